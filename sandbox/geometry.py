@@ -1,0 +1,105 @@
+"""Pure polygon geometry used by the controller and the metrics.
+
+Polygons are float arrays of shape (n, 2), the last vertex joined back to the
+first; either orientation is accepted everywhere.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def signed_area(vertices: np.ndarray) -> float:
+    """Shoelace area: positive for counter-clockwise vertices."""
+    x, y = vertices[:, 0], vertices[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def centroid(vertices: np.ndarray) -> np.ndarray:
+    """Area centroid of a simple polygon."""
+    x, y = vertices[:, 0], vertices[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    a = cross.sum() / 2.0
+    return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6.0 * a)
+
+
+def interior_angles(vertices: np.ndarray) -> np.ndarray:
+    """Interior angle at each vertex in degrees (0, 360); > 180 is a reflex corner.
+
+    Independent of the order the vertices are listed in: the polygon's own
+    orientation (sign of its area) decides which side is inside.
+    """
+    v = np.asarray(vertices, dtype=float)
+    to_prev = np.roll(v, 1, axis=0) - v
+    to_next = np.roll(v, -1, axis=0) - v
+    # Angle swept from the edge to the next vertex round to the edge to the
+    # previous vertex, counter-clockwise: the interior angle of a CCW polygon.
+    turn = np.degrees(np.arctan2(to_prev[:, 1], to_prev[:, 0]) - np.arctan2(to_next[:, 1], to_next[:, 0]))
+    turn = np.mod(turn, 360.0)
+    return turn if signed_area(v) > 0 else 360.0 - turn
+
+
+def fit_to_area(vertices: np.ndarray, area: float, centre: np.ndarray) -> np.ndarray:
+    """Translate so the centroid is at ``centre`` and scale to the given area."""
+    v = np.asarray(vertices, dtype=float)
+    rel = v - centroid(v)
+    return centre + rel * math.sqrt(area / abs(signed_area(v)))
+
+
+def regular_polygon(radius: float, n: int, centre=(0.0, 0.0)) -> np.ndarray:
+    """A counter-clockwise regular polygon (used to draw and test circles)."""
+    t = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+    return np.column_stack([centre[0] + radius * np.cos(t), centre[1] + radius * np.sin(t)])
+
+
+def flare(relative: np.ndarray, amount: float) -> tuple[np.ndarray, np.ndarray]:
+    """The flare strategy (SPEC §5) on a polygon given relative to its centre.
+
+    Inserts a vertex at the midpoint of every edge, then pushes each original
+    corner away from the centre by ``max(1, 90 * amount / angle)``; reflex
+    corners are left where they are. Returns the new vertices and a boolean
+    mask of which of them are original corners.
+    """
+    v = np.asarray(relative, dtype=float)
+    corners = v * flare_factors(v, amount)[:, None]
+    mids = 0.5 * (v + np.roll(v, -1, axis=0))
+    out = np.empty((2 * len(v), 2))
+    out[0::2] = corners
+    out[1::2] = mids
+    is_corner = np.zeros(2 * len(v), dtype=bool)
+    is_corner[0::2] = True
+    return out, is_corner
+
+
+def flare_factors(vertices: np.ndarray, amount: float) -> np.ndarray:
+    """How far flare pushes each corner out (1 for reflex corners)."""
+    angles = interior_angles(vertices)
+    return np.where(angles < 180.0, np.maximum(1.0, 90.0 * amount / angles), 1.0)
+
+
+def distance_to_outline(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """Distance from each point (m, 2) to the closed polyline through ``vertices``."""
+    p = np.asarray(points, dtype=float)[:, None, :]
+    a = np.asarray(vertices, dtype=float)[None, :, :]
+    b = np.roll(vertices, -1, axis=0)[None, :, :]
+    ab = b - a
+    length2 = np.maximum((ab**2).sum(-1), 1e-300)
+    t = np.clip(((p - a) * ab).sum(-1) / length2, 0.0, 1.0)
+    nearest = a + t[..., None] * ab
+    return np.sqrt(((p - nearest) ** 2).sum(-1)).min(axis=1)
+
+
+def points_in_polygon(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """Even-odd test for each point (m, 2); vectorised over points and edges."""
+    p = np.asarray(points, dtype=float)
+    x, y = p[:, 0:1], p[:, 1:2]
+    a = np.asarray(vertices, dtype=float)
+    b = np.roll(a, -1, axis=0)
+    ax, ay, bx, by = a[:, 0], a[:, 1], b[:, 0], b[:, 1]
+    straddles = (ay > y) != (by > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cross_x = ax + (y - ay) * (bx - ax) / (by - ay)
+    return ((straddles & (x < cross_x)).sum(axis=1) % 2) == 1

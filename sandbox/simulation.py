@@ -1,0 +1,230 @@
+"""The simulation: a seeded, resettable, steppable state machine (Gymnasium-style).
+
+>>> sim = Simulation(Config(robots=20, boxes=30), seed=1)
+>>> sim.step(100)
+>>> sim.robot_positions.shape
+(20, 2)
+
+Everything a viewer needs is exposed as read-only numpy arrays. Nothing here
+imports a GUI library. Not thread-safe: drive it from one thread.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from . import metrics, robots
+from .config import Config
+from .controller import Controller, Goal, make_goal
+from .lights import LightField
+from .shapes import shape_vertices
+
+from .world import World
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    v = a.view()
+    v.flags.writeable = False
+    return v
+
+
+class Simulation:
+    """The paper's model, headless.
+
+    ``shape`` overrides ``config.shape``: polygon vertices (any position, size
+    or orientation) or None for the circle. Without it, ``config.shape`` is
+    resolved (a builtin name or a polygon file).
+    """
+
+    def __init__(self, config: Config | None = None, *, seed: int | None = None,
+                 shape: np.ndarray | None | str = "from-config"):
+        self.config = config or Config()
+        if isinstance(shape, str):
+            shape = shape_vertices(self.config.shape if shape == "from-config" else shape)
+        self.shape_vertices = None if shape is None else np.asarray(shape, dtype=float)
+        self.history: list[metrics.Sample] = []
+        self.reset(self.config.seed if seed is None else seed)
+
+    # ------------------------------------------------------------------ life
+    def reset(self, seed: int | None = None) -> None:
+        """Rebuild the world from the configuration. Same seed, same run."""
+        if seed is not None:
+            self.config = self.config.replace(seed=int(seed))
+        cfg = self.config
+        self.seed = cfg.seed
+        rng = np.random.default_rng(cfg.seed)
+        self.world = World(cfg, rng)
+        self.goal: Goal = make_goal(cfg, self.shape_vertices)
+        self.controller = Controller(cfg, self.goal)
+        self.lights = LightField(cfg)
+        self.lights.set_intensities(self.controller.intensities)
+        n = cfg.robots
+        self.steps_done = 0
+        self._charge = np.full(n, float(cfg.start_charge))
+        self._readings = np.zeros((n, 4))
+        self._command = np.zeros((n, 2))  # (v, w) held between refreshes
+        self._applied = np.zeros((n, 2))  # what the robot actually did (0 when empty)
+        # Each robot refreshes its command at its own random phase; robots due
+        # at step s are those with (s + phase) % period == 0, listed per residue.
+        phase = rng.integers(0, cfg.command_period, n)
+        self._due = [np.flatnonzero((r + phase) % cfg.command_period == 0) for r in range(cfg.command_period)]
+        self._fresh = True
+        self.history = []
+        self.physics_seconds = 0.0
+        self._record()
+
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` world steps."""
+        every = self.config.metrics_every
+        for _ in range(int(n)):
+            self._step_once()
+            if self.steps_done % every == 0:
+                self._record()
+        self._sync()
+
+    def _step_once(self) -> None:
+        cfg = self.config
+        state = self._sync()
+        if self.controller.advance():
+            self.lights.set_intensities(self.controller.intensities)
+        nr = self.world.n_robots
+        if nr:
+            positions, headings = state[:nr, 0:2], state[:nr, 2]
+            lum = self._read_light(positions, headings)
+            moving = self._charge > 0.0
+            np.multiply(self._command, moving[:, None], out=self._applied)
+            v, w = self._applied[:, 0], self._applied[:, 1]
+            self._charge = robots.charge_step(self._charge, lum, v, w, cfg)
+            self.world.set_robot_velocities(v * np.cos(headings), v * np.sin(headings), w)
+        t0 = time.perf_counter()
+        self.world.step()
+        self.physics_seconds += time.perf_counter() - t0
+        self.steps_done += 1
+        self._fresh = False
+
+    def _read_light(self, positions: np.ndarray, headings: np.ndarray) -> np.ndarray:
+        """Luminosity at every robot's centre; robots whose turn it is also read
+        their photocells and set a new command. One field lookup for both."""
+        cfg = self.config
+        due = self._due[self.steps_done % cfg.command_period]
+        if len(due) == 0:
+            return self.lights.sample(positions)
+        cells = robots.sensor_points(positions[due], headings[due], cfg.sensor_offset).reshape(-1, 2)
+        lum = self.lights.sample(np.concatenate([positions, cells]))
+        nr = len(positions)
+        readings = lum[nr:].reshape(-1, 4)
+        self._readings[due] = readings
+        v, w = robots.braitenberg(readings, cfg.k_drive, cfg.k_turn)
+        self._command[due, 0] = v
+        self._command[due, 1] = w
+        return lum[:nr]
+
+    def _sync(self) -> np.ndarray:
+        if not self._fresh:
+            self.world.read()
+            self._fresh = True
+        return self.world.state
+
+    # ------------------------------------------------------------ changes
+    def set_strategies(self, **values: float) -> None:
+        """Change flare / switch / no_corners live; applied at the next controller update."""
+        for name, value in values.items():
+            self.config = self.config.replace(**{name: value})
+        self.controller.set_strategies(**values)
+
+    # ------------------------------------------------------------- state
+    @property
+    def robot_positions(self) -> np.ndarray:
+        return _read_only(self.world.state[: self.world.n_robots, 0:2])
+
+    @property
+    def robot_headings(self) -> np.ndarray:
+        return _read_only(self.world.state[: self.world.n_robots, 2])
+
+    @property
+    def robot_charges(self) -> np.ndarray:
+        return _read_only(self._charge)
+
+    @property
+    def robot_sensors(self) -> np.ndarray:
+        """Photocell readings (front, back, left, right) at each robot's last refresh."""
+        return _read_only(self._readings)
+
+    @property
+    def robot_commands(self) -> np.ndarray:
+        """Held (forward speed, turn rate) commands, shape (n, 2)."""
+        return _read_only(self._command)
+
+    @property
+    def robot_velocities(self) -> np.ndarray:
+        """What each robot is actually doing: its command, or zero when out of charge."""
+        return _read_only(self._applied)
+
+    @property
+    def box_positions(self) -> np.ndarray:
+        return _read_only(self.world.state[self.world.n_robots : -1, 0:2])
+
+    @property
+    def box_angles(self) -> np.ndarray:
+        return _read_only(self.world.state[self.world.n_robots : -1, 2])
+
+    @property
+    def box_in_goal(self) -> np.ndarray:
+        return self.goal.contains(self.box_positions)
+
+    @property
+    def light_intensities(self) -> np.ndarray:
+        return _read_only(self.lights.intensities)
+
+    @property
+    def phase(self) -> str:
+        return self.controller.phase
+
+    @property
+    def cycle(self) -> int:
+        return self.controller.cycle
+
+    @property
+    def outline(self) -> np.ndarray:
+        return _read_only(self.controller.outline)
+
+    @property
+    def time(self) -> float:
+        return self.steps_done * self.config.dt
+
+    def sensor_points(self, index: int) -> np.ndarray:
+        """Where robot ``index``'s four photocells are now, shape (4, 2)."""
+        return robots.sensor_points(self.robot_positions[index : index + 1], self.robot_headings[index : index + 1],
+                                    self.config.sensor_offset)[0]
+
+    # ----------------------------------------------------------- metrics
+    def measure(self) -> metrics.Sample:
+        boxes = self.box_positions
+        in_goal = self.goal.contains(boxes)
+        cfg = self.config
+        return metrics.Sample(
+            step=self.steps_done,
+            fraction_in_goal=metrics.fraction_in_goal(in_goal),
+            mean_outside_distance=metrics.mean_outside_distance(boxes, self.goal, in_goal),
+            boxes_escaped=int(metrics.escaped(boxes, cfg.arena_size, cfg.construction_size).sum()),
+            charged_robots=int((self._charge > 0).sum()),
+            cycle=self.controller.cycle,
+            phase=self.controller.phase,
+        )
+
+    def _record(self) -> None:
+        self._sync()
+        self.history.append(self.measure())
+
+    def has_nan(self) -> bool:
+        return not (np.isfinite(self.world.state).all() and np.isfinite(self._charge).all())
+
+    @property
+    def expected_cycle_steps(self) -> float:
+        """World steps in one full contract-hold-dilate cycle."""
+        c = self.controller
+        updates = math.log(c.max_scale / c.min_scale) / -math.log(self.config.scale_rate)
+        return 2 * math.ceil(updates) * self.config.update_every + self.config.hold_steps

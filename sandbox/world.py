@@ -1,0 +1,169 @@
+"""The pymunk world (SPEC §2): arena wall, box-only construction wall, robots and boxes.
+
+State moves between pymunk and numpy in bulk through ``pymunk.batch``; no
+per-body Python loop runs per step. Bodies are added robots first, then
+boxes, and ``pymunk.batch`` reports them in that order.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pymunk
+import pymunk.batch as batch
+
+from .config import Config
+
+# Collision categories: the construction wall only meets boxes.
+ROBOT, BOX, OUTER_WALL, CONSTRUCTION_WALL = 1, 2, 4, 8
+WALL_RADIUS = 0.05
+
+_POSE = batch.BodyFields.POSITION | batch.BodyFields.ANGLE | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
+_VELOCITY = batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
+
+
+def hexagon(circumradius: float) -> list[tuple[float, float]]:
+    return [(circumradius * math.cos(k * math.pi / 3), circumradius * math.sin(k * math.pi / 3)) for k in range(6)]
+
+
+def square_corners(centre: float, half: float) -> list[tuple[float, float]]:
+    return [(centre - half, centre - half), (centre + half, centre - half),
+            (centre + half, centre + half), (centre - half, centre + half)]
+
+
+def sample_separated(rng: np.random.Generator, n: int, low: float, high: float, min_gap: float,
+                     reject=None, max_tries: int = 200) -> np.ndarray:
+    """Uniform random points in the square [low, high]^2, at least ``min_gap`` apart
+    where possible (a point that finds no free spot after ``max_tries`` is placed
+    anyway; the physics pushes it clear). ``reject(points)`` masks forbidden points."""
+    cell = max(min_gap, 1e-9)
+    grid: dict[tuple[int, int], list[np.ndarray]] = {}
+    out = np.empty((n, 2))
+    for k in range(n):
+        for attempt in range(max_tries):
+            p = rng.uniform(low, high, size=2)
+            if reject is not None and reject(p[None, :])[0]:
+                continue
+            gx, gy = int(p[0] // cell), int(p[1] // cell)
+            near = [q for dx in (-1, 0, 1) for dy in (-1, 0, 1) for q in grid.get((gx + dx, gy + dy), ())]
+            if all((q[0] - p[0]) ** 2 + (q[1] - p[1]) ** 2 >= min_gap**2 for q in near) or attempt == max_tries - 1:
+                break
+        out[k] = p
+        grid.setdefault((gx, gy), []).append(p)
+    return out
+
+
+class World:
+    """The physics world and bulk access to its bodies' state."""
+
+    def __init__(self, config: Config, rng: np.random.Generator):
+        self.config = config
+        self.n_robots, self.n_boxes = config.robots, config.boxes
+        self.space = self._make_space()
+        self._add_walls()
+        self._add_robots(rng)
+        self._add_boxes(rng)
+        # Damping is applied by the space to every body; robots are
+        # velocity-driven, so their commanded velocity is divided by the
+        # per-step damping factor to arrive unchanged (see set_robot_velocities).
+        self.damping_per_step = self.space.damping ** config.dt
+        self._buffer = batch.Buffer()
+        # pymunk.batch lists the space's static body (holding the walls) last.
+        self.state = np.zeros((self.n_robots + self.n_boxes + 1, 6))
+        # pymunk reads velocities straight from this array's memory.
+        self._velocities = np.zeros((len(self.state), 3))
+        self._velocity_buffer = batch.Buffer()
+        self._velocity_buffer.set_float_buf(self._velocities.reshape(-1))
+        self.read()
+
+    # -- construction -----------------------------------------------------
+    def _make_space(self) -> pymunk.Space:
+        cfg = self.config
+        space = pymunk.Space(threaded=cfg.threads > 1)
+        if cfg.threads > 1:
+            space.threads = cfg.threads
+        space.gravity = (0.0, 0.0)
+        space.iterations = cfg.iterations
+        space.collision_slop = cfg.collision_slop
+        space.damping = math.exp(-cfg.box_damping)
+        return space
+
+    def _add_walls(self) -> None:
+        cfg = self.config
+        c = cfg.arena_size / 2.0
+        self._add_square_wall(c, c + WALL_RADIUS, pymunk.ShapeFilter(categories=OUTER_WALL))
+        box_only = pymunk.ShapeFilter(categories=CONSTRUCTION_WALL, mask=BOX)
+        self._add_square_wall(c, cfg.construction_size / 2.0 + WALL_RADIUS, box_only)
+
+    def _add_square_wall(self, centre: float, half: float, shape_filter: pymunk.ShapeFilter) -> None:
+        body = self.space.static_body
+        corners = square_corners(centre, half)
+        for a, b in zip(corners, corners[1:] + corners[:1]):
+            seg = pymunk.Segment(body, a, b, WALL_RADIUS)
+            seg.friction = 1.0
+            seg.elasticity = 0.0
+            seg.filter = shape_filter
+            self.space.add(seg)
+
+    def _add_robots(self, rng: np.random.Generator) -> None:
+        cfg = self.config
+        c, r = cfg.arena_size / 2.0, cfg.robot_radius
+        low, high = c - cfg.robot_spawn_size / 2.0 + r, c + cfg.robot_spawn_size / 2.0 - r
+        keep_out = cfg.construction_size / 2.0 + r
+
+        def inside_construction(p: np.ndarray) -> np.ndarray:
+            return np.all(np.abs(p - c) < keep_out, axis=1)
+
+        positions = sample_separated(rng, self.n_robots, low, high, 2 * r, reject=inside_construction)
+        headings = rng.uniform(-math.pi, math.pi, self.n_robots)
+        robot_filter = pymunk.ShapeFilter(categories=ROBOT, mask=pymunk.ShapeFilter.ALL_MASKS() ^ CONSTRUCTION_WALL)
+        for p, a in zip(positions, headings):
+            body = pymunk.Body()
+            body.position = tuple(p)
+            body.angle = float(a)
+            shape = pymunk.Circle(body, r)
+            shape.density = cfg.robot_density
+            shape.friction = cfg.robot_friction
+            shape.elasticity = cfg.robot_elasticity
+            shape.filter = robot_filter
+            self.space.add(body, shape)
+
+    def _add_boxes(self, rng: np.random.Generator) -> None:
+        cfg = self.config
+        c, half = cfg.arena_size / 2.0, cfg.construction_size / 2.0
+        margin = cfg.box_circumradius + WALL_RADIUS
+        positions = sample_separated(rng, self.n_boxes, c - half + margin, c + half - margin, 2 * cfg.box_apothem)
+        angles = rng.uniform(0.0, math.pi / 3, self.n_boxes)
+        vertices = hexagon(cfg.box_circumradius)
+        box_filter = pymunk.ShapeFilter(categories=BOX)
+        for p, a in zip(positions, angles):
+            body = pymunk.Body()
+            body.position = tuple(p)
+            body.angle = float(a)
+            shape = pymunk.Poly(body, vertices, radius=0.0)
+            shape.density = cfg.box_density
+            shape.friction = cfg.box_friction
+            shape.elasticity = cfg.box_elasticity
+            shape.filter = box_filter
+            self.space.add(body, shape)
+
+    # -- bulk state -------------------------------------------------------
+    def read(self) -> np.ndarray:
+        """Refresh :attr:`state`: rows (x, y, angle, vx, vy, w): robots, boxes, static body."""
+        self._buffer.clear()
+        batch.get_space_bodies(self.space, _POSE, self._buffer)
+        self.state[:] = np.frombuffer(self._buffer.float_buf()).reshape(self.state.shape)
+        return self.state
+
+    def set_robot_velocities(self, vx: np.ndarray, vy: np.ndarray, w: np.ndarray) -> None:
+        """Give robots these velocities for the next step; boxes keep theirs (as last read)."""
+        n, scale, out = self.n_robots, 1.0 / self.damping_per_step, self._velocities
+        out[:] = self.state[:, 3:6]
+        np.multiply(vx, scale, out=out[:n, 0])
+        np.multiply(vy, scale, out=out[:n, 1])
+        np.multiply(w, scale, out=out[:n, 2])
+        batch.set_space_bodies(self.space, _VELOCITY, self._velocity_buffer)
+
+    def step(self) -> None:
+        self.space.step(self.config.dt)
