@@ -116,6 +116,16 @@ class Controller:
         return self.goal.is_circle or (switch > 0 and self.progress >= switch - 1e-12)
 
     # -- live changes -----------------------------------------------------
+    def reconfigure(self, config: Config) -> None:
+        """Take new controller values (rate, band, sizes...) keeping the phase
+        and a scale within the new limits; the pattern is redrawn at once."""
+        self.config = config
+        self.min_scale = (self.goal.radius + 2.0 * config.robot_radius) / self.goal.radius
+        self.max_scale = max(self._largest_scale(), self.min_scale)
+        self.scale = min(max(self.scale, self.min_scale), self.max_scale)
+        self._until_update = min(self._until_update, config.update_every)
+        self._redraw()
+
     def set_strategies(self, **values: float) -> None:
         """Change flare / switch / no_corners; applied at the next controller update."""
         unknown = set(values) - set(self.strategies)

@@ -86,7 +86,7 @@ class Simulation:
         self._sync()
 
     def _step_once(self) -> None:
-        cfg = self.config
+        cfg = self.world.config
         state = self._sync()
         if self.controller.advance():
             self.lights.set_intensities(self.controller.intensities)
@@ -108,7 +108,7 @@ class Simulation:
     def _read_light(self, positions: np.ndarray, headings: np.ndarray) -> np.ndarray:
         """Luminosity at every robot's centre; robots whose turn it is also read
         their photocells and set a new command. One field lookup for both."""
-        cfg = self.config
+        cfg = self.world.config
         due = self._due[self.steps_done % cfg.command_period]
         if len(due) == 0:
             return self.lights.sample(positions)
@@ -131,9 +131,46 @@ class Simulation:
     # ------------------------------------------------------------ changes
     def set_strategies(self, **values: float) -> None:
         """Change flare / switch / no_corners live; applied at the next controller update."""
-        for name, value in values.items():
-            self.config = self.config.replace(**{name: value})
+        self.config = self.config.replace(**values)
         self.controller.set_strategies(**values)
+
+    def update_config(self, **changes) -> list[str]:
+        """Change parameters of the running simulation.
+
+        Strategies apply at the next controller update; gains, energy and
+        other controller values at once. Parameters that shape the world
+        (populations, sizes, arena, seed...) are stored and take effect at the
+        next :meth:`reset`; their names are returned so a caller can say so.
+        """
+        from .config import param  # local: avoid a cycle at import time
+
+        config = self.config.replace(**changes)  # validates everything first
+        if "shape" in changes:
+            self.set_shape(shape_vertices(changes.pop("shape")), name=config.shape)
+        strategies = {k: v for k, v in changes.items() if k in ("flare", "switch", "no_corners")}
+        deferred = [k for k in changes if param(k).rebuild and k not in strategies]
+        live = {k: v for k, v in changes.items() if k not in deferred and k not in strategies}
+        self.config = config
+        if live:
+            # The world keeps the values it was built with; the controller
+            # takes the new ones (its cycle position is kept).
+            self.world.config = self.world.config.replace(**live)
+            self.controller.reconfigure(self.world.config.replace(**{k: getattr(config, k) for k in strategies}))
+        if strategies:
+            self.controller.set_strategies(**strategies)
+        return deferred
+
+    def set_shape(self, vertices: np.ndarray | None, name: str | None = None) -> None:
+        """Change the goal (None = circle) without touching robots or boxes.
+        The new outline starts contracting from its largest size."""
+        self.shape_vertices = None if vertices is None else np.asarray(vertices, dtype=float)
+        if name is not None:
+            self.config = self.config.replace(shape=name)
+        self.goal = make_goal(self.config, self.shape_vertices)
+        self.controller = Controller(self.world.config, self.goal)
+        self.controller.set_strategies(flare=self.config.flare, switch=self.config.switch,
+                                       no_corners=self.config.no_corners)
+        self.lights.set_intensities(self.controller.intensities)
 
     # ------------------------------------------------------------- state
     @property
