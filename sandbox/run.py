@@ -1,0 +1,131 @@
+"""``phototaxis run``: one headless trial, with a progress bar, a JSON summary
+and an optional CSV trace of both success metrics."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+import time
+from pathlib import Path
+from typing import IO, Any
+
+from tqdm import tqdm
+
+from .config import CASES, Config
+from .metrics import Sample
+from .simulation import Simulation
+
+TRACE_FIELDS = ["step", "fraction_in_goal", "mean_outside_distance", "boxes_escaped", "charged_robots", "cycle", "phase"]
+
+
+def add_parser(sub: Any) -> argparse.ArgumentParser:
+    from .cli import add_config_arguments
+
+    p = sub.add_parser("run", help="run one headless trial and report both success metrics",
+                       description="Run one headless trial. Every model parameter is a flag; "
+                       "--case picks one of the paper's seven cases and explicit flags override it.")
+    p.add_argument("--trace", metavar="FILE.csv", help="write both metrics every metrics_every steps to this CSV file")
+    p.add_argument("--json", action="store_true", help="print one JSON object with the results on stdout")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_config_arguments(p)
+    p.set_defaults(func=run_command)
+    return p
+
+
+def case_name(config: Config, given: str | None) -> str:
+    """The case the configuration is, if it matches one exactly, else 'custom'."""
+    strategies = dict(flare=config.flare, switch=config.switch, no_corners=config.no_corners)
+    for name, overrides in CASES.items():
+        expected = {"flare": 0.0, "switch": 0.0, "no_corners": 0.0}
+        expected.update((k, v) for k, v in overrides.items() if k != "shape")
+        if overrides["shape"] == config.shape and strategies == expected:
+            return name
+    return f"{given}+custom" if given else "custom"
+
+
+def open_trace(path: str | None) -> tuple[IO[str] | None, Any]:
+    if not path:
+        return None, None
+    from .cli import UserError
+
+    try:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        handle = open(path, "w", newline="", encoding="utf-8")
+    except OSError as exc:
+        raise UserError(f"cannot write trace file {path}: {exc.strerror or exc}") from None
+    writer = csv.DictWriter(handle, fieldnames=TRACE_FIELDS)
+    writer.writeheader()
+    return handle, writer
+
+
+def run_trial(config: Config, *, progress: bool = False, on_sample=None) -> tuple[Simulation, Sample, float]:
+    """Run ``config.steps`` steps in chunks of ``metrics_every``; returns the
+    simulation, its final sample and the wall time in seconds."""
+    sim = Simulation(config)
+    if on_sample:
+        on_sample(sim.history[0])
+    chunk = config.metrics_every
+    bar = tqdm(total=config.steps, unit="step", file=sys.stderr, disable=not progress, dynamic_ncols=True,
+               desc=config.shape)
+    started = time.perf_counter()
+    try:
+        while sim.steps_done < config.steps:
+            n = min(chunk - sim.steps_done % chunk, config.steps - sim.steps_done)
+            recorded = len(sim.history)
+            sim.step(n)
+            bar.update(n)
+            if on_sample:
+                for sample in sim.history[recorded:]:
+                    on_sample(sample)
+            if progress:
+                bar.set_postfix(in_goal=f"{sim.history[-1].fraction_in_goal:.3f}", refresh=False)
+    finally:
+        bar.close()
+    wall = time.perf_counter() - started
+    final = sim.history[-1] if sim.history[-1].step == sim.steps_done else sim.measure()
+    if final is not sim.history[-1] and on_sample:
+        on_sample(final)
+    return sim, final, wall
+
+
+def run_command(args: argparse.Namespace) -> int:
+    from .cli import config_from_args
+
+    config = config_from_args(args)
+    handle, writer = open_trace(args.trace)
+    try:
+        def write(sample: Sample) -> None:
+            if writer:
+                writer.writerow(sample.to_dict())
+                handle.flush()
+
+        sim, final, wall = run_trial(config, progress=not args.no_progress, on_sample=write)
+    finally:
+        if handle:
+            handle.close()
+    result = {
+        "case": case_name(config, args.case),
+        "seed": config.seed,
+        "steps": sim.steps_done,
+        "robots": config.robots,
+        "boxes": config.boxes,
+        "fraction_in_goal": final.fraction_in_goal,
+        "mean_outside_distance": final.mean_outside_distance,
+        "boxes_escaped": final.boxes_escaped,
+        "cycles": sim.cycle,
+        "wall_seconds": round(wall, 3),
+        "steps_per_second": round(sim.steps_done / wall, 1) if wall > 0 else None,
+        "config": config.to_dict(),
+    }
+    if args.json:
+        json.dump(result, sys.stdout)
+        sys.stdout.write("\n")
+    else:
+        print(f"case {result['case']}, seed {config.seed}: {sim.steps_done} steps, {sim.cycle} cycles, "
+              f"{wall:.1f} s ({result['steps_per_second']} steps/s)")
+        print(f"  boxes in goal:             {final.fraction_in_goal:.3f}")
+        print(f"  mean distance of the rest: {final.mean_outside_distance:.3f} m")
+        print(f"  boxes escaped:             {final.boxes_escaped}")
+    return 0
