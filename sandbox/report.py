@@ -1,0 +1,218 @@
+"""Turn a sweep's stored trials into tables, figures and ``report.md``.
+
+Everything here reads only the files under the sweep's folder, so
+``phototaxis report DIR`` rebuilds the same report at any time, also from
+a sweep that is still running or was interrupted.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import datetime as _dt
+import json
+from pathlib import Path
+
+from . import figures, stats
+from .config import Config, params
+from .sweep import METRICS, SAMPLE_COLUMNS, ResultStore, SweepError
+
+SWEEP_FILE = "sweep.json"
+FIGURES_DIR = "figures"
+
+
+def load_meta(out: Path) -> dict:
+    path = Path(out) / SWEEP_FILE
+    if not path.is_file():
+        return {}
+    try:
+        return json.loads(path.read_text())
+    except ValueError:
+        raise SweepError(f"{path} is not valid JSON; delete it and re-run the sweep command") from None
+
+
+def group(results: list[dict], meta: dict) -> dict[str, list[dict]]:
+    """Trials by case, in the sweep's case order, each list by seed."""
+    order = [c["label"] for c in meta.get("cases", [])]
+    by_case: dict[str, list[dict]] = {c: [] for c in order}
+    for r in results:
+        by_case.setdefault(r["case"], []).append(r)
+    return {c: sorted(ts, key=lambda t: t["seed"]) for c, ts in by_case.items() if ts}
+
+
+def build_report(out: str | Path, dest: str | Path | None = None) -> Path:
+    """Write tables, figures and report.md for the sweep in ``out`` into ``dest`` (default ``out``)."""
+    out = Path(out)
+    dest = Path(dest) if dest is not None else out
+    store = ResultStore(out)
+    if not store.trials_dir.is_dir():
+        raise SweepError(f"{out} holds no sweep results (no {store.trials_dir.name}/ folder); "
+                         f"run 'phototaxis sweep --out {out}' first")
+    meta = load_meta(out)
+    by_case = group(store.load(), meta)
+    if not by_case:
+        raise SweepError(f"{out} holds no finished trials yet")
+    try:
+        (dest / FIGURES_DIR).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise SweepError(f"cannot write the report to {dest}: {exc.strerror or exc}") from None
+
+    pairs = stats.default_pairs(list(by_case), [tuple(p) for p in meta.get("compare", [])])
+    tables = {m: stats.summaries(by_case, m) for m in METRICS}
+    first = {m: stats.summaries(by_case, m, when="first-cycle") for m in METRICS}
+    tests = {m: stats.ks_tests(by_case, pairs, m) for m in METRICS}
+
+    _write_results_csv(by_case, dest / "results.csv")
+    _write_final_csv(by_case, dest / "final.csv")
+    _write_rows(dest / "summary.csv", [dataclasses.asdict(r) for m in METRICS for r in tables[m]])
+    _write_rows(dest / "ks_tests.csv", [dataclasses.asdict(r) for m in METRICS for r in tests[m]])
+    figs = {m: figures.plot_metric(by_case, m, dest / FIGURES_DIR / m) for m in METRICS}
+    figs["layouts"] = figures.plot_layouts(by_case, dest / FIGURES_DIR / "final_layouts")
+
+    text = _markdown(meta, by_case, tables, first, tests, figs, dest, store.load_failures())
+    report = dest / "report.md"
+    report.write_text(text, encoding="utf-8")
+    return report
+
+
+# ---------------------------------------------------------------- files
+
+
+def _write_rows(path: Path, rows: list[dict]) -> None:
+    with path.open("w", newline="") as fh:
+        if not rows:
+            return
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def _write_results_csv(by_case: dict[str, list[dict]], path: Path) -> None:
+    with path.open("w", newline="") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(["case", "seed", *SAMPLE_COLUMNS])
+        for case, trials in by_case.items():
+            for t in trials:
+                s = t["samples"]
+                for i in range(len(s["step"])):
+                    writer.writerow([case, t["seed"], *(_plain(s[c][i]) for c in SAMPLE_COLUMNS)])
+
+
+def _write_final_csv(by_case: dict[str, list[dict]], path: Path) -> None:
+    names = [p.name for p in params()]
+    with path.open("w", newline="") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(["case", "seed", "final_step", *METRICS, "boxes_escaped", "seconds", "host", *names])
+        for case, trials in by_case.items():
+            for t in trials:
+                s = t["samples"]
+                writer.writerow([case, t["seed"], int(s["step"][-1]), *(_plain(s[m][-1]) for m in METRICS),
+                                 int(s["boxes_escaped"][-1]), t.get("seconds", ""), t.get("host", ""),
+                                 *(t["config"].get(n, "") for n in names)])
+
+
+def _plain(value):
+    if hasattr(value, "item"):
+        value = value.item()
+    return repr(value) if isinstance(value, float) else value
+
+
+# ------------------------------------------------------------- markdown
+
+
+def _md_table(header: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join(" --- " for _ in header) + "|"]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def _summary_table(rows: list[stats.Summary], digits: int) -> str:
+    return _md_table(["case", "trials", "mean", "median", "std. dev.", "std. error", "min", "max"],
+                     [[f"`{r.case}`", str(r.n), *(stats.fmt(v, digits) for v in
+                                                  (r.mean, r.median, r.std, r.sem, r.low, r.high))] for r in rows])
+
+
+def _ks_table(rows: list[stats.KSTest], digits: int) -> str:
+    if not rows:
+        return "_No case pairs to compare._"
+    return _md_table(["case A", "case B", "n A", "n B", "mean A", "mean B", "KS statistic D", "p-value"],
+                     [[f"`{r.a}`", f"`{r.b}`", str(r.n_a), str(r.n_b), stats.fmt(r.mean_a, digits),
+                       stats.fmt(r.mean_b, digits), stats.fmt(r.statistic, 3), stats.fmt_p(r.pvalue)] for r in rows])
+
+
+def _overrides_text(overrides: dict) -> str:
+    return ", ".join(f"{k} = {v!r}" for k, v in overrides.items()) or "(base values)"
+
+
+def _first_cycle_section(first: dict) -> list[str]:
+    if not any(r.n for r in first["fraction_in_goal"]):
+        return ["", "_No trial ran long enough to finish a compression cycle, so there is no after-one-cycle table._"]
+    return ["", "### After the first compression cycle", "",
+            "Both metrics at the first sample taken after each trial completed its first full "
+            "contract–hold–dilate cycle (trials too short for a cycle are left out).", "",
+            _md_table(["case", "trials", "fraction in goal (mean ± s.d.)", "distance outside, m (mean ± s.d.)"],
+                      [[f"`{a.case}`", str(a.n), f"{stats.fmt(a.mean)} ± {stats.fmt(a.std)}",
+                        f"{stats.fmt(b.mean)} ± {stats.fmt(b.std)}"]
+                       for a, b in zip(first["fraction_in_goal"], first["mean_outside_distance"])])]
+
+
+def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: list[dict]) -> str:
+    trials = [t for ts in by_case.values() for t in ts]
+    steps = sorted({int(t["steps"]) for t in trials})
+    seeds = sorted({int(t["seed"]) for t in trials})
+    cpu = sum(float(t.get("seconds", 0)) for t in trials)
+    hosts = sorted({t.get("host", "?") for t in trials})
+    defaults = Config().to_dict()
+    first_cfg = trials[0]["config"]
+    varying = {k for t in trials for k, v in t["config"].items() if v != first_cfg.get(k)} | {"seed"}
+    base_changes = {k: v for k, v in first_cfg.items() if v != defaults.get(k) and k not in varying and k != "steps"}
+    rel = lambda p: Path(p).relative_to(dest).as_posix()  # noqa: E731
+
+    out = ["# Sweep report", ""]
+    out.append(f"Generated {_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d %H:%M} UTC by `phototaxis report` "
+               f"from the trial files of the sweep.")
+    if meta.get("command"):
+        out += ["", "Command:", "", "```", meta["command"], "```"]
+    out += ["", f"- **{len(trials)} trials** in {len(by_case)} cases "
+                f"({', '.join(f'{c}: {len(ts)}' for c, ts in by_case.items())})",
+            f"- steps per trial: {', '.join(map(str, steps))}; seeds {seeds[0]}–{seeds[-1]} "
+            f"(each case uses the same seeds)",
+            f"- compute: {cpu / 3600:.2f} CPU-hours ({cpu / len(trials):.0f} s per trial on average), "
+            f"on {len(hosts)} host(s)",
+            f"- base parameters changed from the defaults: {_overrides_text(base_changes)}"]
+    if meta.get("cases"):
+        out += ["", "Cases:", ""]
+        out += [f"- `{c['label']}`: {_overrides_text(c.get('overrides', {}))}" for c in meta["cases"]
+                if c["label"] in by_case]
+    if failures:
+        out += ["", f"**{len(failures)} trial(s) failed twice and are missing from the statistics:**", ""]
+        out += [f"- `{f['case']}` seed {f['seed']}: {f['error']}" for f in failures]
+
+    out += ["", "## Table II. Fraction of boxes in the goal at the final step", "",
+            "Higher is better; 1.0 is a perfect tiling. Standard deviation with ddof = 1; standard error = s.d. / √n.",
+            "", _summary_table(tables["fraction_in_goal"], 3),
+            "", "## Table III. Mean distance of boxes outside the goal at the final step (m)", "",
+            "Lower is better; 0 when every box is inside.", "",
+            _summary_table(tables["mean_outside_distance"], 3),
+            *_first_cycle_section(first),
+            "", "## Table IV. Two-sample Kolmogorov–Smirnov tests: fraction in goal at the final step", "",
+            "`scipy.stats.ks_2samp`, two-sided. A small p-value says the two cases' distributions differ.", "",
+            _ks_table(tests["fraction_in_goal"], 3),
+            "", "## Table V. Two-sample Kolmogorov–Smirnov tests: mean distance outside the goal", "",
+            _ks_table(tests["mean_outside_distance"], 3),
+            "", "## Figure 4. Fraction of boxes in the goal over time", "",
+            f"![fraction in goal]({rel(figs['fraction_in_goal'])})",
+            f"([SVG]({rel(figs['fraction_in_goal'].with_suffix('.svg'))}))",
+            "", "## Figure 5. Mean distance of boxes outside the goal over time", "",
+            f"![mean distance outside]({rel(figs['mean_outside_distance'])})",
+            f"([SVG]({rel(figs['mean_outside_distance'].with_suffix('.svg'))}))",
+            "", "## Figures 6 and 7. Final box layouts", "",
+            "For each case, the trial whose final fraction in goal is nearest the case's median. Green boxes "
+            "are in the goal (black outline), orange ones outside; the dashed square is the construction area.",
+            "", f"![final layouts]({rel(figs['layouts'])})",
+            "", "## Files", "",
+            "- `summary.csv`: Tables II and III; `ks_tests.csv`: Tables IV and V",
+            "- `results.csv`: every sample of every trial; `final.csv`: one row per trial with its final "
+            "metrics and full configuration",
+            "- `trials/<case>/seed-<seed>.csv|json` (in the sweep folder): the raw per-trial records", ""]
+    return "\n".join(out)
