@@ -84,10 +84,10 @@ class Config:
         12.8, "lights further than this in x or y do not reach a point", unit="m", low=0.1, high=2000.0, group="lights")
     light_intensity: float = _param(1.0, "intensity of a light that is on", low=0.0, high=1000.0, group="lights")
     field_samples: int = _param(
-        8, "luminosity-field samples per light pitch (even; more is finer and slower to rebuild)",
-        low=2, high=64, group="lights")
+        6, "luminosity-field samples per light pitch, at least (more is finer and slower to rebuild)",
+        low=1, high=64, group="lights")
     field_cache_mb: float = _param(
-        128.0, "memory for remembered luminosity fields (the cycle repeats its patterns); 0 turns it off",
+        256.0, "memory for remembered luminosity fields (the cycle repeats its patterns); 0 turns it off",
         unit="MiB", low=0.0, high=65536.0, group="physics")
 
     # --- robots (SPEC §4) ------------------------------------------------
@@ -145,8 +145,6 @@ class Config:
     def __post_init__(self) -> None:
         for p in dataclasses.fields(self):
             check_value(p.name, getattr(self, p.name))
-        if self.field_samples % 2:
-            raise ConfigError(f"field_samples must be even (got {self.field_samples}) so lights sit on sample points")
         if self.construction_size >= self.arena_size:
             raise ConfigError("construction_size must be smaller than arena_size")
         if self.robot_spawn_size > self.arena_size:

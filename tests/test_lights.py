@@ -1,0 +1,114 @@
+"""Luminosity (SPEC §3) against hand-computed values, and the sampled field
+against direct evaluation of the formula."""
+
+import math
+
+import numpy as np
+import pytest
+
+from sandbox.config import Config
+from sandbox.controller import Controller, make_goal
+from sandbox.lights import LightField, brightness_kernel, light_centres, luminosity_direct
+from sandbox.shapes import shape_vertices
+
+
+def one_light(config: Config, ix: int, iy: int) -> np.ndarray:
+    pattern = np.zeros((config.lights_per_side,) * 2)
+    pattern[ix, iy] = 1.0
+    return pattern
+
+
+def test_light_centres_sit_mid_cell():
+    c = light_centres(Config())
+    assert c.shape == (64, 64, 2)
+    assert c[0, 0].tolist() == [0.5, 0.5]
+    assert c[10, 3].tolist() == [10.5, 3.5]
+
+
+@pytest.mark.parametrize("k, expected_diag", [(1.0, 0.5), (2.0, 2 ** -1.5)])
+def test_single_light_by_hand(k, expected_diag):
+    cfg = Config(light_falloff=k)
+    pattern = one_light(cfg, 20, 30)
+    # Straight below: d = h = 1, sin = 1 -> 1.
+    # One metre to the side: d = sqrt(2), B = 1/d^k, sin = 1/sqrt(2) -> 2^-(k+1)/2.
+    points = np.array([[20.5, 30.5], [21.5, 30.5], [20.5, 29.5]])
+    lum = luminosity_direct(points, pattern, cfg)
+    assert lum == pytest.approx([1.0, expected_diag, expected_diag])
+
+
+def test_two_lights_add_and_height_matters():
+    cfg = Config(light_height=2.0)
+    pattern = one_light(cfg, 10, 10) + one_light(cfg, 12, 10)
+    # Midway between them: each at horizontal 1 m, d = sqrt(1 + 4) = sqrt(5).
+    # B = 1/sqrt(5), sin = 2/sqrt(5) -> 2/5 each, 4/5 together.
+    assert luminosity_direct(np.array([[11.5, 10.5]]), pattern, cfg)[0] == pytest.approx(0.8)
+
+
+def test_lights_out_of_range_do_not_count():
+    cfg = Config()
+    pattern = one_light(cfg, 0, 0)
+    # 13 m away in x: beyond the 12.8 m range, so nothing at all.
+    assert luminosity_direct(np.array([[13.5, 0.5]]), pattern, cfg)[0] == 0.0
+    # 12.5 m away: in range, by the formula.
+    expected = 1.0 / (1 + 12.5**2)
+    assert luminosity_direct(np.array([[13.0, 0.5]]), pattern, cfg)[0] == pytest.approx(expected)
+
+
+def test_intensity_scales_linearly():
+    cfg = Config()
+    pattern = one_light(cfg, 5, 5)
+    p = np.array([[6.2, 4.9]])
+    assert luminosity_direct(p, 0.3 * pattern, cfg)[0] == pytest.approx(0.3 * luminosity_direct(p, pattern, cfg)[0])
+
+
+def test_kernel_formula():
+    assert brightness_kernel(np.array(0.0), np.array(0.0), 1.0, 1.0) == pytest.approx(1.0)
+    assert brightness_kernel(np.array(3.0), np.array(4.0), 1.0, 1.0) == pytest.approx(1.0 / 26.0)
+
+
+def band_pattern(cfg: Config, shape: str, scale_steps: int = 0) -> np.ndarray:
+    controller = Controller(cfg, make_goal(cfg, shape_vertices(shape)))
+    for _ in range(scale_steps):
+        controller._update()
+    return controller.intensities
+
+
+@pytest.mark.parametrize("k", [1.0, 2.0])
+@pytest.mark.parametrize("shape, updates", [("circle", 0), ("star", 30), ("square", 50)])
+def test_sampled_field_matches_formula_within_one_percent(k, shape, updates, rng):
+    cfg = Config(light_falloff=k)
+    pattern = band_pattern(cfg, shape, updates)
+    field = LightField(cfg)
+    field.set_intensities(pattern)
+    points = rng.uniform(0.0, cfg.arena_size, size=(3000, 2))
+    exact = luminosity_direct(points, pattern, cfg)
+    sampled = field.sample(points)
+    assert np.abs(sampled - exact).max() <= 0.01 * exact.max()
+
+
+def test_incremental_updates_and_cache_agree_with_a_fresh_field(rng):
+    cfg = Config()
+    controller = Controller(cfg, make_goal(cfg, shape_vertices("star")))
+    field = LightField(cfg)
+    patterns = []
+    for _ in range(60):
+        controller._update()
+        patterns.append(controller.intensities)
+        field.set_intensities(controller.intensities)
+    # Revisit an old pattern (served from the cache) and a partial change.
+    for pattern in (patterns[3], patterns[3] * 0.5, patterns[40]):
+        field.set_intensities(pattern)
+        fresh = LightField(cfg)
+        fresh.set_intensities(pattern)
+        assert np.abs(field.field - fresh.field).max() < 1e-5 * max(fresh.field.max(), 1.0)
+    assert field.cache_hits >= 1
+
+
+def test_points_outside_arena_are_clamped():
+    cfg = Config()
+    field = LightField(cfg)
+    field.set_intensities(one_light(cfg, 0, 0))
+    inside = field.sample(np.array([[0.0, 0.5]]))
+    outside = field.sample(np.array([[-5.0, 0.5]]))
+    assert outside[0] == pytest.approx(inside[0])
+    assert math.isfinite(outside[0])
