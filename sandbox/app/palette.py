@@ -1,0 +1,144 @@
+"""Colours and picture-making shared by the live page, the recordings and the
+headless GIF / MP4 frames, so every view of a run looks the same.
+
+Pure numpy: nothing here imports viser or touches a running simulation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..robots import charge_colours
+
+# RGB, 0..255.
+BACKGROUND = (24, 26, 32)
+LIGHT_OFF = (58, 61, 70)
+LIGHT_ON = (255, 212, 38)
+CELL_EDGE = (36, 38, 45)
+BOX_OUT = (236, 238, 242)
+BOX_IN = (255, 92, 168)
+GOAL_LINE = (64, 200, 255)
+LIGHT_LINE = (255, 140, 30)
+BOX_WALL = (150, 160, 185)
+ARENA_WALL = (205, 210, 220)
+HEADING_MARK = (20, 22, 28)
+SELECTED = (190, 90, 255)
+DRAW_LINE = (120, 255, 140)
+SENSOR_COLOURS = np.array([[255, 255, 255], [90, 90, 90], [64, 200, 255], [255, 140, 30]], dtype=np.uint8)
+
+#: Pixels per light cell in the light-grid texture (cells stay crisp even with
+#: the browser's linear texture filtering because each cell is a flat block).
+CELL_PIXELS = 8
+
+
+def robot_colours(charges: np.ndarray, capacity: float) -> np.ndarray:
+    """(n, 3) uint8: green when full, red when empty, blended between (the engine's colours)."""
+    return np.round(charge_colours(np.asarray(charges, dtype=float), capacity) * 255).astype(np.uint8)
+
+
+def box_colours(in_goal: np.ndarray) -> np.ndarray:
+    """(m, 3) uint8: pink when the box centre is inside the goal, white otherwise."""
+    return np.where(np.asarray(in_goal, dtype=bool)[:, None], np.uint8(BOX_IN), np.uint8(BOX_OUT)).astype(np.uint8)
+
+
+def light_grid_image(intensities: np.ndarray, cell_pixels: int = CELL_PIXELS, peak: float = 1.0,
+                     top_first: bool = True) -> np.ndarray:
+    """RGB image (rows = y from the top, or from the bottom when ``top_first``
+    is False as viser's scene images want; columns = x) of the light grid:
+    each light a flat block, grey when off through yellow when fully on,
+    with a thin darker seam between cells."""
+    level = np.clip(np.asarray(intensities, dtype=float) / (peak if peak > 0 else 1.0), 0.0, 1.0)
+    off, on = np.array(LIGHT_OFF, float), np.array(LIGHT_ON, float)
+    cells = off + level[..., None] * (on - off)  # [ix, iy, 3]
+    cells = np.transpose(cells, (1, 0, 2))  # [row from bottom, col, 3]
+    if top_first:
+        cells = cells[::-1]
+    img = np.repeat(np.repeat(cells, cell_pixels, axis=0), cell_pixels, axis=1)
+    if cell_pixels >= 4:
+        img[::cell_pixels, :] = CELL_EDGE
+        img[:, ::cell_pixels] = CELL_EDGE
+    return img.astype(np.uint8)
+
+
+_HEAT_LUT: np.ndarray | None = None
+
+
+def _heat_lut() -> np.ndarray:
+    global _HEAT_LUT
+    if _HEAT_LUT is None:
+        try:
+            from matplotlib import colormaps
+
+            _HEAT_LUT = np.round(colormaps["inferno"](np.linspace(0, 1, 256))[:, :3] * 255).astype(np.uint8)
+        except Exception:  # pragma: no cover - matplotlib is a dependency; keep a fallback
+            t = np.linspace(0, 1, 256)[:, None]
+            _HEAT_LUT = np.round(np.hstack([t, t**2, 0.3 * (1 - t)]) * 255).astype(np.uint8)
+    return _HEAT_LUT
+
+
+def field_image(field: np.ndarray, scale: float | None = None, top_first: bool = True) -> np.ndarray:
+    """Heat map (RGB, rows = y from the top) of the luminosity field the robots
+    sense, indexed [ix, iy] on the sample grid. ``scale`` maps to full colour
+    (default: the field's maximum)."""
+    f = np.asarray(field, dtype=np.float32)
+    top = float(scale if scale else f.max()) or 1.0
+    idx = np.clip(np.sqrt(np.clip(f / top, 0.0, 1.0)) * 255.0, 0, 255).astype(np.uint8)
+    return _heat_lut()[idx.T[::-1] if top_first else idx.T]
+
+
+def closed_segments(vertices: np.ndarray, z: float = 0.0) -> np.ndarray:
+    """(k, 2, 3) line segments around a closed polygon at height z."""
+    v = np.asarray(vertices, dtype=np.float32).reshape(-1, 2)
+    if len(v) < 2:
+        return np.zeros((0, 2, 3), dtype=np.float32)
+    a, b = v, np.roll(v, -1, axis=0)
+    out = np.empty((len(v), 2, 3), dtype=np.float32)
+    out[:, 0, :2], out[:, 1, :2] = a, b
+    out[:, :, 2] = z
+    return out
+
+
+def open_segments(vertices: np.ndarray, z: float = 0.0) -> np.ndarray:
+    """(k-1, 2, 3) line segments along an open polyline at height z."""
+    v = np.asarray(vertices, dtype=np.float32).reshape(-1, 2)
+    if len(v) < 2:
+        return np.zeros((0, 2, 3), dtype=np.float32)
+    out = np.empty((len(v) - 1, 2, 3), dtype=np.float32)
+    out[:, 0, :2], out[:, 1, :2] = v[:-1], v[1:]
+    out[:, :, 2] = z
+    return out
+
+
+def square(centre: float, half: float) -> np.ndarray:
+    return np.array([[centre - half, centre - half], [centre + half, centre - half],
+                     [centre + half, centre + half], [centre - half, centre + half]])
+
+
+def heading_quaternions(angles: np.ndarray) -> np.ndarray:
+    """(n, 4) wxyz quaternions of rotations by ``angles`` about +z."""
+    half = np.asarray(angles, dtype=np.float64) * 0.5
+    q = np.zeros((len(half), 4), dtype=np.float32)
+    q[:, 0] = np.cos(half)
+    q[:, 3] = np.sin(half)
+    return q
+
+
+def disc_mesh(radius: float, segments: int = 20, z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """A flat disc facing +z: (vertices, faces)."""
+    a = np.linspace(0, 2 * np.pi, segments, endpoint=False)
+    ring = np.stack([radius * np.cos(a), radius * np.sin(a), np.full(segments, z)], axis=1)
+    vertices = np.vstack([[0.0, 0.0, z], ring]).astype(np.float32)
+    faces = np.array([[0, 1 + i, 1 + (i + 1) % segments] for i in range(segments)], dtype=np.uint32)
+    return vertices, faces
+
+
+def hexagon_mesh(circumradius: float, z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """A flat regular hexagon facing +z, corners at angles k*60 degrees (like the engine's boxes)."""
+    return disc_mesh(circumradius, 6, z)
+
+
+def heading_mark_mesh(radius: float, z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """A slim triangle pointing along +x from the centre to the rim: the robot's heading."""
+    vertices = np.array([[0.92 * radius, 0.0, z], [0.05 * radius, 0.32 * radius, z],
+                         [0.05 * radius, -0.32 * radius, z]], dtype=np.float32)
+    return vertices, np.array([[0, 1, 2]], dtype=np.uint32)

@@ -1,0 +1,350 @@
+"""The simulation thread: the only code that touches the :class:`Simulation`.
+
+pymunk and the simulation are not thread-safe, and viser runs GUI and pointer
+callbacks on its own threads. So callbacks never touch the simulation: they
+:meth:`Runner.post` a command (a function of the simulation) that the
+simulation loop runs between steps. After every frame's worth of steps the
+loop copies what a viewer needs into an immutable :class:`Snapshot`; a second
+thread hands the newest snapshot to the listeners (the scene, the panel) at
+the frame rate, dropping stale ones, so a slow browser never slows physics.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import queue
+import threading
+import time
+from collections import deque
+from typing import Any, Callable
+
+import numpy as np
+
+from ..config import Config
+from ..metrics import Sample
+from ..simulation import Simulation
+
+Command = Callable[[Simulation], Any]
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotView:
+    """What the inspector shows about one robot."""
+
+    index: int
+    position: np.ndarray
+    heading: float
+    sensors: np.ndarray  # front, back, left, right at the last refresh
+    sensor_points: np.ndarray  # (4, 2)
+    command: np.ndarray  # held (v, w)
+    applied: np.ndarray  # (v, w) actually applied (0 when out of charge)
+    charge: float
+
+
+@dataclasses.dataclass(frozen=True)
+class Snapshot:
+    """A consistent copy of everything the page draws, taken between steps."""
+
+    frame: int
+    step: int
+    time: float
+    phase: str
+    cycle: int
+    seed: int
+    shape_name: str
+    world_config: Config  # what the running world was built with
+    config: Config  # the current settings (may hold values pending a reset)
+    robot_positions: np.ndarray
+    robot_headings: np.ndarray
+    robot_charges: np.ndarray
+    box_positions: np.ndarray
+    box_angles: np.ndarray
+    box_in_goal: np.ndarray
+    lights_key: tuple  # changes whenever the light pattern (or the world) changes
+    intensities: np.ndarray
+    field: np.ndarray  # luminosity on the sample grid, float32 [ix, iy]
+    outline: np.ndarray
+    goal_key: int  # changes whenever the goal changes
+    goal_outline: np.ndarray
+    goal_vertices: np.ndarray | None  # the fitted polygon (None for the circle)
+    sample: Sample
+    playing: bool
+    steps_per_frame: int
+    steps_per_second: float
+    robot: RobotView | None
+
+
+class Runner:
+    """Owns the simulation and runs it in its own thread.
+
+    ``fps`` is the frame rate the loop paces itself to; ``steps_per_frame`` the
+    speed. Listeners receive snapshots on the publisher thread.
+    """
+
+    def __init__(self, config: Config, *, shape: Any = "from-config", seed: int | None = None,
+                 fps: float = 30.0, steps_per_frame: int = 8, playing: bool = True, chart_every: int = 100):
+        self.sim = Simulation(config, seed=seed, shape=shape)
+        self.fps = float(fps)
+        self.steps_per_frame = int(steps_per_frame)
+        self.playing = bool(playing)
+        self.chart_every = int(chart_every)
+        self.selected: int | None = None
+        self.shape_name = config.shape
+        self._commands: queue.SimpleQueue = queue.SimpleQueue()
+        self._listeners: list[Callable[[Snapshot], None]] = []
+        self._stop = threading.Event()
+        self._wake = threading.Event()
+        self._new_frame = threading.Condition()
+        self._latest: Snapshot | None = None
+        self._published = -1
+        self._frame = 0
+        self._goal_key = 0
+        self._world_key = 0
+        self._step_times: deque = deque(maxlen=120)  # (wall time, steps_done)
+        self._series_lock = threading.Lock()
+        self._series: list[Sample] = []
+        self.frames_published = 0
+        self.publish_times: deque = deque(maxlen=120)
+        self._threads: list[threading.Thread] = []
+        self.errors: list[BaseException] = []
+        self._record_series(force=True)
+        self._snapshot()
+
+    # ------------------------------------------------------------ control
+    def start(self) -> "Runner":
+        for target, name in ((self._loop, "simulation"), (self._publish_loop, "publisher")):
+            t = threading.Thread(target=target, name=f"phototaxis-{name}", daemon=True)
+            t.start()
+            self._threads.append(t)
+        return self
+
+    def stop(self, timeout: float = 5.0) -> None:
+        self._stop.set()
+        self._wake.set()
+        with self._new_frame:
+            self._new_frame.notify_all()
+        for t in self._threads:
+            t.join(timeout)
+        self._threads = []
+
+    def post(self, command: Command, *, on_done: Callable[[Any], None] | None = None,
+             on_error: Callable[[BaseException], None] | None = None) -> None:
+        """Run ``command(sim)`` in the simulation thread before the next step.
+        Callbacks run in the simulation thread too; keep them short."""
+        self._commands.put((command, on_done, on_error))
+        self._wake.set()
+
+    def call(self, command: Command, timeout: float = 10.0) -> Any:
+        """Post a command and wait for its result (raises its exception)."""
+        if not self._threads:
+            # Not started (tests, headless use): run inline.
+            result = command(self.sim)
+            self._snapshot()
+            return result
+        done = threading.Event()
+        box: dict[str, Any] = {}
+        self.post(command, on_done=lambda r: (box.__setitem__("r", r), done.set()),
+                  on_error=lambda e: (box.__setitem__("e", e), done.set()))
+        if not done.wait(timeout):
+            raise TimeoutError("the simulation did not answer in time")
+        if "e" in box:
+            raise box["e"]
+        return box.get("r")
+
+    def advance(self, n: int) -> Snapshot:
+        """Headless use (no threads): step ``n`` steps and take a snapshot."""
+        assert not self._threads, "advance() is for a runner that was not started"
+        self._run_commands()
+        self.sim.step(n)
+        self._record_series()
+        self._snapshot()
+        return self.latest
+
+    def subscribe(self, listener: Callable[[Snapshot], None]) -> None:
+        self._listeners.append(listener)
+
+    def set_playing(self, playing: bool) -> None:
+        self.playing = bool(playing)
+        self._wake.set()
+
+    def set_speed(self, steps_per_frame: int) -> None:
+        self.steps_per_frame = max(1, int(steps_per_frame))
+
+    def select(self, index: int | None) -> None:
+        self.selected = index
+        self._wake.set()
+
+    def step_once(self, n: int = 1) -> None:
+        """Advance ``n`` steps now (used while paused)."""
+        self.post(lambda sim: sim.step(n))
+
+    def reset(self, seed: int | None = None) -> None:
+        """Rebuild the world; ``seed`` None keeps the current seed."""
+
+        def do(sim: Simulation) -> None:
+            sim.reset(seed)
+            self._world_key += 1
+            self._goal_key += 1
+            with self._series_lock:
+                self._series = []
+            self._record_series(force=True)
+
+        self.post(do)
+
+    def set_shape(self, vertices: np.ndarray | None, name: str) -> None:
+        def do(sim: Simulation) -> None:
+            sim.set_shape(vertices, name=name)
+            self.shape_name = name
+            self._goal_key += 1
+
+        self.post(do)
+
+    @property
+    def latest(self) -> Snapshot:
+        assert self._latest is not None
+        return self._latest
+
+    def series(self) -> list[Sample]:
+        with self._series_lock:
+            return list(self._series)
+
+    def steps_per_second(self) -> float:
+        if len(self._step_times) < 2:
+            return 0.0
+        (t0, s0), (t1, s1) = self._step_times[0], self._step_times[-1]
+        return (s1 - s0) / (t1 - t0) if t1 > t0 else 0.0
+
+    def frames_per_second(self) -> float:
+        if len(self.publish_times) < 2:
+            return 0.0
+        span = self.publish_times[-1] - self.publish_times[0]
+        return (len(self.publish_times) - 1) / span if span > 0 else 0.0
+
+    # -------------------------------------------------------------- loops
+    def _run_commands(self) -> None:
+        while True:
+            try:
+                command, on_done, on_error = self._commands.get_nowait()
+            except queue.Empty:
+                return
+            try:
+                result = command(self.sim)
+            except Exception as exc:  # reported to whoever posted it
+                if on_error:
+                    on_error(exc)
+                else:
+                    self.errors.append(exc)
+                continue
+            if on_done:
+                on_done(result)
+
+    def _loop(self) -> None:
+        interval = 1.0 / self.fps
+        next_frame = time.perf_counter()
+        while not self._stop.is_set():
+            self._run_commands()
+            if self.playing:
+                self.sim.step(self.steps_per_frame)
+                self._record_series()
+            self._step_times.append((time.perf_counter(), self.sim.steps_done))
+            self._snapshot()
+            next_frame += interval
+            now = time.perf_counter()
+            if next_frame < now - interval:  # fell behind: do not try to catch up
+                next_frame = now
+            delay = next_frame - now
+            if not self.playing:
+                delay = max(delay, 0.0)
+                # Paused: sleep until a command arrives (or a frame's time passes).
+            if delay > 0:
+                self._wake.wait(delay)
+                self._wake.clear()
+
+    def _publish_loop(self) -> None:
+        while not self._stop.is_set():
+            with self._new_frame:
+                while self._latest is None or self._latest.frame == self._published:
+                    if self._stop.is_set():
+                        return
+                    self._new_frame.wait(0.5)
+                snap = self._latest
+            self._published = snap.frame
+            for listener in list(self._listeners):
+                try:
+                    listener(snap)
+                except Exception as exc:  # a broken listener must not stop the others
+                    self.errors.append(exc)
+            self.frames_published += 1
+            self.publish_times.append(time.perf_counter())
+
+    # ---------------------------------------------------------- snapshots
+    def _record_series(self, force: bool = False) -> None:
+        sim = self.sim
+        with self._series_lock:
+            last = self._series[-1].step if self._series else None
+        if force or last is None or sim.steps_done - last >= self.chart_every:
+            sample = sim.measure()
+            with self._series_lock:
+                self._series.append(sample)
+
+    def _snapshot(self) -> None:
+        sim = self.sim
+        self._frame += 1
+        robot = None
+        sel = self.selected
+        if sel is not None and 0 <= sel < sim.world.n_robots:
+            robot = RobotView(
+                index=sel,
+                position=sim.robot_positions[sel].copy(),
+                heading=float(sim.robot_headings[sel]),
+                sensors=sim.robot_sensors[sel].copy(),
+                sensor_points=sim.sensor_points(sel).copy(),
+                command=sim.robot_commands[sel].copy(),
+                applied=sim.robot_velocities[sel].copy(),
+                charge=float(sim.robot_charges[sel]),
+            )
+        in_goal = sim.box_in_goal
+        lights_key = (self._world_key, id(sim.lights), sim.lights.rebuilds)
+        prev = self._latest
+        if prev is not None and prev.lights_key == lights_key:
+            intensities, field = prev.intensities, prev.field
+        else:
+            intensities = sim.light_intensities.copy()
+            field = sim.lights.field.astype(np.float32)
+        if prev is not None and prev.goal_key == self._goal_key:
+            goal_outline, goal_vertices = prev.goal_outline, prev.goal_vertices
+        else:
+            goal_outline = sim.goal.outline().copy()
+            goal_vertices = None if sim.goal.vertices is None else sim.goal.vertices.copy()
+        snap = Snapshot(
+            frame=self._frame,
+            step=sim.steps_done,
+            time=sim.time,
+            phase=sim.phase,
+            cycle=sim.cycle,
+            seed=sim.seed,
+            shape_name=self.shape_name,
+            world_config=sim.world.config,
+            config=sim.config,
+            robot_positions=sim.robot_positions.copy(),
+            robot_headings=sim.robot_headings.copy(),
+            robot_charges=sim.robot_charges.copy(),
+            box_positions=sim.box_positions.copy(),
+            box_angles=sim.box_angles.copy(),
+            box_in_goal=np.asarray(in_goal).copy(),
+            lights_key=lights_key,
+            intensities=intensities,
+            field=field,
+            outline=sim.outline.copy(),
+            goal_key=self._goal_key,
+            goal_outline=goal_outline,
+            goal_vertices=goal_vertices,
+            sample=self._series[-1] if self._series else sim.measure(),
+            playing=self.playing,
+            steps_per_frame=self.steps_per_frame,
+            steps_per_second=self.steps_per_second(),
+            robot=robot,
+        )
+        with self._new_frame:
+            self._latest = snap
+            self._new_frame.notify_all()

@@ -1,0 +1,150 @@
+"""``phototaxis serve``: the browser sandbox.
+
+:class:`App` glues the pieces: a :class:`~sandbox.app.runner.Runner` (the
+simulation thread), a :class:`~sandbox.app.scene.SceneView` (what is drawn)
+and a :class:`~sandbox.app.panel.Panel` (the controls), on one viser server.
+Every connected browser sees the same simulation and the same panel.
+"""
+
+from __future__ import annotations
+
+import argparse
+import socket
+import threading
+import time
+from typing import Any
+
+import viser
+
+from ..config import Config
+from ..shapes import shape_vertices
+from .runner import Runner, Snapshot
+from .scene import SceneView, top_down_camera
+
+TITLE = "Phototaxis sandbox"
+
+
+class App:
+    """A live simulation served to browsers. ``start()`` it, ``stop()`` it."""
+
+    def __init__(self, config: Config, *, host: str = "127.0.0.1", port: int = 8080, shape: Any = "from-config",
+                 fps: float = 30.0, steps_per_frame: int = 8, playing: bool = True, verbose: bool = False):
+        if isinstance(shape, str) and shape == "from-config":
+            shape = shape_vertices(config.shape)  # raises ShapeError before any server starts
+        self.config = config
+        self.runner = Runner(config, shape=shape, fps=fps, steps_per_frame=steps_per_frame, playing=playing)
+        self.server = viser.ViserServer(host=host, port=port, label=TITLE, verbose=verbose)
+        self._configure_page()
+        self.view = SceneView(self.server.scene, self.runner.latest)
+        from .panel import Panel  # imports the Learn illustrations; after the scene exists
+
+        self.panel = Panel(self)
+        self.frames_drawn = 0
+        self._frame_lock = threading.Lock()
+        self.runner.subscribe(self._on_frame)
+        self.server.on_client_connect(self._on_connect)
+
+    # ------------------------------------------------------------ set-up
+    def _configure_page(self) -> None:
+        server = self.server
+        server.gui.configure_theme(dark_mode=True, control_width="large", show_logo=False,
+                                   show_share_button=False, brand_color=(255, 190, 40))
+        server.scene.set_up_direction("+z")
+        server.scene.world_axes.visible = False
+        # Flat, true colours: no shading lights, only an even ambient light.
+        server.scene.configure_default_lights(False)
+        server.scene.configure_environment_map(None)
+        server.scene.add_light_ambient("/ambient", intensity=3.14159)
+        position, look_at, fov = top_down_camera(self.config)
+        server.initial_camera.position = tuple(position)
+        server.initial_camera.look_at = tuple(look_at)
+        server.initial_camera.fov = fov
+        server.initial_camera.far = float(position[2] * 4)
+
+    def _on_connect(self, client: viser.ClientHandle) -> None:
+        position, look_at, fov = top_down_camera(self.runner.latest.world_config)
+        client.camera.fov = fov
+        client.camera.look_at = tuple(look_at)
+        client.camera.position = tuple(position)
+
+    def _on_frame(self, snap: Snapshot) -> None:
+        with self._frame_lock:
+            with self.server.atomic():
+                self.view.update(snap)
+            self.panel.update(snap)
+            self.panel.on_frame_drawn()
+            self.frames_drawn += 1
+
+    # -------------------------------------------------------------- life
+    @property
+    def port(self) -> int:
+        return self.server.get_port()
+
+    @property
+    def url(self) -> str:
+        host = self.server.get_host()
+        shown = "localhost" if host in ("127.0.0.1", "localhost") else host
+        if host == "0.0.0.0":
+            shown = socket.gethostname()
+        return f"http://{shown}:{self.port}/"
+
+    def start(self) -> "App":
+        self.runner.start()
+        return self
+
+    def stop(self) -> None:
+        self.runner.stop()
+        self.server.stop()
+
+
+def free_port(host: str = "127.0.0.1") -> int:
+    with socket.socket() as s:
+        s.bind((host, 0))
+        return s.getsockname()[1]
+
+
+# ------------------------------------------------------------------- CLI
+def add_parser(sub: Any) -> argparse.ArgumentParser:
+    from ..cli import add_config_arguments
+
+    p = sub.add_parser("serve", help="start the browser sandbox (the default command)",
+                       description="Start a live simulation in the browser. Open the printed URL. "
+                       "Every model parameter is a flag; --case picks one of the paper's seven cases.")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1: this machine only; "
+                        "0.0.0.0 shares it on the network)")
+    p.add_argument("--port", type=int, default=8080, help="port to listen on (default 8080; the next free one if taken)")
+    p.add_argument("--paused", action="store_true", help="start paused")
+    p.add_argument("--steps-per-frame", type=int, default=8, metavar="N",
+                   help="speed: world steps between two frames (default 8)")
+    p.add_argument("--fps", type=float, default=30.0, help="frame rate the page is updated at (default 30)")
+    add_config_arguments(p)
+    p.set_defaults(func=serve_command)
+    return p
+
+
+def serve_command(args: argparse.Namespace) -> int:
+    from ..cli import UserError, config_from_args
+
+    config = config_from_args(args)
+    if not 0 <= args.port <= 65535:
+        raise UserError(f"--port must be between 0 and 65535, got {args.port}")
+    if args.steps_per_frame < 1:
+        raise UserError("--steps-per-frame must be at least 1")
+    if not 1 <= args.fps <= 240:
+        raise UserError("--fps must be between 1 and 240")
+    try:
+        app = App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
+                  playing=not args.paused)
+    except OSError as exc:
+        raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
+    app.start()
+    print(f"Phototaxis sandbox running at {app.url}  (Ctrl+C to stop)", flush=True)
+    try:
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        app.stop()
+    return 0
