@@ -28,7 +28,7 @@ class App:
     """A live simulation served to browsers. ``start()`` it, ``stop()`` it."""
 
     def __init__(self, config: Config, *, host: str = "127.0.0.1", port: int = 8080, shape: Any = "from-config",
-                 fps: float = 30.0, steps_per_frame: int = 8, playing: bool = True, verbose: bool = False):
+                 fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, verbose: bool = False):
         if isinstance(shape, str) and shape == "from-config":
             shape = shape_vertices(config.shape)  # raises ShapeError before any server starts
         self.config = config
@@ -49,6 +49,9 @@ class App:
         server = self.server
         server.gui.configure_theme(dark_mode=True, control_width="large", show_logo=False,
                                    show_share_button=False, brand_color=(255, 190, 40))
+        # Dock the panel beside the canvas so the arena is never hidden behind it.
+        server.gui.main_panel.dock_right()
+        server.gui.main_panel.set_width(400)
         server.scene.set_up_direction("+z")
         server.scene.world_axes.visible = False
         # Flat, true colours: no shading lights, only an even ambient light.
@@ -115,8 +118,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                         "0.0.0.0 shares it on the network)")
     p.add_argument("--port", type=int, default=8080, help="port to listen on (default 8080; the next free one if taken)")
     p.add_argument("--paused", action="store_true", help="start paused")
-    p.add_argument("--steps-per-frame", type=int, default=8, metavar="N",
-                   help="speed: world steps between two frames (default 8)")
+    p.add_argument("--steps-per-frame", type=int, default=10, metavar="N",
+                   help="speed: world steps between two frames (default 10)")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate the page is updated at (default 30)")
     add_config_arguments(p)
     p.set_defaults(func=serve_command)

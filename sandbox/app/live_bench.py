@@ -1,0 +1,84 @@
+"""``phototaxis bench --live``: simulation speed and frame rate with a real
+browser connected.
+
+Starts the app on a free port, opens it in headless Chromium (Playwright),
+lets it run, and measures steps per second in the simulation thread and
+frames per second actually drawn by the browser (counted in the page with
+``requestAnimationFrame`` while scene updates arrive) and sent by the server.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from typing import Any
+
+from ..config import Config
+
+CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage"]
+
+
+def chromium_path() -> str | None:
+    """Debian's chromium, or $PHOTOTAXIS_CHROMIUM, or whatever 'chromium' is on PATH."""
+    for candidate in (os.environ.get("PHOTOTAXIS_CHROMIUM"), "/usr/bin/chromium", shutil.which("chromium"),
+                      shutil.which("chromium-browser")):
+        if candidate and os.path.exists(candidate):
+            return candidate
+    return None
+
+
+def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 10, fps: float = 30.0,
+        warmup: float = 5.0) -> dict[str, Any]:
+    """Measure the live app for ``seconds`` (after ``warmup``) with one headless browser."""
+    from playwright.sync_api import sync_playwright
+
+    from .server import App, free_port
+
+    browser_path = chromium_path()
+    if browser_path is None:
+        raise RuntimeError("no chromium found: install Debian's chromium (apt-get install chromium)")
+    app = App(config, port=free_port(), fps=fps, steps_per_frame=steps_per_frame)
+    app.start()
+    try:
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=browser_path, args=CHROMIUM_ARGS)
+            try:
+                page = browser.new_page(viewport={"width": 1280, "height": 800})
+                page.goto(f"http://127.0.0.1:{app.port}/")
+                page.wait_for_selector("canvas", timeout=30_000)
+                deadline = time.time() + 30
+                while not app.server.get_clients() and time.time() < deadline:
+                    time.sleep(0.1)
+                time.sleep(warmup)
+                page.evaluate("""() => { window.__frames = 0; const tick = () => { window.__frames++;
+                                 requestAnimationFrame(tick); }; requestAnimationFrame(tick); }""")
+                steps0, frames0, t0 = app.runner.sim.steps_done, app.frames_drawn, time.perf_counter()
+                time.sleep(seconds)
+                steps1, frames1, t1 = app.runner.sim.steps_done, app.frames_drawn, time.perf_counter()
+                browser_frames = page.evaluate("() => window.__frames")
+                clients = len(app.server.get_clients())
+            finally:
+                browser.close()
+    finally:
+        app.stop()
+    wall = t1 - t0
+    sps = (steps1 - steps0) / wall
+    return {
+        "steps_per_second": round(sps, 1),
+        "real_time_factor": round(sps * config.dt, 2),
+        "frames_per_second": round((frames1 - frames0) / wall, 1),
+        "browser_frames_per_second": round(browser_frames / wall, 1),
+        "clients": clients,
+        "seconds": round(wall, 1),
+        "robots": config.robots,
+        "boxes": config.boxes,
+        "steps_per_frame": steps_per_frame,
+    }
+
+
+if __name__ == "__main__":  # pragma: no cover
+    import json
+    import sys
+
+    print(json.dumps(run(Config(), float(sys.argv[1]) if len(sys.argv) > 1 else 20.0)))
