@@ -41,6 +41,7 @@ METRICS = ("fraction_in_goal", "mean_outside_distance")
 TRIALS_DIR = "trials"
 FAILURES_FILE = "failures.json"
 ATTEMPTS = 2  # a failing trial is retried once
+DASK_CONNECT_TIMEOUT = "15s"
 
 
 class SweepError(Exception):
@@ -231,7 +232,7 @@ def dask_executor(address: str) -> Iterator[cf.Executor]:
     except ImportError:
         raise SweepError("--scheduler needs Dask; install it with: pip install 'phototaxis-sandbox[cluster]'") from None
     try:
-        client = Client(address, timeout="15s")
+        client = Client(address, timeout=DASK_CONNECT_TIMEOUT)
     except (OSError, TimeoutError, ValueError) as exc:
         raise SweepError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     try:
