@@ -31,6 +31,16 @@ SENSOR_COLOURS = np.array([[255, 255, 255], [90, 90, 90], [64, 200, 255], [255, 
 CELL_PIXELS = 8
 
 
+_LINEAR_LUT = np.round(255.0 * np.where(np.arange(256) / 255.0 <= 0.04045, np.arange(256) / 255.0 / 12.92,
+                                        ((np.arange(256) / 255.0 + 0.055) / 1.055) ** 2.4)).astype(np.uint8)
+
+
+def linear(colours: np.ndarray | tuple) -> np.ndarray:
+    """sRGB uint8 colours converted for viser's per-instance colours, which the
+    browser treats as linear: after this they show as the sRGB colour asked for."""
+    return _LINEAR_LUT[np.asarray(colours, dtype=np.uint8)]
+
+
 def robot_colours(charges: np.ndarray, capacity: float) -> np.ndarray:
     """(n, 3) uint8: green when full, red when empty, blended between (the engine's colours)."""
     return np.round(charge_colours(np.asarray(charges, dtype=float), capacity) * 255).astype(np.uint8)
@@ -84,6 +94,20 @@ def field_image(field: np.ndarray, scale: float | None = None, top_first: bool =
     top = float(scale if scale else f.max()) or 1.0
     idx = np.clip(np.sqrt(np.clip(f / top, 0.0, 1.0)) * 255.0, 0, 255).astype(np.uint8)
     return _heat_lut()[idx.T[::-1] if top_first else idx.T]
+
+
+def light_colours(intensities: np.ndarray, peak: float = 1.0) -> np.ndarray:
+    """(n*n, 3) uint8 colour of each light, in [ix, iy] row-major order:
+    grey when off through yellow when fully on."""
+    level = np.clip(np.asarray(intensities, dtype=float).reshape(-1) / (peak if peak > 0 else 1.0), 0.0, 1.0)
+    off, on = np.array(LIGHT_OFF, float), np.array(LIGHT_ON, float)
+    return np.round(off + level[:, None] * (on - off)).astype(np.uint8)
+
+
+def square_mesh(half: float, z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """A flat axis-aligned square facing +z."""
+    v = np.array([[-half, -half, z], [half, -half, z], [half, half, z], [-half, half, z]], dtype=np.float32)
+    return v, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32)
 
 
 def closed_segments(vertices: np.ndarray, z: float = 0.0) -> np.ndarray:

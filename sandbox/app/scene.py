@@ -37,6 +37,21 @@ def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0) 
     return np.array([c, c - 1e-3 * height, height]), np.array([c, c, 0.0]), float(fov)
 
 
+def configure_scene(server: Any, config: Config) -> None:
+    """z up, flat true colours (no shading lights, an even ambient light) and a
+    top-down initial camera framing the arena. Also recorded into replays."""
+    server.scene.set_up_direction("+z")
+    server.scene.world_axes.visible = False
+    server.scene.configure_default_lights(False)
+    server.scene.configure_environment_map(None)
+    server.scene.add_light_ambient("/ambient", intensity=3.14159)
+    position, look_at, fov = top_down_camera(config)
+    server.initial_camera.position = tuple(position)
+    server.initial_camera.look_at = tuple(look_at)
+    server.initial_camera.fov = fov
+    server.initial_camera.far = float(position[2] * 4)
+
+
 class SceneView:
     """Draws snapshots into a viser scene."""
 
@@ -67,9 +82,20 @@ class SceneView:
                 pass
         self.handles = {}
         placeholder = np.zeros((8, 8, 3), np.uint8)
-        self.handles["lights"] = sc.add_image(
-            "/arena/lights", pal.light_grid_image(np.zeros((cfg.lights_per_side,) * 2), top_first=False), s, s,
-            format="png", position=(c, c, Z_LIGHTS), cast_shadow=False, receive_shadow=False)
+        # The light grid: one flat square per light, crisp by construction, on a
+        # dark floor that shows as thin seams between cells.
+        self.handles["floor"] = sc.add_mesh_simple(
+            "/arena/floor", *pal.square_mesh(c), color=pal.CELL_EDGE, position=(c, c, Z_LIGHTS - 0.005),
+            cast_shadow=False, receive_shadow=False)
+        n_side, pitch = cfg.lights_per_side, cfg.light_pitch
+        centres = (np.arange(n_side) + 0.5) * pitch
+        gx, gy = np.meshgrid(centres, centres, indexing="ij")  # row-major [ix, iy] like the intensities
+        cells = np.stack([gx.ravel(), gy.ravel(), np.full(gx.size, Z_LIGHTS)], axis=1).astype(np.float32)
+        self.handles["lights"] = sc.add_batched_meshes_simple(
+            "/arena/lights", *pal.square_mesh(0.44 * pitch),
+            np.tile(np.array([1.0, 0.0, 0.0, 0.0], np.float32), (len(cells), 1)), cells,
+            batched_colors=pal.linear(pal.light_colours(np.zeros(len(cells)))), lod="off", cast_shadow=False,
+            receive_shadow=False)
         self.handles["field"] = sc.add_image(
             "/arena/field", placeholder, s, s, format="png", position=(c, c, Z_FIELD),
             cast_shadow=False, receive_shadow=False, visible=self.show_field)
@@ -87,7 +113,7 @@ class SceneView:
             lod="off", cast_shadow=False, receive_shadow=False, visible=n > 0)
         hv, hf = pal.heading_mark_mesh(cfg.robot_radius, 0.005)
         self.handles["headings"] = sc.add_batched_meshes_simple(
-            "/swarm/headings", hv, hf, identity, pos, batched_colors=pal.HEADING_MARK,
+            "/swarm/headings", hv, hf, identity, pos, batched_colors=pal.linear(pal.HEADING_MARK),
             lod="off", cast_shadow=False, receive_shadow=False, visible=n > 0)
         bv, bf = pal.hexagon_mesh(cfg.box_circumradius)
         identity_b = np.tile(np.array([1.0, 0.0, 0.0, 0.0], np.float32), (max(m, 1), 1))
@@ -123,8 +149,7 @@ class SceneView:
                 self._build(snap)
             h = self.handles
             if snap.lights_key != self._lights_key:
-                h["lights"].image = pal.light_grid_image(snap.intensities, peak=max(cfg.light_intensity, 1e-9),
-                                                          top_first=False)
+                h["lights"].batched_colors = pal.linear(pal.light_colours(snap.intensities, peak=max(cfg.light_intensity, 1e-9)))
                 self._lights_key = snap.lights_key
             if self.show_field and snap.lights_key != self._field_key:
                 h["field"].image = pal.field_image(snap.field, top_first=False)
@@ -142,7 +167,7 @@ class SceneView:
                 quat = pal.heading_quaternions(snap.robot_headings)
                 h["robots"].batched_positions = pos
                 h["robots"].batched_wxyzs = quat
-                h["robots"].batched_colors = pal.robot_colours(snap.robot_charges, cfg.capacity)
+                h["robots"].batched_colors = pal.linear(pal.robot_colours(snap.robot_charges, cfg.capacity))
                 pos_marks = pos.copy()
                 pos_marks[:, 2] = Z_MARKS
                 h["headings"].batched_positions = pos_marks
@@ -152,7 +177,7 @@ class SceneView:
                 bpos[:, :2], bpos[:, 2] = snap.box_positions, Z_BOXES
                 h["boxes"].batched_positions = bpos
                 h["boxes"].batched_wxyzs = pal.heading_quaternions(snap.box_angles)
-                h["boxes"].batched_colors = pal.box_colours(snap.box_in_goal)
+                h["boxes"].batched_colors = pal.linear(pal.box_colours(snap.box_in_goal))
             robot = snap.robot
             if robot is not None:
                 a = np.linspace(0, 2 * np.pi, 33)
@@ -174,6 +199,7 @@ class SceneView:
                 self._field_key = snap.lights_key
             self.handles["field"].visible = self.show_field
             self.handles["lights"].visible = not self.show_field
+            self.handles["floor"].visible = not self.show_field
 
     # ------------------------------------------------------------ drawing
     def set_draw_points(self, points: list[tuple[float, float]]) -> None:

@@ -19,7 +19,7 @@ import viser
 from ..config import Config
 from ..shapes import shape_vertices
 from .runner import Runner, Snapshot
-from .scene import SceneView, top_down_camera
+from .scene import SceneView, configure_scene
 
 TITLE = "Phototaxis sandbox"
 
@@ -42,7 +42,6 @@ class App:
         self.frames_drawn = 0
         self._frame_lock = threading.Lock()
         self.runner.subscribe(self._on_frame)
-        self.server.on_client_connect(self._on_connect)
 
     # ------------------------------------------------------------ set-up
     def _configure_page(self) -> None:
@@ -51,24 +50,8 @@ class App:
                                    show_share_button=False, brand_color=(255, 190, 40))
         # Dock the panel beside the canvas so the arena is never hidden behind it.
         server.gui.main_panel.dock_right()
-        server.gui.main_panel.set_width(400)
-        server.scene.set_up_direction("+z")
-        server.scene.world_axes.visible = False
-        # Flat, true colours: no shading lights, only an even ambient light.
-        server.scene.configure_default_lights(False)
-        server.scene.configure_environment_map(None)
-        server.scene.add_light_ambient("/ambient", intensity=3.14159)
-        position, look_at, fov = top_down_camera(self.config)
-        server.initial_camera.position = tuple(position)
-        server.initial_camera.look_at = tuple(look_at)
-        server.initial_camera.fov = fov
-        server.initial_camera.far = float(position[2] * 4)
-
-    def _on_connect(self, client: viser.ClientHandle) -> None:
-        position, look_at, fov = top_down_camera(self.runner.latest.world_config)
-        client.camera.fov = fov
-        client.camera.look_at = tuple(look_at)
-        client.camera.position = tuple(position)
+        server.gui.main_panel.set_width(420)
+        configure_scene(server, self.config)
 
     def _on_frame(self, snap: Snapshot) -> None:
         with self._frame_lock:
