@@ -36,24 +36,44 @@ def _save(fig: Figure, path: Path) -> Path:
     return path.with_suffix(".png")
 
 
+#: The paper plots its square/circle cases and its star cases apart.
+PAPER_PANELS = (("circle", "square", "square-flare", "square-flare-switch"),
+                ("star", "star-switch", "star-switch-nocorners"))
+STYLES = ("-", "--", "-.", ":")
+
+
+def panels(cases: list[str]) -> list[list[str]]:
+    """Cases per panel: the paper's two groups when both are present, else one panel."""
+    groups = [[c for c in group if c in cases] for group in PAPER_PANELS]
+    rest = [c for c in cases if not any(c in g for g in groups)]
+    if all(groups) and not rest:
+        return groups
+    return [list(cases)]
+
+
 def plot_metric(by_case: dict[str, list[dict]], metric: str, path: Path) -> Path:
-    fig = Figure(figsize=(8.0, 4.8))
-    ax = fig.add_subplot()
-    for colour, (case, trials) in zip(_colours(len(by_case)), by_case.items()):
-        steps, mean, std, n = stats.series(trials, metric)
-        if not len(steps):
-            continue
-        ax.plot(steps, mean, color=colour, lw=1.6, label=f"{case} (n={n})")
-        ax.fill_between(steps, mean - std, mean + std, color=colour, alpha=0.15, lw=0)
-    ax.set_xlabel("world step")
-    ax.set_ylabel(stats.LABELS[metric])
+    """Mean over trials and a shaded ±1 s.d. band per case (the paper's Figures 4 and 5)."""
+    groups = panels(list(by_case))
+    colour = dict(zip(by_case, _colours(len(by_case))))
+    fig = Figure(figsize=(6.4 * len(groups) if len(groups) > 1 else 8.0, 4.6), layout="constrained")
+    axes = fig.subplots(1, len(groups), sharey=True, squeeze=False)[0]
+    for ax, group in zip(axes, groups):
+        for i, case in enumerate(group):
+            steps, mean, std, n = stats.series(by_case[case], metric)
+            if not len(steps):
+                continue
+            ax.plot(steps, mean, color=colour[case], lw=1.6, ls=STYLES[i % len(STYLES)], label=f"{case} (n={n})")
+            ax.fill_between(steps, mean - std, mean + std, color=colour[case], alpha=0.15, lw=0)
+        ax.set_xlabel("world step")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="best" if len(groups) > 1 else "center left",
+                  bbox_to_anchor=None if len(groups) > 1 else (1.01, 0.5), frameon=len(groups) > 1)
+    axes[0].set_ylabel(stats.LABELS[metric])
     if metric == "fraction_in_goal":
-        ax.set_ylim(0, 1)
+        axes[0].set_ylim(0, 1)
     else:
-        ax.set_ylim(bottom=0)
-    ax.grid(alpha=0.3)
-    ax.set_title(f"{stats.LABELS[metric].capitalize()}: mean ± 1 s.d. over trials")
-    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
+        axes[0].set_ylim(bottom=0)
+    fig.suptitle(f"{stats.LABELS[metric].capitalize()}: mean ± 1 s.d. over trials", fontsize=11)
     return _save(fig, path)
 
 
@@ -70,7 +90,9 @@ def draw_layout(ax, trial: dict, *, margin: float = 1.0) -> None:
     cfg = Config(**trial["config"])
     final = trial["final"]
     centre = cfg.arena_size / 2.0
-    half = cfg.construction_size / 2.0 + margin
+    goal = np.asarray(final["goal_outline"], dtype=float)
+    reach = float(np.abs(goal - centre).max()) if len(goal) else 0.0
+    half = max(cfg.construction_size / 2.0, reach) + margin
     boxes = np.asarray(final["box_positions"], dtype=float).reshape(-1, 2)
     angles = np.asarray(final["box_angles"], dtype=float)
     inside = np.asarray(final["box_in_goal"], dtype=bool)
@@ -83,7 +105,6 @@ def draw_layout(ax, trial: dict, *, margin: float = 1.0) -> None:
         points_per_metre = ax.get_window_extent().width / ax.figure.dpi * 72 / (2 * half)
         ax.scatter(robots[:, 0], robots[:, 1], s=(2 * cfg.robot_radius * points_per_metre) ** 2,
                    c=ROBOT, alpha=0.5, lw=0)
-    goal = np.asarray(final["goal_outline"], dtype=float)
     ax.add_patch(_closed(goal, GOAL))
     c = cfg.construction_size / 2.0
     ax.plot(centre + np.array([-c, c, c, -c, -c]), centre + np.array([-c, -c, c, c, -c]), color="#9e9e9e", lw=0.8,
@@ -105,7 +126,7 @@ def plot_layouts(by_case: dict[str, list[dict]], path: Path) -> Path:
     n = len(by_case)
     cols = min(4, n)
     rows = math.ceil(n / cols)
-    fig = Figure(figsize=(3.2 * cols, 3.5 * rows))
+    fig = Figure(figsize=(3.2 * cols, 3.7 * rows + 0.4), layout="constrained")
     for i, (case, trials) in enumerate(by_case.items()):
         ax = fig.add_subplot(rows, cols, i + 1)
         trial = stats.representative(trials)
@@ -114,5 +135,4 @@ def plot_layouts(by_case: dict[str, list[dict]], path: Path) -> Path:
         ax.set_title(f"{case}\nseed {trial['seed']}, {frac:.1%} in goal", fontsize=9)
     fig.suptitle("Final box layouts (trial nearest each case's median; green: in goal, orange: outside, "
                  "grey dots: robots)", fontsize=9)
-    fig.tight_layout()
     return _save(fig, path)
