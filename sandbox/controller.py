@@ -201,5 +201,7 @@ class Controller:
             return on
         d = np.hypot(*(self._centres[lit, None, :] - self.corners[None, :, :]).transpose(2, 0, 1)).min(axis=1)
         on = on.copy()
-        on[lit[np.argsort(d, kind="stable")[:off]]] = False
+        # Rounded so that equally near lights tie exactly, whatever order the
+        # file lists its vertices in; ties then go by light index.
+        on[lit[np.argsort(np.round(d, 9), kind="stable")[:off]]] = False
         return on

@@ -73,7 +73,9 @@ class Simulation:
         self._due = [np.flatnonzero((r + phase) % cfg.command_period == 0) for r in range(cfg.command_period)]
         self._fresh = True
         self.history = []
-        self.physics_seconds = 0.0
+        #: Wall seconds spent in pymunk's Space.step, in light-pattern changes
+        #: (controller redraw + field update) and in metrics, for `bench`.
+        self.timings = {"physics": 0.0, "lights": 0.0, "metrics": 0.0}
         self._record()
 
     def step(self, n: int = 1) -> None:
@@ -88,8 +90,10 @@ class Simulation:
     def _step_once(self) -> None:
         cfg = self.world.config
         state = self._sync()
+        t0 = time.perf_counter()
         if self.controller.advance():
             self.lights.set_intensities(self.controller.intensities)
+            self.timings["lights"] += time.perf_counter() - t0
         nr = self.world.n_robots
         if nr:
             positions, headings = state[:nr, 0:2], state[:nr, 2]
@@ -101,7 +105,7 @@ class Simulation:
             self.world.set_robot_velocities(v * np.cos(headings), v * np.sin(headings), w)
         t0 = time.perf_counter()
         self.world.step()
-        self.physics_seconds += time.perf_counter() - t0
+        self.timings["physics"] += time.perf_counter() - t0
         self.steps_done += 1
         self._fresh = False
 
@@ -253,8 +257,10 @@ class Simulation:
         )
 
     def _record(self) -> None:
+        t0 = time.perf_counter()
         self._sync()
         self.history.append(self.measure())
+        self.timings["metrics"] += time.perf_counter() - t0
 
     def has_nan(self) -> bool:
         return not (np.isfinite(self.world.state).all() and np.isfinite(self._charge).all())

@@ -1,0 +1,136 @@
+"""``phototaxis bench``: how fast the engine runs and where the time goes.
+
+Runs the paper's configuration (or any other: every parameter is a flag)
+and reports steps per second, the share of wall time inside pymunk's
+``Space.step`` against our own code, and peak memory. ``--scale K``
+multiplies both populations by K in an arena K^(1/2) times wider (density
+kept); ``--live`` measures the browser app with a real client connected.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import resource
+import sys
+import time
+from typing import Any
+
+from tqdm import tqdm
+
+from .config import Config
+from .simulation import Simulation
+
+
+def add_parser(sub: Any) -> argparse.ArgumentParser:
+    from .cli import add_config_arguments
+
+    p = sub.add_parser("bench", help="measure steps per second and where the time goes",
+                       description="Benchmark the engine on the paper's configuration (circle, 200 robots, "
+                       "500 boxes) unless flags say otherwise.")
+    p.add_argument("--scale", type=float, default=1.0, metavar="K",
+                   help="K times the robots and boxes in an arena sqrt(K) times wider (default 1)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.add_argument("--live", action="store_true",
+                   help="measure the browser sandbox with a headless Chromium client connected instead")
+    p.add_argument("--seconds", type=float, default=20.0, help="how long --live measures (default 20)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_config_arguments(p)
+    p.set_defaults(func=bench_command)
+    return p
+
+
+def scaled(config: Config, k: float) -> Config:
+    """The same densities and light pitch in a bigger (k > 1) world."""
+    if k == 1.0:
+        return config
+    grow = math.sqrt(k)
+    pitch = config.light_pitch
+
+    def whole_pitches(x: float) -> float:
+        return max(pitch, round(x * grow / pitch) * pitch)
+
+    return config.replace(
+        arena_size=whole_pitches(config.arena_size),
+        construction_size=whole_pitches(config.construction_size),
+        robot_spawn_size=whole_pitches(config.robot_spawn_size),
+        robots=int(round(config.robots * k)),
+        boxes=int(round(config.boxes * k)),
+    )
+
+
+def peak_rss_mb() -> float:
+    # ru_maxrss is in KiB on Linux.
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def measure(config: Config, steps: int, progress: bool = False) -> dict[str, Any]:
+    """Run ``steps`` steps and time them; the world's construction is not counted."""
+    sim = Simulation(config)
+    chunk = max(1, min(1000, steps))
+    bar = tqdm(total=steps, unit="step", file=sys.stderr, disable=not progress, dynamic_ncols=True)
+    started = time.perf_counter()
+    rss_samples = []
+    while sim.steps_done < steps:
+        n = min(chunk, steps - sim.steps_done)
+        sim.step(n)
+        bar.update(n)
+        rss_samples.append(peak_rss_mb())
+    wall = time.perf_counter() - started
+    bar.close()
+    t = sim.timings
+    final = sim.measure()
+    ours = wall - t["physics"]
+    return {
+        "steps": steps,
+        "robots": config.robots,
+        "boxes": config.boxes,
+        "arena_size": config.arena_size,
+        "wall_seconds": round(wall, 3),
+        "steps_per_second": round(steps / wall, 1),
+        "physics_share": round(t["physics"] / wall, 3),
+        "lights_share": round(t["lights"] / wall, 3),
+        "metrics_share": round(t["metrics"] / wall, 3),
+        "robots_share": round((ours - t["lights"] - t["metrics"]) / wall, 3),
+        "us_per_step": {"physics": round(t["physics"] / steps * 1e6, 1), "ours": round(ours / steps * 1e6, 1)},
+        "full_trial_seconds": round(100_000 * wall / steps, 1),
+        "peak_rss_mb": round(peak_rss_mb(), 1),
+        "rss_growth_mb_second_half": round(rss_samples[-1] - rss_samples[len(rss_samples) // 2], 1),
+        "field_cache_hits": sim.lights.cache_hits,
+        "field_updates": sim.lights.rebuilds,
+        "nan": sim.has_nan(),
+        "boxes_escaped": final.boxes_escaped,
+        "fraction_in_goal": round(final.fraction_in_goal, 4),
+        "cycles": sim.cycle,
+    }
+
+
+def bench_command(args: argparse.Namespace) -> int:
+    from .cli import UserError, config_from_args
+
+    if not (args.scale > 0 and math.isfinite(args.scale)):
+        raise UserError(f"--scale must be a positive number, got {args.scale}")
+    if args.steps is None:
+        args.steps = 20_000  # a benchmark default: two full cycles, not a whole trial
+    config = scaled(config_from_args(args), args.scale)
+    if args.live:
+        if not args.seconds > 0:
+            raise UserError(f"--seconds must be positive, got {args.seconds}")
+        try:
+            from .app import live_bench
+        except ImportError as exc:
+            raise UserError(f"--live needs the browser app: {exc}") from None
+        result = live_bench.run(config, args.seconds)
+    else:
+        if config.steps <= 0:
+            raise UserError("--steps must be at least 1 for a benchmark")
+        result = measure(config, config.steps, progress=not args.no_progress)
+    if args.json:
+        json.dump(result, sys.stdout)
+        sys.stdout.write("\n")
+    else:
+        width = max(len(k) for k in result)
+        for key, value in result.items():
+            print(f"{key:<{width}}  {value}")
+    return 0

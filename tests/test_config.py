@@ -1,0 +1,72 @@
+"""The parameter declaration, config files and cases."""
+
+import json
+
+import pytest
+
+from sandbox.config import CASES, Config, ConfigError, case_config, load_config_file, param_names, params
+
+
+def test_every_parameter_is_documented():
+    for p in params():
+        assert p.help and p.group
+        if p.type in (int, float):
+            assert p.low is not None and p.high is not None
+            assert p.low <= p.default <= p.high, p.name
+
+
+def test_spec_defaults():
+    c = Config()
+    assert (c.arena_size, c.construction_size, c.robots, c.boxes) == (64, 16, 200, 500)
+    assert (c.k_drive, c.k_turn, c.command_period) == (5, 20, 50)
+    assert (c.eta_in, c.metabolic, c.eta_out, c.capacity, c.start_charge) == (0.4, 0.01, 0.1, 20, 0)
+    assert (c.update_every, c.scale_rate, c.hold_steps, c.light_range) == (100, 0.975, 25, 12.8)
+    assert c.lights_per_side == 64
+
+
+@pytest.mark.parametrize("bad", [dict(robots=-1), dict(k_drive=float("nan")), dict(box_size_is="side"),
+                                 dict(flare=11), dict(construction_size=70), dict(arena_size=64.5)])
+def test_bad_values_are_refused_with_a_message(bad):
+    with pytest.raises(ConfigError) as err:
+        Config().replace(**bad)
+    assert "\n" not in str(err.value)
+
+
+def test_unknown_parameter():
+    with pytest.raises(ConfigError, match="unknown parameter"):
+        Config().replace(robotz=3)
+
+
+def test_strings_are_coerced():
+    c = Config().replace(robots="12", k_drive="2.5")
+    assert c.robots == 12 and c.k_drive == 2.5
+    with pytest.raises(ConfigError, match="whole number"):
+        Config().replace(robots="1.5")
+
+
+def test_toml_and_json_files(tmp_path):
+    toml = tmp_path / "c.toml"
+    toml.write_text('robots = 10\n[controller]\nshape = "star"\nhold_steps = 3\n')
+    c = load_config_file(toml)
+    assert (c.robots, c.shape, c.hold_steps) == (10, "star", 3)
+    js = tmp_path / "c.json"
+    js.write_text(json.dumps({"config": Config(boxes=7).to_dict()}))  # a result file
+    assert load_config_file(js).boxes == 7
+
+
+@pytest.mark.parametrize("text, message", [("robots = ", "not valid"), ("robotz = 1", "unknown"),
+                                           ("robots = 'many'", "whole number")])
+def test_bad_files(tmp_path, text, message):
+    f = tmp_path / "bad.toml"
+    f.write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_config_file(f)
+
+
+def test_cases():
+    assert len(CASES) == 7
+    c = case_config("star-switch-nocorners")
+    assert (c.shape, c.switch, c.no_corners, c.flare) == ("star", 0.25, 0.5, 0.0)
+    with pytest.raises(ConfigError, match="unknown case"):
+        case_config("hexagon")
+    assert "seed" in param_names()
