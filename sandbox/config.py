@@ -319,3 +319,12 @@ def case_config(name: str, base: Config | None = None) -> Config:
         raise ConfigError(f"unknown case {name!r}; the cases are: {', '.join(CASES)}")
     base = base or Config()
     return base.replace(**CASES[name])
+
+
+def markdown_table() -> str:
+    """The parameter table in README.md (a test keeps the two in step)."""
+    rows = ["| flag | default | unit | what it is |", "| --- | --- | --- | --- |"]
+    for p in params():
+        default = f"{p.default:.6g}" if isinstance(p.default, float) else str(p.default)
+        rows.append(f"| `--{p.name.replace('_', '-')}` | {default} | {p.unit} | {p.help} |")
+    return "\n".join(rows)
