@@ -36,10 +36,12 @@ table, the grid values).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import itertools
 import json
 import os
 import shlex
+import signal
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -268,6 +270,23 @@ def _cpu_count() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+@contextlib.contextmanager
+def _term_as_interrupt():
+    """Treat SIGTERM (kill, a batch system's time limit) like Ctrl-C: stop workers, keep finished trials."""
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def sweep_command(args: argparse.Namespace) -> int:
     from .cli import UserError
 
@@ -307,7 +326,8 @@ def _sweep(args: argparse.Namespace) -> int:
     print(f"sweep: {len(cases)} case(s) x {args.trials} trial(s) of {', '.join(map(str, steps))} steps "
           f"(seeds {seed_start}..{seed_start + args.trials - 1}) on {where}; results in {out}", file=sys.stderr)
     try:
-        outcome = run_trials(trials, store, executor, progress=not args.no_progress)
+        with _term_as_interrupt():
+            outcome = run_trials(trials, store, executor, progress=not args.no_progress)
     except KeyboardInterrupt:
         print(f"sweep interrupted: finished trials are saved in {out}; run the same command again to resume",
               file=sys.stderr)

@@ -23,6 +23,7 @@ import json
 import multiprocessing
 import os
 import re
+import signal
 import socket
 import sys
 import time
@@ -214,12 +215,27 @@ def read_samples(path: Path) -> dict[str, np.ndarray]:
 # Executors.
 
 
+def _worker_init() -> None:
+    # Ctrl-C is for the parent: it stops the workers itself (otherwise a worker
+    # catches KeyboardInterrupt as a trial failure and goes on with the queue).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 @contextlib.contextmanager
 def local_executor(workers: int) -> Iterator[cf.Executor]:
     # spawn: fresh interpreters, no inherited threads or pymunk state, same on every OS.
-    ex = cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    ex = cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                                initializer=_worker_init)
     try:
         yield ex
+    except BaseException:
+        # Interrupted (or a bug): stop the trials in flight now, not after they finish.
+        if hasattr(ex, "terminate_workers"):  # Python 3.14+
+            ex.terminate_workers()
+        else:
+            for process in list(getattr(ex, "_processes", {}).values()):
+                process.terminate()
+        raise
     finally:
         ex.shutdown(wait=False, cancel_futures=True)
 
