@@ -34,6 +34,14 @@ SUBCOMMANDS = {
 _STRATEGY_FLAGS = {"flare": "--flare", "switch": "--switch", "no_corners": "--no-corners"}
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line, not the whole usage text
+    (every parameter is a flag, so the usage is long)."""
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
 class UserError(Exception):
     """Raised by subcommands for errors to show as one line, exit code 2."""
 
@@ -82,12 +90,12 @@ def config_from_args(args: argparse.Namespace) -> Config:
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="phototaxis",
         description="A light-powered phototaxic robot swarm that pushes boxes into a goal shape. "
         "With no command, starts the browser sandbox (same as 'phototaxis serve').",
     )
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     for name, (module, adder) in SUBCOMMANDS.items():
         if only is not None and name != only:
             continue

@@ -1,0 +1,98 @@
+"""The command line as a user runs it: exit codes, one-line errors, JSON and traces."""
+
+import csv
+import json
+import subprocess
+import sys
+
+import pytest
+
+SMALL = ["--robots", "10", "--boxes", "20", "--steps", "300", "--metrics-every", "100", "--no-progress"]
+
+
+def phototaxis(*args: str, cwd=None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "sandbox", *args], capture_output=True, text=True, timeout=120, cwd=cwd)
+
+
+def test_run_json_has_the_promised_keys(tmp_path):
+    trace = tmp_path / "t.csv"
+    out = phototaxis("run", "--case", "star-switch", *SMALL, "--json", "--trace", str(trace))
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    for key in ("case", "seed", "steps", "robots", "boxes", "fraction_in_goal", "mean_outside_distance",
+                "boxes_escaped", "cycles", "wall_seconds", "steps_per_second", "config"):
+        assert key in result
+    assert result["case"] == "star-switch" and result["steps"] == 300 and result["boxes_escaped"] == 0
+    assert result["config"]["switch"] == 0.25 and result["config"]["robots"] == 10
+    rows = list(csv.DictReader(trace.open()))
+    assert [int(r["step"]) for r in rows] == [0, 100, 200, 300]
+    assert float(rows[-1]["fraction_in_goal"]) == pytest.approx(result["fraction_in_goal"])
+
+
+def test_flags_override_case_and_config_file(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("seed = 5\nflare = 1.0\n")
+    out = phototaxis("run", "--config", str(cfg), "--case", "square-flare", "--flare", "2.5", *SMALL, "--json")
+    assert out.returncode == 0, out.stderr
+    config = json.loads(out.stdout)["config"]
+    assert (config["seed"], config["shape"], config["flare"]) == (5, "square", 2.5)
+
+
+def test_bare_strategy_flags_take_their_default_amount():
+    out = phototaxis("run", "--shape", "square", "--flare", "--switch", "--no-corners", *SMALL, "--json")
+    config = json.loads(out.stdout)["config"]
+    assert (config["flare"], config["switch"], config["no_corners"]) == (1.75, 0.25, 0.5)
+
+
+def test_same_seed_same_result_from_the_cli():
+    a = json.loads(phototaxis("run", *SMALL, "--seed", "4", "--json").stdout)
+    b = json.loads(phototaxis("run", *SMALL, "--seed", "4", "--json").stdout)
+    assert a["fraction_in_goal"] == b["fraction_in_goal"]
+    assert a["mean_outside_distance"] == b["mean_outside_distance"]
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--robots", "many"], "whole number"),
+    (["--robots", "-3"], "outside the allowed range"),
+    (["--k-drive", "nan"], "finite"),
+    (["--shape", "nosuchshape"], "built-in shapes are"),
+    (["--case", "hexagon"], "invalid choice"),
+    (["--config", "/no/such/file.toml"], "cannot read config file"),
+    (["--trace", "/proc/nope/t.csv"], "cannot write trace file"),
+    (["--box-size-is", "side"], "invalid choice"),
+])
+def test_bad_input_is_one_line_and_exit_2(args, words):
+    out = phototaxis("run", *SMALL, *args)
+    assert out.returncode == 2
+    assert words in out.stderr
+    assert "Traceback" not in out.stderr
+    assert len(out.stderr.strip().splitlines()) <= 2  # argparse adds a usage line
+
+
+def test_bad_shape_file(tmp_path):
+    bad = tmp_path / "bow.txt"
+    bad.write_text("0 0\n1 1\n1 0\n0 1\n")
+    out = phototaxis("run", *SMALL, "--shape", str(bad))
+    assert out.returncode == 2 and "bow.txt" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_bench_json():
+    out = phototaxis("bench", "--steps", "200", "--robots", "20", "--boxes", "30", "--json", "--no-progress")
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout)
+    assert r["steps_per_second"] > 0 and 0 < r["physics_share"] < 1 and r["peak_rss_mb"] > 0
+
+
+def test_bench_scale_grows_the_world():
+    from sandbox.bench import scaled
+    from sandbox.config import Config
+
+    c = scaled(Config(), 10)
+    assert (c.robots, c.boxes, c.arena_size, c.construction_size) == (2000, 5000, 202.0, 51.0)
+
+
+def test_help_lists_commands():
+    out = phototaxis("--help")
+    assert out.returncode == 0
+    for command in ("run", "bench", "serve", "sweep", "report", "record"):
+        assert command in out.stdout
