@@ -71,6 +71,7 @@ def measure(config: Config, steps: int, progress: bool = False) -> dict[str, Any
     chunk = max(1, min(1000, steps))
     bar = tqdm(total=steps, unit="step", file=sys.stderr, disable=not progress, dynamic_ncols=True)
     started = time.perf_counter()
+    cpu_started = time.process_time()
     rss_samples = []
     while sim.steps_done < steps:
         n = min(chunk, steps - sim.steps_done)
@@ -78,6 +79,7 @@ def measure(config: Config, steps: int, progress: bool = False) -> dict[str, Any
         bar.update(n)
         rss_samples.append(peak_rss_mb())
     wall = time.perf_counter() - started
+    cpu = time.process_time() - cpu_started
     bar.close()
     t = sim.timings
     final = sim.measure()
@@ -89,6 +91,9 @@ def measure(config: Config, steps: int, progress: bool = False) -> dict[str, Any
         "arena_size": config.arena_size,
         "wall_seconds": round(wall, 3),
         "steps_per_second": round(steps / wall, 1),
+        # On a shared machine CPU time is steadier than wall time.
+        "cpu_seconds": round(cpu, 3),
+        "steps_per_cpu_second": round(steps / cpu, 1) if cpu > 0 else None,
         "physics_share": round(t["physics"] / wall, 3),
         "lights_share": round(t["lights"] / wall, 3),
         "metrics_share": round(t["metrics"] / wall, 3),
