@@ -21,7 +21,11 @@ _SENSOR_ANGLES = np.array([0.0, np.pi, np.pi / 2, -np.pi / 2])
 def sensor_points(positions: np.ndarray, headings: np.ndarray, offset: float) -> np.ndarray:
     """Floor points under each robot's four photocells, shape (n, 4, 2)."""
     a = headings[:, None] + _SENSOR_ANGLES[None, :]
-    return positions[:, None, :] + offset * np.stack([np.cos(a), np.sin(a)], axis=-1)
+    out = np.empty(a.shape + (2,))
+    np.multiply(np.cos(a), offset, out=out[..., 0])
+    np.multiply(np.sin(a), offset, out=out[..., 1])
+    out += positions[:, None, :]
+    return out
 
 
 def braitenberg(readings: np.ndarray, k_drive: float, k_turn: float) -> tuple[np.ndarray, np.ndarray]:
@@ -36,7 +40,7 @@ def charge_step(charge: np.ndarray, luminosity: np.ndarray, v: np.ndarray, w: np
     """One step of the energy store, clamped to [0, capacity]."""
     gained = config.eta_in * luminosity
     spent = config.metabolic + config.eta_out * (np.abs(v) + np.abs(w))
-    return np.clip(charge + gained - spent, 0.0, config.capacity)
+    return (charge + gained - spent).clip(0.0, config.capacity)
 
 
 def charge_colours(charge: np.ndarray, capacity: float) -> np.ndarray:
