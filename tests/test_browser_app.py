@@ -1,0 +1,276 @@
+"""The real page in headless Chromium (Debian's chromium through Playwright).
+
+One small simulation and one browser for the whole module; each test drives
+one part of the panel and checks that it reached the simulation. Waits are
+for conditions, never fixed sleeps.
+"""
+
+from __future__ import annotations
+
+import io
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sandbox.app.live_bench import CHROMIUM_ARGS, chromium_path
+
+CHROMIUM = chromium_path()
+pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (apt-get install chromium)")
+playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwright (pip install -e '.[test]')")
+
+SQUARE = b"0 0\n4 0\n4 4\n0 4\n"
+BOWTIE = b"0 0\n4 4\n4 0\n0 4\n"  # crosses itself
+
+
+def wait_until(condition, timeout: float = 20.0, what: str = "condition"):
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        value = condition()
+        if value:
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+@pytest.fixture(scope="module")
+def app():
+    from sandbox.app.server import App, free_port
+    from sandbox.config import Config
+
+    config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
+    app = App(config, port=free_port(), steps_per_frame=4)
+    app.start()
+    yield app
+    app.stop()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with playwright_api.sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield browser
+        browser.close()
+
+
+@pytest.fixture(scope="module")
+def page(app, browser):
+    context = browser.new_context(viewport={"width": 1400, "height": 900}, accept_downloads=True)
+    page = context.new_page()
+    page.goto(f"http://127.0.0.1:{app.port}/")
+    page.get_by_text("Goal shape", exact=True).wait_for(timeout=30_000)
+    wait_until(lambda: app.server.get_clients(), what="the page to connect")
+    yield page
+    context.close()
+
+
+def scene_canvas(page):
+    canvases = page.locator("canvas")
+    sizes = [(c.bounding_box() or {"width": 0, "height": 0}) for c in canvases.all()]
+    best = max(range(len(sizes)), key=lambda i: sizes[i]["width"] * sizes[i]["height"])
+    return canvases.nth(best)
+
+
+def open_folder(page, title: str) -> None:
+    page.get_by_text(title, exact=True).first.click()
+
+
+def click_button(page, name: str) -> None:
+    page.get_by_role("button", name=name, exact=True).click()
+
+
+def choose(page, label: str, option: str) -> None:
+    """Pick an option of a dropdown (retrying while its opening animation runs)."""
+    field = page.get_by_label(label, exact=True)
+    for _ in range(5):
+        field.click()
+        item = page.get_by_role("option", name=option, exact=True)
+        item.wait_for(state="visible", timeout=10_000)
+        page.wait_for_timeout(300)  # let the drop-down finish opening
+        item.click()
+        try:
+            wait_until(lambda: field.input_value() == option, 3, f"{label} = {option}")
+            return
+        except AssertionError:
+            continue
+    raise AssertionError(f"could not choose {option!r} in {label!r}")
+
+
+def notification(page, text: str):
+    return page.get_by_text(text).first.wait_for(timeout=15_000)
+
+
+# --------------------------------------------------------------------- tests
+def test_page_loads_and_draws_the_arena(app, page):
+    from PIL import Image
+
+    from sandbox.app import palette
+
+    canvas = scene_canvas(page)
+    box = canvas.bounding_box()
+    assert box["width"] > 400 and box["height"] > 400
+
+    def arena_drawn():
+        img = np.asarray(Image.open(io.BytesIO(canvas.screenshot())).convert("RGB")).astype(int)
+        off = np.abs(img - np.array(palette.LIGHT_OFF)).sum(axis=2) < 60  # unlit light cells (tone-mapped)
+        return off.mean() > 0.2
+
+    wait_until(arena_drawn, 30, "the light grid to be drawn")
+    start = app.runner.sim.steps_done
+    wait_until(lambda: app.runner.sim.steps_done > start + 20, what="the simulation to run")
+    assert page.get_by_text("Phase", exact=False).count() > 0
+
+
+def test_run_controls(app, page):
+    runner = app.runner
+    click_button(page, "Pause")
+    wait_until(lambda: not runner.playing, what="pause")
+    before = runner.sim.steps_done
+    time.sleep(0.3)
+    assert runner.sim.steps_done == before
+    click_button(page, "Step")
+    wait_until(lambda: runner.sim.steps_done == before + 1, what="one step")
+    click_button(page, "Reset (same seed)")
+    seed = runner.sim.seed
+    wait_until(lambda: runner.sim.steps_done == 0, what="reset")
+    assert runner.sim.seed == seed
+    click_button(page, "Reset (new seed)")
+    wait_until(lambda: runner.sim.seed != seed, what="a new seed")
+    thumb = page.get_by_role("slider").first  # "Steps per frame", the first slider of the panel
+    speed = runner.steps_per_frame
+    thumb.focus()
+    thumb.press("ArrowRight")
+    thumb.press("ArrowRight")
+    wait_until(lambda: runner.steps_per_frame == speed + 2, what="the speed to change")
+    click_button(page, "Play")
+    wait_until(lambda: runner.playing, what="play")
+    page.get_by_label("Show sensed light", exact=True).check()
+    wait_until(lambda: app.view.show_field, what="the heat map")
+    page.get_by_label("Show sensed light", exact=True).uncheck()
+    wait_until(lambda: not app.view.show_field, what="the light grid")
+
+
+def test_shape_picker_changes_the_goal(app, page):
+    choose(page, "Shape", "star")
+    wait_until(lambda: app.runner.latest.shape_name == "star" and app.runner.latest.goal_vertices is not None,
+               what="the star goal")
+    assert len(app.runner.latest.goal_vertices) == 10
+
+
+@pytest.mark.parametrize("label,name", [("Flare", "flare"), ("Switch to circle", "switch"),
+                                        ("No corners", "no_corners")])
+def test_each_strategy_reaches_the_simulation(app, page, label, name):
+    from sandbox.config import STRATEGY_DEFAULTS
+
+    steps = app.runner.sim.steps_done
+    page.get_by_label(label, exact=True).check()
+    wait_until(lambda: app.runner.sim.controller.strategies[name] == STRATEGY_DEFAULTS[name],
+               what=f"{name} in the controller")
+    assert app.runner.sim.steps_done >= steps  # no reset happened
+    page.get_by_label(label, exact=True).uncheck()
+    wait_until(lambda: app.runner.sim.controller.strategies[name] == 0.0, what=f"{name} off")
+
+
+def test_drawing_by_clicks_creates_a_valid_goal(app, page):
+    open_folder(page, "Draw")
+    click_button(page, "Start drawing")
+    wait_until(lambda: app.panel.drawing, what="draw mode")
+    box = scene_canvas(page).bounding_box()
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    for k, (dx, dy) in enumerate(((-120, -80), (120, -80), (150, 90), (0, 160), (-150, 90))):
+        page.mouse.click(cx + dx, cy + dy)
+        wait_until(lambda: len(app.panel.draw_points) == k + 1, what=f"drawn point {k + 1}")
+        page.wait_for_timeout(400)  # not a double click
+    pts = np.array(app.panel.draw_points)
+    assert np.all((pts > 0) & (pts < app.runner.latest.world_config.arena_size))  # on the floor
+    click_button(page, "Undo last point")
+    wait_until(lambda: len(app.panel.draw_points) == 4, what="undo")
+    click_button(page, "Close and use")
+    wait_until(lambda: app.runner.latest.shape_name == "drawn", what="the drawn goal")
+    assert len(app.runner.latest.goal_vertices) == 4
+    assert not app.panel.drawing
+
+
+def test_upload_valid_and_invalid_files(app, page):
+    upload = page.locator("input[type=file]")
+    upload.set_input_files(files=[{"name": "my-square.txt", "mimeType": "text/plain", "buffer": SQUARE}])
+    wait_until(lambda: app.runner.latest.shape_name == "my-square.txt", what="the uploaded goal")
+    steps = app.runner.sim.steps_done
+    upload.set_input_files(files=[{"name": "bowtie.txt", "mimeType": "text/plain", "buffer": BOWTIE}])
+    notification(page, "crosses itself")
+    wait_until(lambda: app.runner.sim.steps_done > steps + 20, what="the simulation to keep running")
+    assert app.runner.latest.shape_name == "my-square.txt"
+    upload.set_input_files(files=[{"name": "junk.bin", "mimeType": "application/octet-stream",
+                                   "buffer": b"\x00\x01\x02garbage"}])
+    notification(page, "binary file")
+    assert app.runner.latest.shape_name == "my-square.txt"
+
+
+def test_download_shape_and_metrics(app, page, tmp_path):
+    from sandbox.shapes import load_polygon
+
+    with page.expect_download() as info:
+        click_button(page, "Download shape")
+    path = tmp_path / info.value.suggested_filename
+    info.value.save_as(path)
+    assert len(load_polygon(path)) >= 3
+    with page.expect_download() as info:
+        click_button(page, "Download CSV")
+    text = Path(info.value.path()).read_text()
+    assert text.splitlines()[0].startswith("step,time,fraction_in_goal")
+    assert len(text.splitlines()) >= 2
+
+
+def test_parameters_and_inspector(app, page):
+    open_folder(page, "Population and physics")
+    robots = page.get_by_label("robots", exact=True)
+    robots.fill("25")
+    robots.press("Tab")
+    wait_until(lambda: app.runner.sim.config.robots == 25, what="the robots setting")
+    notification(page, "Applies on reset")
+    assert app.runner.sim.world.n_robots == 40  # not before a reset
+    open_folder(page, "Robot: gains and energy")
+    gain = page.get_by_label("k turn", exact=True)
+    gain.fill("15")
+    gain.press("Tab")
+    wait_until(lambda: app.runner.sim.world.config.k_turn == 15, what="the live gain")
+    click_button(page, "Follow a random robot")
+    wait_until(lambda: app.runner.latest.robot is not None, what="a followed robot")
+    page.get_by_text("front", exact=True).wait_for(timeout=10_000)
+    click_button(page, "Stop following")
+    wait_until(lambda: app.runner.selected is None, what="stop following")
+
+
+def test_second_browser_and_disconnect(app, browser, page):
+    other = browser.new_page()
+    other.goto(f"http://127.0.0.1:{app.port}/")
+    other.get_by_text("Goal shape", exact=True).wait_for(timeout=30_000)
+    wait_until(lambda: len(app.server.get_clients()) == 2, what="two clients")
+    other.close()
+    wait_until(lambda: len(app.server.get_clients()) == 1, what="one client again")
+    steps = app.runner.sim.steps_done
+    wait_until(lambda: app.runner.sim.steps_done > steps + 20, what="the simulation to keep running")
+    assert not app.runner.errors
+
+
+def test_recording_downloads_a_standalone_page(app, browser, page, tmp_path):
+    open_folder(page, "Record")
+    click_button(page, "Start recording")
+    wait_until(lambda: app.panel.recorder is not None, what="recording")
+    frames = app.frames_drawn
+    wait_until(lambda: app.frames_drawn > frames + 10, what="some frames")
+    with page.expect_download(timeout=60_000) as info:
+        click_button(page, "Stop and download")
+    path = tmp_path / "recording.html"
+    info.value.save_as(path)
+    html = path.read_text()
+    assert "__VISER_EMBED_DATA__" in html and len(html) > 100_000
+    # It opens without a server.
+    replay = browser.new_page()
+    errors = []
+    replay.on("pageerror", lambda e: errors.append(str(e)))
+    replay.goto(path.as_uri())
+    replay.locator("canvas").first.wait_for(timeout=30_000)
+    assert not errors
+    replay.close()
