@@ -102,12 +102,14 @@ def _write_final_csv(by_case: dict[str, list[dict]], path: Path) -> None:
     names = [p.name for p in params()]
     with path.open("w", newline="") as fh:
         writer = csv.writer(fh)
-        writer.writerow(["case", "seed", "final_step", *METRICS, "boxes_escaped", "seconds", "host", *names])
+        writer.writerow(["case", "seed", "final_step", *METRICS, "boxes_escaped", "seconds", "cpu_seconds", "host",
+                         *names])
         for case, trials in by_case.items():
             for t in trials:
                 s = t["samples"]
                 writer.writerow([case, t["seed"], int(s["step"][-1]), *(_plain(s[m][-1]) for m in METRICS),
-                                 int(s["boxes_escaped"][-1]), t.get("seconds", ""), t.get("host", ""),
+                                 int(s["boxes_escaped"][-1]), t.get("seconds", ""), t.get("cpu_seconds", ""),
+                                 t.get("host", ""),
                                  *(t["config"].get(n, "") for n in names)])
 
 
@@ -160,7 +162,8 @@ def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: l
     trials = [t for ts in by_case.values() for t in ts]
     steps = sorted({int(t["steps"]) for t in trials})
     seeds = sorted({int(t["seed"]) for t in trials})
-    cpu = sum(float(t.get("seconds", 0)) for t in trials)
+    wall = sum(float(t.get("seconds", 0)) for t in trials)
+    cpu = sum(float(t.get("cpu_seconds", t.get("seconds", 0))) for t in trials)
     hosts = sorted({t.get("host", "?") for t in trials})
     defaults = Config().to_dict()
     first_cfg = trials[0]["config"]
@@ -177,8 +180,8 @@ def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: l
                 f"({', '.join(f'{c}: {len(ts)}' for c, ts in by_case.items())})",
             f"- steps per trial: {', '.join(map(str, steps))}; seeds {seeds[0]}–{seeds[-1]} "
             f"(each case uses the same seeds)",
-            f"- compute: {cpu / 3600:.2f} CPU-hours ({cpu / len(trials):.0f} s per trial on average), "
-            f"on {len(hosts)} host(s)",
+            f"- compute: {cpu / 3600:.2f} CPU-hours, {cpu / len(trials):.0f} CPU-s per trial "
+            f"({wall / len(trials):.0f} s wall-clock) on average, on {len(hosts)} host(s)",
             f"- base parameters changed from the defaults: {_overrides_text(base_changes)}"]
     if meta.get("cases"):
         out += ["", "Cases:", ""]

@@ -63,7 +63,7 @@ def run_trial(config: dict, seed: int, steps: int, shape: list | None) -> dict:
     from .simulation import Simulation  # imported in the worker
 
     cfg = Config(**config).replace(seed=int(seed), steps=int(steps))
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     sim = Simulation(cfg, shape=None if shape is None else np.asarray(shape, dtype=float))
     sim.step(cfg.steps)
     if sim.has_nan():
@@ -76,6 +76,7 @@ def run_trial(config: dict, seed: int, steps: int, shape: list | None) -> dict:
         "seed": cfg.seed,
         "steps": cfg.steps,
         "seconds": round(time.perf_counter() - start, 3),
+        "cpu_seconds": round(time.process_time() - cpu, 3),
         "host": socket.gethostname(),
         "samples": samples,
         "final": {

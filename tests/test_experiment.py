@@ -266,3 +266,27 @@ def test_describe_by_hand():
     assert s.sem == pytest.approx(math.sqrt(14 / 3) / 2)
     one = describe("c", "m", np.array([0.5]), 100)
     assert one.mean == 0.5 and math.isnan(one.std)
+
+
+def test_sigterm_keeps_finished_trials_and_resume_runs_the_rest(tmp_path, capsys):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "run"
+    argv = ["sweep", "--cases", "square", "--trials", "3", "--workers", "1", "--no-progress", "--no-report",
+            "--robots", "40", "--boxes", "80", "--steps", "4000", "--out", str(out)]
+    proc = subprocess.Popen([sys.executable, "-m", "sandbox", *argv], stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not list(out.glob("trials/square/seed-*.json")) and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "run the same command again to resume" in err
+    saved = len(list(out.glob("trials/square/seed-*.json")))
+    assert 1 <= saved < 3
+    assert not list(out.glob("trials/square/*.tmp"))
+    assert cli.main(argv) == 0
+    assert f"{3 - saved} trial(s) run, {saved} already done" in capsys.readouterr().err
