@@ -139,6 +139,8 @@ def grid_cases(path: str, base: Config, typed: dict) -> tuple[list[Case], list[t
             if key not in names and not (allow_case and key == "case"):
                 hint = [n for n in names if n.replace("_", "") == key.replace("_", "").replace("-", "")]
                 extra = f" (did you mean {hint[0]!r}?)" if hint else "; see 'phototaxis sweep --help' for the names"
+                if key == "compare":
+                    extra = " (in TOML, put compare = [...] above the first [table], or it belongs to that table)"
                 raise SweepError(f"{where}unknown parameter {key!r} in {what}{extra}")
             if key == "seed":
                 raise SweepError(f"{where}'seed' in {what}: seeds are chosen with --seeds and --trials")
@@ -361,10 +363,20 @@ def add_sweep_parser(subparsers: Any) -> argparse.ArgumentParser:
 
     p = subparsers.add_parser(
         "sweep", help="run many trials in parallel and write the paper's tables and figures",
-        description="Run cases x seeds as independent trials, locally or on a Dask cluster. Each trial is "
-        "saved under OUT/trials as it finishes; re-running the same command resumes. Then writes "
-        "OUT/report.md with summary tables, Kolmogorov-Smirnov tests and figures. Every model parameter "
-        "flag below sets the base for all cases (e.g. --steps 100000 --robots 200).")
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Run cases x seeds as independent trials, locally or on a Dask cluster. Each trial is\n"
+        "saved under OUT/trials as it finishes; re-running the same command resumes. Then writes\n"
+        "OUT/report.md with summary tables, Kolmogorov-Smirnov tests and figures. Every model\n"
+        "parameter flag below sets the base for all cases (e.g. --steps 100000 --robots 200);\n"
+        "a case's own values (shape, strategies, grid values) win over them.",
+        epilog="grid file example (every combination of the [grid] values is one case):\n"
+        "  [base]\n  steps = 50000\n  [grid]\n  shape = [\"square\", \"star\", \"my/house.txt\"]\n"
+        "  robots = [100, 200]\n  flare = [0.0, 1.75]\n"
+        "optional: [cases.NAME] tables of values, a [grid] key case = [NAME, ...] (also the\n"
+        "paper's case names), and compare = [[CASE, CASE], ...] for extra KS tests.\n\n"
+        "examples:\n"
+        "  phototaxis sweep --cases paper --trials 20 --out runs/paper\n"
+        "  phototaxis sweep --grid grid.toml --trials 10 --scheduler tcp://head:8786 --out runs/grid")
     what = p.add_mutually_exclusive_group()
     what.add_argument("--cases", default=None, metavar="paper|NAME,NAME,...",
                       help=f"'paper' (the seven cases of SPEC §7) or names among: {', '.join(CASES)} "
