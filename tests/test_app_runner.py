@@ -1,0 +1,198 @@
+"""The app without a browser: the simulation thread, snapshots, colours and
+the panel's logic (upload validation, CSV), on a small population."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from sandbox.app import palette
+from sandbox.app.runner import Runner
+from sandbox.config import Config
+
+SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
+
+
+def wait_until(condition, timeout=10.0):
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        if condition():
+            return True
+        time.sleep(0.01)
+    raise AssertionError("timed out")
+
+
+@pytest.fixture
+def runner():
+    r = Runner(SMALL, shape=None, fps=60, steps_per_frame=2)
+    r.start()
+    yield r
+    r.stop()
+
+
+def test_commands_run_in_the_simulation_thread(runner):
+    names = runner.call(lambda sim: threading.current_thread().name)
+    assert names == "phototaxis-simulation"
+    assert runner.call(lambda sim: sim.steps_done) >= 0
+
+
+def test_runs_pauses_steps_and_resets(runner):
+    wait_until(lambda: runner.sim.steps_done > 10)
+    runner.set_playing(False)
+    steps = runner.call(lambda sim: sim.steps_done)
+    time.sleep(0.1)
+    assert runner.call(lambda sim: sim.steps_done) == steps
+    runner.step_once(3)
+    wait_until(lambda: runner.latest.step == steps + 3)
+    runner.reset(7)
+    wait_until(lambda: runner.latest.seed == 7 and runner.latest.step == 0)
+    assert [s.step for s in runner.series()] == [0]
+
+
+def test_snapshots_are_copies_the_gui_can_keep(runner):
+    snap = runner.latest
+    assert snap.robot_positions.shape == (12, 2) and snap.box_positions.shape == (20, 2)
+    assert snap.intensities.shape == (64, 64) and snap.field.dtype == np.float32
+    before = snap.robot_positions.copy()
+    wait_until(lambda: runner.latest.step > snap.step + 10)
+    np.testing.assert_array_equal(snap.robot_positions, before)  # old snapshot untouched
+
+
+def test_errors_go_back_to_whoever_posted(runner):
+    seen = []
+    runner.post(lambda sim: sim.update_config(robots=-1), on_error=seen.append)
+    wait_until(lambda: seen)
+    assert "robots" in str(seen[0])
+    start = runner.latest.step
+    wait_until(lambda: runner.latest.step > start)  # still running
+
+
+def test_shape_change_and_selection(runner):
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
+    runner.set_shape(square, "sq")
+    wait_until(lambda: runner.latest.shape_name == "sq" and runner.latest.goal_vertices is not None)
+    assert len(runner.latest.goal_vertices) == 4
+    runner.select(3)
+    wait_until(lambda: runner.latest.robot is not None)
+    robot = runner.latest.robot
+    assert robot.index == 3 and robot.sensors.shape == (4,) and robot.sensor_points.shape == (4, 2)
+
+
+def test_speed_is_measured(runner):
+    wait_until(lambda: runner.steps_per_second() > 0 and runner.frames_per_second() > 0)
+
+
+def test_headless_advance_without_threads():
+    r = Runner(SMALL, shape=None, playing=False)
+    snap = r.advance(25)
+    assert snap.step == 25 and r.call(lambda sim: sim.steps_done) == 25
+
+
+# ------------------------------------------------------------------ palette
+def test_light_grid_orientation_and_colours():
+    inten = np.zeros((64, 64))
+    inten[0, 63] = 1.0  # the light at the top-left corner (x smallest, y largest)
+    img = palette.light_grid_image(inten, cell_pixels=4)
+    assert img.shape == (256, 256, 3)
+    assert tuple(img[2, 2]) == palette.LIGHT_ON
+    assert tuple(img[254, 254]) == palette.LIGHT_OFF
+    bottom_first = palette.light_grid_image(inten, cell_pixels=4, top_first=False)
+    assert tuple(bottom_first[254, 2]) == palette.LIGHT_ON
+    colours = palette.light_colours(inten)
+    assert tuple(colours[0 * 64 + 63]) == palette.LIGHT_ON  # [ix, iy] row-major like the batched cells
+    assert tuple(colours[1]) == palette.LIGHT_OFF
+
+
+def test_charge_and_box_colours():
+    c = palette.robot_colours(np.array([0.0, 20.0]), 20.0)
+    assert c[0, 0] > c[0, 1] and c[1, 1] > c[1, 0]  # red empty, green full
+    b = palette.box_colours(np.array([True, False]))
+    assert tuple(b[0]) == palette.BOX_IN and tuple(b[1]) == palette.BOX_OUT
+    assert palette.linear((0, 255, 128)).tolist() == [0, 255, 55]
+
+
+def test_closed_segments_join_the_last_vertex_to_the_first():
+    segs = palette.closed_segments(np.array([[0, 0], [1, 0], [0, 1]]), z=0.5)
+    assert segs.shape == (3, 2, 3)
+    np.testing.assert_allclose(segs[-1, 1], [0, 0, 0.5])
+
+
+def test_floor_point():
+    from sandbox.app.panel import floor_point
+
+    assert floor_point((1, 2, 10), (0, 0, -1)) == (1.0, 2.0)
+    x, y = floor_point((0, 0, 10), (1, 1, -10))
+    assert (x, y) == pytest.approx((1.0, 1.0))
+    assert floor_point((0, 0, 10), (1, 0, 0)) is None  # parallel to the floor
+    assert floor_point((0, 0, 10), (0, 0, 1)) is None  # looking up
+
+
+# ------------------------------------------------------- the app, no browser
+class FakeClient:
+    def __init__(self):
+        self.notes = []
+
+    def add_notification(self, title, body, **kwargs):
+        self.notes.append((title, body, kwargs.get("color")))
+
+
+@pytest.fixture
+def app():
+    from sandbox.app.server import App, free_port
+
+    a = App(SMALL, port=free_port(), fps=60, steps_per_frame=2)
+    a.start()
+    yield a
+    a.stop()
+
+
+def test_upload_validation_leaves_the_simulation_alone(app):
+    client = FakeClient()
+    assert not app.panel.use_shape_file("bowtie.txt", b"0 0\n1 1\n1 0\n0 1\n", client)
+    assert client.notes[-1][0] == "Shape not used" and "crosses itself" in client.notes[-1][1]
+    assert not app.panel.use_shape_file("two.txt", b"0 0\n1 1\n", client)
+    assert "at least 3" in client.notes[-1][1]
+    assert not app.panel.use_shape_file("bin.txt", b"\x00\xff", client)
+    assert app.runner.latest.shape_name == "circle"
+    step = app.runner.latest.step
+    wait_until(lambda: app.runner.latest.step > step)
+    assert app.panel.use_shape_file("../../tri.geojson",
+                                    b'{"type": "Polygon", "coordinates": [[[0,0],[2,0],[1,2],[0,0]]]}', client)
+    wait_until(lambda: app.runner.latest.shape_name == "tri.geojson")
+    assert len(app.runner.latest.goal_vertices) == 3
+
+
+def test_metrics_csv_and_frames(app):
+    wait_until(lambda: app.frames_drawn > 5 and len(app.runner.series()) >= 2)
+    lines = app.panel.metrics_csv().splitlines()
+    assert lines[0] == "step,time,fraction_in_goal,mean_outside_distance,boxes_escaped,charged_robots,cycle,phase"
+    assert len(lines) >= 3
+    assert not app.runner.errors
+
+
+def test_recording_from_the_panel(app):
+    app.panel.start_recording()
+    frames = app.frames_drawn
+    wait_until(lambda: app.frames_drawn > frames + 5)
+    html = app.panel.stop_recording()
+    assert "__VISER_EMBED_DATA__" in html
+    assert app.panel.recorder is None
+
+
+def test_serve_command_line_checks_its_flags(capsys):
+    from sandbox.cli import main
+
+    assert main(["serve", "--port", "70000"]) == 2
+    assert "--port" in capsys.readouterr().err
+    assert main(["serve", "--shape", "no-such-shape"]) == 2
+    assert "not a built-in shape" in capsys.readouterr().err
+
+
+def test_serve_defaults_to_this_machine_only():
+    from sandbox.cli import build_parser
+
+    args = build_parser("serve").parse_args(["serve"])
+    assert args.host == "127.0.0.1" and args.port == 8080
