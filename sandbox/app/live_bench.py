@@ -31,13 +31,16 @@ def chromium_path() -> str | None:
 def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 10, fps: float = 30.0,
         warmup: float = 5.0) -> dict[str, Any]:
     """Measure the live app for ``seconds`` (after ``warmup``) with one headless browser."""
-    from playwright.sync_api import sync_playwright
-
+    from ..cli import UserError
     from .server import App, free_port
 
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        raise UserError("the live benchmark needs playwright: pip install -e '.[test]'") from None
     browser_path = chromium_path()
     if browser_path is None:
-        raise RuntimeError("no chromium found: install Debian's chromium (apt-get install chromium)")
+        raise UserError("the live benchmark needs chromium: apt-get install chromium")
     app = App(config, port=free_port(), fps=fps, steps_per_frame=steps_per_frame)
     app.start()
     try:

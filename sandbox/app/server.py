@@ -9,6 +9,8 @@ Every connected browser sees the same simulation and the same panel.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import socket
 import threading
 import time
@@ -33,7 +35,8 @@ class App:
             shape = shape_vertices(config.shape)  # raises ShapeError before any server starts
         self.config = config
         self.runner = Runner(config, shape=shape, fps=fps, steps_per_frame=steps_per_frame, playing=playing)
-        self.server = viser.ViserServer(host=host, port=port, label=TITLE, verbose=verbose)
+        with contextlib.redirect_stdout(io.StringIO()) if not verbose else contextlib.nullcontext():
+            self.server = viser.ViserServer(host=host, port=port, label=TITLE, verbose=verbose)
         self._configure_page()
         self.view = SceneView(self.server.scene, self.runner.latest)
         from .panel import Panel  # imports the Learn illustrations; after the scene exists
@@ -80,7 +83,8 @@ class App:
 
     def stop(self) -> None:
         self.runner.stop()
-        self.server.stop()
+        with contextlib.redirect_stdout(io.StringIO()):  # viser says goodbye on stdout
+            self.server.stop()
 
 
 def free_port(host: str = "127.0.0.1") -> int:
