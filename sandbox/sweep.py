@@ -321,7 +321,11 @@ def run_trials(trials: list[Trial], store: ResultStore, executor: Callable[[], c
                                                          traceback="".join(traceback.format_exception(exc))[-4000:]))
                             bar.update(1)
                         continue
-                    store.save(t.case, result)
+                    try:
+                        store.save(t.case, result)
+                    except OSError as exc:
+                        raise SweepError(f"cannot save trial {t.name} under {store.root}: "
+                                         f"{exc.strerror or exc}") from None
                     outcome.done += 1
                     bar.update(1)
                 if broken:
