@@ -152,9 +152,9 @@ class Panel:
         return (f"**Step** {snap.step:,} &nbsp; **time** {snap.time:,.1f} s  \n"
                 f"**Phase** {snap.phase} &nbsp; **cycle** {snap.cycle}  \n"
                 f"**Seed** {snap.seed} &nbsp; {cfg.robots} robots, {cfg.boxes} boxes, goal *{snap.shape_name}*  \n"
-                f"**Speed** {self.runner.steps_per_second():,.0f} steps/s "
-                f"({self.runner.steps_per_second() * cfg.dt:,.1f}x real time), "
-                f"{self.runner.frames_per_second():,.0f} frames/s")
+                + (f"**Speed** {self.runner.steps_per_second():,.0f} steps/s "
+                   f"({self.runner.steps_per_second() * cfg.dt:,.1f}x real time), "
+                   f"{self.runner.frames_per_second():,.0f} frames/s" if snap.playing else "**Paused**"))
 
     # ============================================================== shape
     def _build_shape(self, snap: Snapshot) -> None:
@@ -181,7 +181,7 @@ class Panel:
         @self.shape.on_update
         def _(event: viser.GuiEvent) -> None:
             name = self.shape.value
-            if name == self.runner.latest.shape_name:
+            if name == self.runner.latest.shape_name or name not in builtin_shape_names():
                 return
             try:
                 vertices = shape_vertices(name)
@@ -527,7 +527,13 @@ class Panel:
         self.metrics_text.content = self._metrics_text(snap)
         if self.play.label != ("Pause" if snap.playing else "Play"):
             self._sync_play_button()
-        if self.shape.value != snap.shape_name and snap.shape_name in self.shape.options:
+        if self.shape.value != snap.shape_name:
+            # A drawn or uploaded goal joins the list, so picking a built-in
+            # shape afterwards is always a change.
+            builtins = tuple(builtin_shape_names())
+            options = builtins if snap.shape_name in builtins else builtins + (snap.shape_name,)
+            if tuple(self.shape.options) != options:
+                self.shape.options = options
             self.shape.value = snap.shape_name
         series = self.runner.series()[-3000:]
         if len(series) >= 2:
