@@ -55,7 +55,11 @@ def test_runs_pauses_steps_and_resets(runner):
 def test_snapshots_are_copies_the_gui_can_keep(runner):
     snap = runner.latest
     assert snap.robot_positions.shape == (12, 2) and snap.box_positions.shape == (20, 2)
-    assert snap.intensities.shape == (64, 64) and snap.field.dtype == np.float32
+    assert snap.intensities.shape == (64, 64) and snap.field is None  # the heat map is off
+    runner.want_field = True
+    wait_until(lambda: runner.latest.field is not None)
+    assert runner.latest.field.shape == (257, 257) and runner.latest.field.dtype == np.float32
+    assert runner.latest.field.max() > 0
     before = snap.robot_positions.copy()
     wait_until(lambda: runner.latest.step > snap.step + 10)
     np.testing.assert_array_equal(snap.robot_positions, before)  # old snapshot untouched

@@ -24,7 +24,7 @@ def render(snap: Snapshot, size: int = 640, *, show_field: bool = False, robot: 
         p = np.asarray(points, dtype=float).reshape(-1, 2)
         return [(float(x * k), float(size - y * k)) for x, y in p]
 
-    if show_field:
+    if show_field and snap.field is not None:
         floor = Image.fromarray(pal.field_image(snap.field)).resize((size, size), Image.BILINEAR)
     else:
         cells = max(1, int(round(size / cfg.lights_per_side)))

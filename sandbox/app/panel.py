@@ -133,6 +133,7 @@ class Panel:
 
         @self.show_field.on_update
         def _(event: viser.GuiEvent) -> None:
+            self.runner.want_field = bool(self.show_field.value)  # the next snapshots carry the field
             self.app.view.set_show_field(self.show_field.value, self.runner.latest)
 
     def _reset_done(self, client: Any) -> None:

@@ -62,7 +62,7 @@ class Snapshot:
     box_in_goal: np.ndarray
     lights_key: tuple  # changes whenever the light pattern (or the world) changes
     intensities: np.ndarray
-    field: np.ndarray  # luminosity on the sample grid, float32 [ix, iy]
+    field: np.ndarray | None  # sensed luminosity on a display grid, float32 [ix, iy]; only when asked for
     outline: np.ndarray
     goal_key: int  # changes whenever the goal changes
     goal_outline: np.ndarray
@@ -89,6 +89,8 @@ class Runner:
         self.playing = bool(playing)
         self.chart_every = int(chart_every)
         self.selected: int | None = None
+        #: Whether snapshots should carry the luminosity field (costly: only for the heat map).
+        self.want_field = False
         self.shape_name = config.shape
         self._commands: queue.SimpleQueue = queue.SimpleQueue()
         self._listeners: list[Callable[[Snapshot], None]] = []
@@ -287,6 +289,13 @@ class Runner:
             with self._series_lock:
                 self._series.append(sample)
 
+    def _display_field(self, per_pitch: int = 4) -> np.ndarray:
+        """The sensed luminosity on a grid of ``per_pitch`` points per light pitch."""
+        cfg = self.sim.world.config
+        c = np.linspace(0.0, cfg.arena_size, cfg.lights_per_side * per_pitch + 1)
+        gx, gy = np.meshgrid(c, c, indexing="ij")
+        return self.sim.lights.sample(np.stack([gx, gy], axis=-1)).astype(np.float32)
+
     def _snapshot(self) -> None:
         sim = self.sim
         self._frame += 1
@@ -306,11 +315,11 @@ class Runner:
         in_goal = sim.box_in_goal
         lights_key = (self._world_key, id(sim.lights), sim.lights.rebuilds)
         prev = self._latest
-        if prev is not None and prev.lights_key == lights_key:
-            intensities, field = prev.intensities, prev.field
-        else:
-            intensities = sim.light_intensities.copy()
-            field = sim.lights.field.astype(np.float32)
+        same_lights = prev is not None and prev.lights_key == lights_key
+        intensities = prev.intensities if same_lights else sim.light_intensities.copy()
+        field = None
+        if self.want_field:
+            field = prev.field if same_lights and prev.field is not None else self._display_field()
         if prev is not None and prev.goal_key == self._goal_key:
             goal_outline, goal_vertices = prev.goal_outline, prev.goal_vertices
         else:

@@ -151,7 +151,7 @@ class SceneView:
             if snap.lights_key != self._lights_key:
                 h["lights"].batched_colors = pal.linear(pal.light_colours(snap.intensities, peak=max(cfg.light_intensity, 1e-9)))
                 self._lights_key = snap.lights_key
-            if self.show_field and snap.lights_key != self._field_key:
+            if self.show_field and snap.field is not None and snap.lights_key != self._field_key:
                 h["field"].image = pal.field_image(snap.field, top_first=False)
                 self._field_key = snap.lights_key
             if snap.goal_key != self._goal_key:
@@ -194,7 +194,9 @@ class SceneView:
     def set_show_field(self, show: bool, snap: Snapshot) -> None:
         with self._lock:
             self.show_field = bool(show)
-            if show and snap.lights_key != self._field_key:
+            if not show:
+                self._field_key = None
+            elif snap.field is not None and snap.lights_key != self._field_key:
                 self.handles["field"].image = pal.field_image(snap.field, top_first=False)
                 self._field_key = snap.lights_key
             self.handles["field"].visible = self.show_field
