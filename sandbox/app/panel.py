@@ -33,6 +33,7 @@ if TYPE_CHECKING:  # pragma: no cover
 NOT_IN_PARAMETER_FOLDERS = {"shape", "flare", "switch", "no_corners", "steps"}
 GROUP_TITLES = {"bodies": "Population and bodies", "robot": "Robot: gains and energy", "lights": "Light grid",
                 "controller": "Controller cycle", "arena": "Arena", "run": "Run", "physics": "Physics engine"}
+CUSTOM_SHAPE = "(drawn or uploaded)"
 STRATEGY_LABELS = {"flare": "Flare", "switch": "Switch to circle", "no_corners": "No corners"}
 PANEL_HZ = 6.0  # how often read-outs and charts refresh
 MAX_RECORD_SECONDS = 120.0
@@ -75,6 +76,7 @@ class Panel:
         self._record_started = 0.0
         self._last_record_time = 0.0
         self._pending: set[str] = set()
+        self._shape_picked_at = 0.0
         snap = self.runner.latest
         self._build_run(snap)
         self._build_shape(snap)
@@ -160,8 +162,10 @@ class Panel:
     # ============================================================== shape
     def _build_shape(self, snap: Snapshot) -> None:
         gui = self.gui
-        names = builtin_shape_names()
-        current = snap.shape_name if snap.shape_name in names else names[0]
+        # A drawn or uploaded goal shows as CUSTOM_SHAPE, so picking a
+        # built-in shape afterwards is always a change.
+        names = [*builtin_shape_names(), CUSTOM_SHAPE]
+        current = snap.shape_name if snap.shape_name in names else CUSTOM_SHAPE
         with gui.add_folder("Goal shape"):
             self.shape = gui.add_dropdown("Shape", tuple(names), initial_value=current,
                                           hint="circle, or a polygon file from shapes/")
@@ -182,6 +186,7 @@ class Panel:
         @self.shape.on_update
         def _(event: viser.GuiEvent) -> None:
             name = self.shape.value
+            self._shape_picked_at = time.perf_counter()
             if name == self.runner.latest.shape_name or name not in builtin_shape_names():
                 return
             try:
@@ -528,14 +533,9 @@ class Panel:
         self.metrics_text.content = self._metrics_text(snap)
         if self.play.label != ("Pause" if snap.playing else "Play"):
             self._sync_play_button()
-        if self.shape.value != snap.shape_name:
-            # A drawn or uploaded goal joins the list, so picking a built-in
-            # shape afterwards is always a change.
-            builtins = tuple(builtin_shape_names())
-            options = builtins if snap.shape_name in builtins else builtins + (snap.shape_name,)
-            if tuple(self.shape.options) != options:
-                self.shape.options = options
-            self.shape.value = snap.shape_name
+        shown = snap.shape_name if snap.shape_name in self.shape.options else CUSTOM_SHAPE
+        if self.shape.value != shown and now - self._shape_picked_at > 2.0:  # not while a pick is on its way
+            self.shape.value = shown
         series = self.runner.series()[-3000:]
         if len(series) >= 2:
             steps = np.array([s.step for s in series], float)
