@@ -328,7 +328,7 @@ def _sweep(args: argparse.Namespace) -> int:
     print(f"sweep: {len(cases)} case(s) x {args.trials} trial(s) of {', '.join(map(str, steps))} steps "
           f"(seeds {seed_start}..{seed_start + args.trials - 1}) on {where}; results in {out}", file=sys.stderr)
     try:
-        with _term_as_interrupt():
+        with store.lock(), _term_as_interrupt():
             outcome = run_trials(trials, store, executor, progress=not args.no_progress)
     except KeyboardInterrupt:
         print(f"sweep interrupted: finished trials are saved in {out}; run the same command again to resume",

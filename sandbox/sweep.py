@@ -134,6 +134,32 @@ class ResultStore:
         except OSError as exc:
             raise SweepError(f"cannot write results to {self.root}: {exc.strerror or exc}") from None
 
+    @contextlib.contextmanager
+    def lock(self) -> Iterator[None]:
+        """Refuse a second sweep into the same folder while one runs (it would repeat the same trials)."""
+        path = self.root / ".sweep.lock"
+        me = f"{socket.gethostname()} {os.getpid()}"
+        for _ in range(2):
+            try:
+                fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+            except FileExistsError:
+                try:
+                    host, pid = path.read_text().split()
+                except (OSError, ValueError):
+                    host, pid = "", "0"
+                if host == socket.gethostname() and not _alive(int(pid)):
+                    path.unlink(missing_ok=True)  # left by a sweep that was killed
+                    continue
+                raise SweepError(f"another sweep (process {pid} on {host or '?'}) is writing to {self.root}; "
+                                 f"wait for it or stop it (delete {path} if it is gone)") from None
+            os.write(fd, me.encode())
+            os.close(fd)
+            break
+        try:
+            yield
+        finally:
+            path.unlink(missing_ok=True)
+
     def is_done(self, trial: Trial) -> bool:
         """True when the trial's files are there and were made with the same configuration."""
         csv_path, json_path = self.paths(trial.case, trial.seed)
@@ -193,6 +219,16 @@ class ResultStore:
             return json.loads(path.read_text()) if path.is_file() else []
         except (OSError, ValueError):
             return []
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError):
+        return True
+    return pid > 0
 
 
 def _fmt(value: Any) -> Any:

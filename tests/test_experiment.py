@@ -290,3 +290,18 @@ def test_sigterm_keeps_finished_trials_and_resume_runs_the_rest(tmp_path, capsys
     assert not list(out.glob("trials/square/*.tmp"))
     assert cli.main(argv) == 0
     assert f"{3 - saved} trial(s) run, {saved} already done" in capsys.readouterr().err
+
+
+def test_second_sweep_into_a_busy_folder_is_refused(tmp_path, capsys):
+    import os
+    import socket
+
+    out = tmp_path / "busy"
+    out.mkdir()
+    lock = out / ".sweep.lock"
+    lock.write_text(f"{socket.gethostname()} {os.getpid()}")  # a live process holds it
+    assert sweep(out, trials=1, cases="square") == 2
+    assert "another sweep" in capsys.readouterr().err
+    lock.write_text(f"{socket.gethostname()} 999999999")  # its process is gone: a stale lock
+    assert sweep(out, "--no-report", trials=1, cases="square", workers=1) == 0
+    assert not lock.exists()
