@@ -40,7 +40,7 @@ def app():
     from sandbox.config import Config
 
     config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
-    app = App(config, port=free_port(), steps_per_frame=4)
+    app = App(config, port=free_port(), steps_per_frame=4, fps=15)
     app.start()
     yield app
     app.stop()
@@ -56,7 +56,7 @@ def browser():
 
 @pytest.fixture(scope="module")
 def page(app, browser):
-    context = browser.new_context(viewport={"width": 1400, "height": 900}, accept_downloads=True)
+    context = browser.new_context(viewport={"width": 1100, "height": 760}, accept_downloads=True)
     page = context.new_page()
     page.goto(f"http://127.0.0.1:{app.port}/")
     page.get_by_text("Goal shape", exact=True).wait_for(timeout=30_000)
