@@ -116,8 +116,8 @@ def phototaxis_picture(config: Config | None = None, size: int = 300) -> np.ndar
         draw.ellipse([sx - 4, sy - 4, sx + 4, sy + 4], fill=(255, 255, 255), outline=(0, 0, 0))
         draw.text((rx + 1.35 * r * np.cos(heading + a) - 3, ry - 1.35 * r * np.sin(heading + a) - 5), name,
                   fill=(255, 255, 255))
-    ax, ay = rx + 2.6 * r * np.cos(heading), ry - 2.6 * r * np.sin(heading)
-    draw.line([rx + r * np.cos(heading), ry - r * np.sin(heading), ax, ay], fill=(255, 255, 255), width=3)
+    ax, ay = rx + 3.2 * r * np.cos(heading), ry - 3.2 * r * np.sin(heading)
+    draw.line([rx + 1.8 * r * np.cos(heading), ry - 1.8 * r * np.sin(heading), ax, ay], fill=(255, 255, 255), width=3)
     draw.text((6, 6), "lit band: brightest here", fill=(255, 255, 255))
     draw.text((6, size - 18), "robot turns and drives up the gradient", fill=(255, 255, 255))
     return np.asarray(img)

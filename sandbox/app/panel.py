@@ -21,7 +21,7 @@ import numpy as np
 import viser
 import viser.uplot
 
-from ..config import STRATEGY_DEFAULTS, ConfigError, params
+from ..config import STRATEGY_DEFAULTS, params
 from ..shapes import ShapeError, builtin_shape_names, load_polygon, polygon_to_text, shape_vertices, validate_polygon
 from . import learn
 from .runner import Snapshot
@@ -320,16 +320,17 @@ class Panel:
         with gui.add_folder("Metrics"):
             self.metrics_text = gui.add_markdown(self._metrics_text(snap))
             x = np.array([0.0, 0.0])
-            common = dict(height=120, padding=(8, 12, 0, 0), legend={"show": False})
+            # x is the world step (not a date: "time": False below).
+            common = dict(height=130, padding=(8, 12, 0, 0), legend={"show": False})
             self.chart_goal = gui.add_uplot(
                 (x, x), ({"label": "step"}, {"label": "in goal", "stroke": "#ff5ca8", "width": 2}),
-                title="Boxes in goal (fraction)", scales={"y": {"range": [0, 1]}}, **common)
+                title="Boxes in goal (fraction) vs step", scales={"x": {"time": False}, "y": {"range": [0, 1]}}, **common)
             self.chart_dist = gui.add_uplot(
                 (x, x), ({"label": "step"}, {"label": "stray distance", "stroke": "#40c8ff", "width": 2}),
-                title="Mean distance of stray boxes (m)", **common)
+                title="Mean distance of stray boxes (m)", scales={"x": {"time": False}}, **common)
             self.chart_charged = gui.add_uplot(
                 (x, x), ({"label": "step"}, {"label": "charged", "stroke": "#2ecc40", "width": 2}),
-                title="Charged robots", **common)
+                title="Charged robots", scales={"x": {"time": False}}, **common)
             self.download_csv = gui.add_button("Download CSV", icon=viser.Icon.FILE_SPREADSHEET,
                                                hint="The metrics time series of this run")
 
