@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import signal
 import socket
 import threading
 import time
@@ -130,6 +131,12 @@ def serve_command(args: argparse.Namespace) -> int:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
     app.start()
     print(f"Phototaxis sandbox running at {app.url}  (Ctrl+C to stop)", flush=True)
+
+    def stop_on_term(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, stop_on_term)  # stop cleanly when a service manager asks
     try:
         while True:
             time.sleep(3600)
@@ -137,4 +144,5 @@ def serve_command(args: argparse.Namespace) -> int:
         pass
     finally:
         app.stop()
+        print("stopped", flush=True)
     return 0
