@@ -102,7 +102,6 @@ def measure(config: Config, steps: int, progress: bool = False) -> dict[str, Any
         "full_trial_seconds": round(100_000 * wall / steps, 1),
         "peak_rss_mb": round(peak_rss_mb(), 1),
         "rss_growth_mb_second_half": round(rss_samples[-1] - rss_samples[len(rss_samples) // 2], 1),
-        "field_cache_hits": sim.lights.cache_hits,
         "field_updates": sim.lights.rebuilds,
         "nan": sim.has_nan(),
         "boxes_escaped": final.boxes_escaped,

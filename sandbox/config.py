@@ -86,9 +86,6 @@ class Config:
     field_samples: int = _param(
         6, "luminosity-field samples per light pitch, at least (more is finer and slower to rebuild)",
         low=1, high=64, group="lights")
-    field_cache_mb: float = _param(
-        256.0, "memory for remembered luminosity fields (the cycle repeats its patterns); 0 turns it off",
-        unit="MiB", low=0.0, high=65536.0, group="physics")
 
     # --- robots (SPEC §4) ------------------------------------------------
     sensor_offset: float = _param(

@@ -17,9 +17,7 @@ that exact enough (within 1 % of the field's maximum, tested):
   never straddles a jump.
 * The layout repeats every pitch and lights sit one pitch apart, so every
   light adds the same precomputed block of values, shifted by whole
-  pitches; a pattern change adds or removes only the lights that changed,
-  and fields of patterns seen before are served from a cache (the
-  controller's cycle repeats its patterns).
+  pitches; a pattern change adds or removes only the lights that changed.
 """
 
 from __future__ import annotations
@@ -150,10 +148,7 @@ class LightField:
         self._flat = self._values.reshape(-1)
         self.intensities = np.zeros((n, n))
         self.rebuilds = 0
-        self.cache_hits = 0
         self._incremental = 0
-        self._cache: dict[bytes, np.ndarray] = {}
-        self._cache_capacity = int(config.field_cache_mb * 2**20 // max(self._values.size * 4, 1))
         # A regular grid of the field for display (computed on demand).
         self.spacing = config.light_pitch / 8
         self.size = n * 8 + 1
@@ -168,34 +163,19 @@ class LightField:
         changed = np.argwhere(delta != 0)
         if len(changed) == 0:
             return False
-        key = new.tobytes()
-        cached = self._cache.pop(key, None)
-        if cached is not None:
-            self._cache[key] = cached  # most recently used last
-            self._values[:] = cached
-            self.cache_hits += 1
+        self._incremental += 1
+        if len(changed) > np.count_nonzero(new) or self._incremental > self.FRESH_EVERY:
+            # Cheaper, or due: start afresh (also clears float32 rounding
+            # that adding and removing lights accumulates).
+            self._values.fill(0.0)
+            self._add_lights(np.argwhere(new != 0), new)
+            self._incremental = 0
         else:
-            self._incremental += 1
-            if len(changed) > np.count_nonzero(new) or self._incremental > self.FRESH_EVERY:
-                # Cheaper, or due: start afresh (also clears float32 rounding
-                # that adding and removing lights accumulates).
-                self._values.fill(0.0)
-                self._add_lights(np.argwhere(new != 0), new)
-                self._incremental = 0
-            else:
-                self._add_lights(changed, delta)
-            self._remember(key)
+            self._add_lights(changed, delta)
         self.intensities = new.copy()
         self._display = None
         self.rebuilds += 1
         return True
-
-    def _remember(self, key: bytes) -> None:
-        if self._cache_capacity <= 0:
-            return
-        while len(self._cache) >= self._cache_capacity:
-            self._cache.pop(next(iter(self._cache)))
-        self._cache[key] = self._values.copy()
 
     def _add_lights(self, indices: np.ndarray, weights: np.ndarray) -> None:
         ax, k = self.axis, self.kernel

@@ -86,7 +86,7 @@ def test_sampled_field_matches_formula_within_one_percent(k, shape, updates, rng
     assert np.abs(sampled - exact).max() <= 0.01 * exact.max()
 
 
-def test_incremental_updates_and_cache_agree_with_a_fresh_field(rng):
+def test_incremental_updates_agree_with_a_fresh_field(rng):
     cfg = Config()
     controller = Controller(cfg, make_goal(cfg, shape_vertices("star")))
     field = LightField(cfg)
@@ -95,13 +95,12 @@ def test_incremental_updates_and_cache_agree_with_a_fresh_field(rng):
         controller._update()
         patterns.append(controller.intensities)
         field.set_intensities(controller.intensities)
-    # Revisit an old pattern (served from the cache) and a partial change.
+    # Jump back to an old pattern, a partial change, a far one.
     for pattern in (patterns[3], patterns[3] * 0.5, patterns[40]):
         field.set_intensities(pattern)
         fresh = LightField(cfg)
         fresh.set_intensities(pattern)
         assert np.abs(field.field - fresh.field).max() < 1e-5 * max(fresh.field.max(), 1.0)
-    assert field.cache_hits >= 1
 
 
 def test_points_outside_arena_are_clamped():
