@@ -121,21 +121,29 @@ def _record_animation(config: Config, kind: str, every: int, fps: float, size: i
 
     pictures = [np.asarray(render(snap, size, label=_label(snap, snap.shape_name)))
                 for snap in frames(config, every, shape, progress)]
-    buffer = io.BytesIO()
     if kind == ".gif":
+        buffer = io.BytesIO()
         iio.imwrite(buffer, pictures, extension=".gif", duration=1000.0 / fps, loop=0)
-    else:
-        iio.imwrite(buffer, pictures, extension=".mp4", fps=fps, codec="libx264", plugin="pyav") \
-            if _has_pyav() else iio.imwrite(buffer, pictures, extension=".mp4", fps=fps, plugin="FFMPEG")
-    return buffer.getvalue()
+        return buffer.getvalue()
+    return _mp4(pictures, fps)
 
 
-def _has_pyav() -> bool:
-    try:
-        import av  # noqa: F401
-        return True
-    except ImportError:
-        return False
+def _mp4(pictures: list, fps: float) -> bytes:
+    """H.264 through imageio-ffmpeg (its own ffmpeg binary), via a temporary file."""
+    import tempfile
+
+    import imageio.v2 as imageio
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "run.mp4"
+        writer = imageio.get_writer(path, format="FFMPEG", fps=fps, codec="libx264", quality=7,
+                                    macro_block_size=16, pixelformat="yuv420p")
+        try:
+            for picture in pictures:
+                writer.append_data(picture)
+        finally:
+            writer.close()
+        return path.read_bytes()
 
 
 def _record_viser(config: Config, kind: str, every: int, fps: float, shape: Any,

@@ -50,3 +50,16 @@ def test_command_line_errors(tmp_path, capsys, args, message):
     args = [a if not a.startswith("x.") else str(tmp_path / a) for a in args]
     assert main(["record", *args]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_mp4_for_slides(tmp_path):
+    pytest.importorskip("imageio_ffmpeg", reason="MP4 needs imageio-ffmpeg (pip install -e '.[mp4]')")
+    import imageio.v2 as imageio
+
+    out = tmp_path / "run.mp4"
+    out.write_bytes(record(TINY, ".mp4", every=20, size=128))
+    reader = imageio.get_reader(out)
+    try:
+        assert reader.count_frames() == 4 and reader.get_meta_data()["size"] == (128, 128)
+    finally:
+        reader.close()
