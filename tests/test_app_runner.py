@@ -167,6 +167,10 @@ def test_upload_validation_leaves_the_simulation_alone(app):
                                     b'{"type": "Polygon", "coordinates": [[[0,0],[2,0],[1,2],[0,0]]]}', client)
     wait_until(lambda: app.runner.latest.shape_name == "tri.geojson")
     assert len(app.runner.latest.goal_vertices) == 3
+    svg = b'<svg xmlns="http://www.w3.org/2000/svg"><polygon points="0,0 10,0 10,4 0,4"/></svg>'
+    assert app.panel.use_shape_file("box.svg", svg, client)
+    assert app.panel.use_shape_file("t.wkt", b"POLYGON((0 0, 4 0, 4 3, 0 0))", client)
+    wait_until(lambda: app.runner.latest.shape_name == "t.wkt")
 
 
 def test_metrics_csv_and_frames(app):
