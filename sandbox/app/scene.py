@@ -37,6 +37,11 @@ def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0) 
     return np.array([c, c - 1e-3 * height, height]), np.array([c, c, 0.0]), float(fov)
 
 
+def _geometry_key(cfg: Config, n: int, m: int) -> tuple:
+    """What the static scene depends on: a change rebuilds the nodes (a gain does not)."""
+    return (cfg.arena_size, cfg.construction_size, cfg.light_pitch, cfg.robot_radius, cfg.box_circumradius, n, m)
+
+
 def configure_scene(server: Any, config: Config) -> None:
     """z up, flat true colours (no shading lights, an even ambient light) and a
     top-down initial camera framing the arena. Also recorded into replays."""
@@ -134,7 +139,7 @@ class SceneView:
         self.handles["draw_points"] = sc.add_point_cloud(
             "/draw/points", np.zeros((1, 3), np.float32), pal.DRAW_LINE, point_size=0.6, point_shape="circle",
             visible=False)
-        self._built_for = (cfg, n, m)
+        self._built_for = _geometry_key(cfg, n, m)
         self._lights_key = self._field_key = self._goal_key = None
         self._outline_bytes = None
         self._n = (n, m)
@@ -145,7 +150,7 @@ class SceneView:
         with self._lock:
             cfg = snap.world_config
             n, m = len(snap.robot_positions), len(snap.box_positions)
-            if self._built_for != (cfg, n, m):
+            if self._built_for != _geometry_key(cfg, n, m):
                 self._build(snap)
             h = self.handles
             if snap.lights_key != self._lights_key:
