@@ -238,6 +238,14 @@ def test_parameters_and_inspector(app, page):
     click_button(page, "Follow a random robot")
     wait_until(lambda: app.runner.latest.robot is not None, what="a followed robot")
     page.get_by_text("front", exact=True).wait_for(timeout=10_000)
+    page.get_by_label("Camera follows", exact=True).check()
+    client = next(iter(app.server.get_clients().values()))
+
+    def camera_on_robot():
+        robot = app.runner.latest.robot
+        return robot is not None and np.hypot(*(client.camera.look_at[:2] - robot.position)) < 1.5
+
+    wait_until(camera_on_robot, what="the camera to follow the robot")
     click_button(page, "Stop following")
     wait_until(lambda: app.runner.selected is None, what="stop following")
 

@@ -50,7 +50,7 @@ STRATEGIES = """\
 INSPECT = """\
 **Inspector.** Click a robot on the floor to follow it (it gets a purple
 ring; its photocells show as dots). Its readings, command and charge update
-live below.
+live below; *Camera follows* zooms in on it.
 """
 
 

@@ -366,6 +366,8 @@ class Panel:
             self.inspect_help = gui.add_markdown("Click a robot on the floor to follow it.")
             self.inspect_text = gui.add_markdown("")
             self.charge_bar = gui.add_progress_bar(0.0, color="green", visible=False)
+            self.camera_follow = gui.add_checkbox("Camera follows", False,
+                                                  hint="Zoom in on the followed robot and keep it centred")
             self.follow_random = gui.add_button("Follow a random robot", icon=viser.Icon.TARGET)
             self.stop_follow = gui.add_button("Stop following", icon=viser.Icon.X, disabled=True)
 
@@ -378,6 +380,11 @@ class Panel:
                 self.inspect_help.content = f"Following robot **{i}** (click another, or stop)."
                 self.stop_follow.disabled = False
 
+        @self.camera_follow.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if not self.camera_follow.value:
+                self._frame_arena()
+
         @self.stop_follow.on_click
         def _(event: viser.GuiEvent) -> None:
             self.runner.select(None)
@@ -385,6 +392,26 @@ class Panel:
             self.inspect_text.content = ""
             self.charge_bar.visible = False
             self.stop_follow.disabled = True
+            if self.camera_follow.value:
+                self.camera_follow.value = False
+                self._frame_arena()
+
+    def _frame_arena(self) -> None:
+        from .scene import top_down_camera
+
+        position, look_at, _ = top_down_camera(self.runner.latest.world_config)
+        for client in self.app.server.get_clients().values():
+            with client.atomic():
+                client.camera.position = tuple(position)
+                client.camera.look_at = tuple(look_at)
+
+    def _follow_with_cameras(self, snap: Snapshot) -> None:
+        x, y = (float(v) for v in snap.robot.position)
+        height = 12.0
+        for client in self.app.server.get_clients().values():
+            with client.atomic():
+                client.camera.position = (x, y - 1e-3 * height, height)
+                client.camera.look_at = (x, y, 0.0)
 
     def _inspect_text(self, snap: Snapshot) -> str:
         r = snap.robot
@@ -548,6 +575,8 @@ class Panel:
             cap = snap.world_config.capacity
             self.charge_bar.value = float(100.0 * snap.robot.charge / cap) if cap > 0 else 0.0
             self.charge_bar.visible = True
+            if self.camera_follow.value:
+                self._follow_with_cameras(snap)
         if self.recorder is not None:
             self.record_status.content = f"Recording: {now - self._record_started:.0f} s"
 
