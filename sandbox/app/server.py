@@ -38,11 +38,15 @@ class App:
         self.runner = Runner(config, shape=shape, fps=fps, steps_per_frame=steps_per_frame, playing=playing)
         with contextlib.redirect_stdout(io.StringIO()) if not verbose else contextlib.nullcontext():
             self.server = viser.ViserServer(host=host, port=port, label=TITLE, verbose=verbose)
-        self._configure_page()
-        self.view = SceneView(self.server.scene, self.runner.latest)
-        from .panel import Panel  # imports the Learn illustrations; after the scene exists
+        try:
+            self._configure_page()
+            self.view = SceneView(self.server.scene, self.runner.latest)
+            from .panel import Panel  # imports the Learn illustrations; after the scene exists
 
-        self.panel = Panel(self)
+            self.panel = Panel(self)
+        except BaseException:
+            self.server.stop()  # do not leave a half-built server listening
+            raise
         self.frames_drawn = 0
         self._frame_lock = threading.Lock()
         self.runner.subscribe(self._on_frame)
