@@ -17,7 +17,12 @@ from .config import Config
 
 # Collision categories: the construction wall only meets boxes.
 ROBOT, BOX, OUTER_WALL, CONSTRUCTION_WALL = 1, 2, 4, 8
-WALL_RADIUS = 0.05
+# Walls are thick segments whose inner face is on the boundary. With thin
+# (0.05 m) walls, robots squeezing boxes against the construction wall
+# pushed one through about every 700,000 steps (2 boxes in a 1,000,000-step
+# run, 1 in 14 paper trials); to get out now a box's centre must be pushed
+# 0.75 m (half the wall plus its own apothem) into the wall.
+WALL_RADIUS = 0.5
 
 _POSE = batch.BodyFields.POSITION | batch.BodyFields.ANGLE | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 _VELOCITY = batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
@@ -132,7 +137,7 @@ class World:
     def _add_boxes(self, rng: np.random.Generator) -> None:
         cfg = self.config
         c, half = cfg.arena_size / 2.0, cfg.construction_size / 2.0
-        margin = cfg.box_circumradius + WALL_RADIUS
+        margin = cfg.box_circumradius + 0.01  # clear of the wall's inner face
         positions = sample_separated(rng, self.n_boxes, c - half + margin, c + half - margin, 2 * cfg.box_apothem)
         angles = rng.uniform(0.0, math.pi / 3, self.n_boxes)
         vertices = hexagon(cfg.box_circumradius)
