@@ -108,23 +108,27 @@ class _AxisLayout:
         self.pad = int(self.light_offsets.max()) + 1  # cells of padding on each side
         self.length = (self.n_cells + 2 * self.pad) * self.per_cell
         self.limit = n * pitch
-        # Per-strip lookup tables for locate().
-        self._lo = np.array(self.strip_lo)
-        self._inv_step = 1.0 / np.array(self.strip_step)
-        self._last = np.array(self.strip_count) - 1
-        self._row0 = (self.pad - self.first_cell) * self.per_cell + np.array(self.strip_first)
+        # Knots of the position -> sample-coordinate map used by locate().
+        knots_x, knots_g = [], []
+        for lo, step, first, count in zip(self.strip_lo, self.strip_step, self.strip_first, self.strip_count):
+            knots_x += [lo, lo + step * count]
+            knots_g += [first, first + count]
+        self._knots_x, self._knots_g = np.array(knots_x), np.array(knots_g, dtype=float)
+        self._row_base = (self.pad - self.first_cell) * self.per_cell
 
     def locate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Row index of the sample at or before each ``x`` in its strip, and the
-        fraction of the way to the next sample. Hot path: few numpy calls."""
+        fraction of the way to the next sample. Hot path: few numpy calls.
+
+        Within a layout cell, sample coordinates are a piecewise-linear
+        function of position, jumping by one at each strip boundary (where
+        a sample is doubled); ``np.interp`` evaluates it in one call."""
         x = x.clip(0.0, self.limit) - self.origin
         cell = np.floor(x * (1.0 / self.pitch))
-        f = x - cell * self.pitch
-        strip = np.searchsorted(self.strip_bounds, f, side="right")
-        u = (f - self._lo.take(strip)) * self._inv_step.take(strip)
-        i = np.minimum(u.astype(np.intp), self._last.take(strip))
-        row = cell.astype(np.intp) * self.per_cell + (self._row0.take(strip) + i)
-        return row, u - i
+        g = np.interp(x - cell * self.pitch, self._knots_x, self._knots_g)
+        i = g.astype(np.intp)
+        row = cell.astype(np.intp) * self.per_cell + (self._row_base + i)
+        return row, g - i
 
 
 class LightField:
