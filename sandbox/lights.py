@@ -216,11 +216,3 @@ class LightField:
             gx, gy = np.meshgrid(c, c, indexing="ij")
             self._display = self.sample(np.stack([gx, gy], axis=-1))
         return self._display
-
-    def sample_points(self) -> np.ndarray:
-        """Coordinates of the display grid along one axis."""
-        return np.arange(self.size) * self.spacing
-
-    @property
-    def maximum(self) -> float:
-        return float(self._values.max())

@@ -11,7 +11,6 @@ imports a GUI library. Not thread-safe: drive it from one thread.
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
@@ -264,10 +263,3 @@ class Simulation:
 
     def has_nan(self) -> bool:
         return not (np.isfinite(self.world.state).all() and np.isfinite(self._charge).all())
-
-    @property
-    def expected_cycle_steps(self) -> float:
-        """World steps in one full contract-hold-dilate cycle."""
-        c = self.controller
-        updates = math.log(c.max_scale / c.min_scale) / -math.log(self.config.scale_rate)
-        return 2 * math.ceil(updates) * self.config.update_every + self.config.hold_steps
