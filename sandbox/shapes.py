@@ -27,8 +27,10 @@ MIN_RELATIVE_AREA = 1e-9       # area / (bounding-box size)^2 below this is "zer
 FORMATS = ("txt", "geojson", "wkt", "json", "svg")
 _EXTENSIONS = {".txt": "txt", ".csv": "txt", ".poly": "txt", ".dat": "txt",
                ".geojson": "geojson", ".json": "json", ".wkt": "wkt", ".svg": "svg"}
+# ``builtin_shapes`` is a link to the repository's shapes/ folder, copied
+# into wheels, so built-in names work in editable and regular installs.
 SHAPES_DIR = Path(os.environ.get("PHOTOTAXIS_SHAPES_DIR")
-                  or Path(__file__).resolve().parent.parent / "shapes")
+                  or (Path(__file__).parent / "builtin_shapes").resolve())
 
 
 class ShapeError(ValueError):
