@@ -77,8 +77,7 @@ class Controller:
         self.config = config
         self.goal = goal
         self._centres = light_centres(config).reshape(-1, 2)
-        self.min_scale = (goal.radius + 2.0 * config.robot_radius) / goal.radius
-        self.max_scale = max(self._largest_scale(), self.min_scale)
+        self._set_limits()
         self.scale = self.max_scale
         self.phase = CONTRACTING
         self.cycle = 0  # completed contract -> hold -> dilate cycles
@@ -93,6 +92,11 @@ class Controller:
         self._redraw()
 
     # -- sizes ------------------------------------------------------------
+    def _set_limits(self) -> None:
+        """Smallest scale: the goal grown by one robot diameter; largest: see below."""
+        self.min_scale = (self.goal.radius + 2.0 * self.config.robot_radius) / self.goal.radius
+        self.max_scale = max(self._largest_scale(), self.min_scale)
+
     def _largest_scale(self) -> float:
         cfg, goal = self.config, self.goal
         if goal.is_circle:
@@ -120,8 +124,7 @@ class Controller:
         """Take new controller values (rate, band, sizes...) keeping the phase
         and a scale within the new limits; the pattern is redrawn at once."""
         self.config = config
-        self.min_scale = (self.goal.radius + 2.0 * config.robot_radius) / self.goal.radius
-        self.max_scale = max(self._largest_scale(), self.min_scale)
+        self._set_limits()
         self.scale = min(max(self.scale, self.min_scale), self.max_scale)
         self._until_update = min(self._until_update, config.update_every)
         self._redraw()

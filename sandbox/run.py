@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import json
 import sys
 import time
@@ -17,7 +18,7 @@ from .config import CASES, Config
 from .metrics import Sample
 from .simulation import Simulation
 
-TRACE_FIELDS = ["step", "fraction_in_goal", "mean_outside_distance", "boxes_escaped", "charged_robots", "cycle", "phase"]
+TRACE_FIELDS = [f.name for f in dataclasses.fields(Sample)]
 
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:

@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from . import metrics, robots
-from .config import Config
+from .config import Config, param
 from .controller import Controller, Goal, make_goal
 from .lights import LightField
 from .shapes import shape_vertices
@@ -145,8 +145,6 @@ class Simulation:
         (populations, sizes, arena, seed...) are stored and take effect at the
         next :meth:`reset`; their names are returned so a caller can say so.
         """
-        from .config import param  # local: avoid a cycle at import time
-
         config = self.config.replace(**changes)  # validates everything first
         if "shape" in changes:
             self.set_shape(shape_vertices(changes.pop("shape")), name=config.shape)
