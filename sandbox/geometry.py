@@ -80,16 +80,21 @@ def flare_factors(vertices: np.ndarray, amount: float) -> np.ndarray:
     return np.where(angles < 180.0, np.maximum(1.0, 90.0 * amount / angles), 1.0)
 
 
-def distance_to_outline(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
-    """Distance from each point (m, 2) to the closed polyline through ``vertices``."""
+def distances_to_edges(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """Distance from each point (m, 2) to each edge vertices[i] -> vertices[i+1], shape (m, n)."""
     p = np.asarray(points, dtype=float)[:, None, :]
     a = np.asarray(vertices, dtype=float)[None, :, :]
-    b = np.roll(vertices, -1, axis=0)[None, :, :]
+    b = np.roll(a, -1, axis=1)
     ab = b - a
     length2 = np.maximum((ab**2).sum(-1), 1e-300)
     t = np.clip(((p - a) * ab).sum(-1) / length2, 0.0, 1.0)
     nearest = a + t[..., None] * ab
-    return np.sqrt(((p - nearest) ** 2).sum(-1)).min(axis=1)
+    return np.sqrt(((p - nearest) ** 2).sum(-1))
+
+
+def distance_to_outline(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """Distance from each point (m, 2) to the closed polyline through ``vertices``."""
+    return distances_to_edges(points, vertices).min(axis=1)
 
 
 def points_in_polygon(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:

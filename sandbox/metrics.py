@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
@@ -23,6 +23,10 @@ class Sample:
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+#: Column names of a metrics sample, in order (CSV traces, sweeps, the app).
+SAMPLE_FIELDS = [f.name for f in fields(Sample)]
 
 
 def fraction_in_goal(in_goal: np.ndarray) -> float:

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import dataclasses
 import json
 import sys
 import time
@@ -15,10 +14,10 @@ from typing import IO, Any
 from tqdm import tqdm
 
 from .config import CASES, Config
-from .metrics import Sample
+from .metrics import SAMPLE_FIELDS, Sample
 from .simulation import Simulation
 
-TRACE_FIELDS = [f.name for f in dataclasses.fields(Sample)]
+TRACE_FIELDS = SAMPLE_FIELDS
 
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:

@@ -21,6 +21,8 @@ from shapely.errors import ShapelyError
 from shapely.geometry import MultiPoint, MultiPolygon, Polygon
 from shapely.validation import explain_validity
 
+from .geometry import distances_to_edges
+
 MAX_BYTES = 1_000_000          # "1 MB": no sane polygon file is larger
 MAX_VERTICES = 10_000
 MIN_RELATIVE_AREA = 1e-9       # area / (bounding-box size)^2 below this is "zero"
@@ -445,10 +447,7 @@ def _check_simple(array: np.ndarray, source: str, labels: list, kind: str) -> No
 
 def _edges_near(array: np.ndarray, point, limit: int = 4) -> list[int]:
     """Indices i of edges array[i] -> array[i+1] passing within a hair of point."""
-    a, b = array, np.roll(array, -1, axis=0)
-    ab, ap = b - a, np.asarray(point) - a
-    t = np.clip((ap * ab).sum(axis=1) / np.maximum((ab * ab).sum(axis=1), 1e-300), 0.0, 1.0)
-    distance = np.hypot(*(ap - t[:, None] * ab).T)
+    distance = distances_to_edges(np.asarray(point, dtype=float)[None, :], array)[0]
     tolerance = 1e-7 * max(float(np.ptp(array, axis=0).max()), 1e-300)
     return sorted(np.flatnonzero(distance <= tolerance).tolist())[:limit]
 

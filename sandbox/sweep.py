@@ -35,9 +35,9 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from .config import Config
+from .metrics import SAMPLE_FIELDS
 
-SAMPLE_COLUMNS = ["step", "fraction_in_goal", "mean_outside_distance", "boxes_escaped",
-                  "charged_robots", "cycle", "phase"]
+SAMPLE_COLUMNS = SAMPLE_FIELDS
 METRICS = ("fraction_in_goal", "mean_outside_distance")
 TRIALS_DIR = "trials"
 FAILURES_FILE = "failures.json"

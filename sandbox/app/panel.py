@@ -22,6 +22,7 @@ import viser
 import viser.uplot
 
 from ..config import STRATEGY_DEFAULTS, params
+from ..metrics import SAMPLE_FIELDS
 from ..shapes import ShapeError, builtin_shape_names, load_polygon, polygon_to_text, shape_vertices, validate_polygon
 from . import learn
 from .runner import Snapshot
@@ -342,8 +343,7 @@ class Panel:
     def metrics_csv(self) -> str:
         out = io.StringIO()
         dt = self.runner.latest.world_config.dt
-        fields = ["step", "time", "fraction_in_goal", "mean_outside_distance", "boxes_escaped", "charged_robots",
-                  "cycle", "phase"]
+        fields = ["step", "time", *SAMPLE_FIELDS[1:]]
         writer = csv.DictWriter(out, fieldnames=fields)
         writer.writeheader()
         for s in self.runner.series():

@@ -313,10 +313,8 @@ class Runner:
                 charge=float(sim.robot_charges[sel]),
             )
         in_goal = sim.box_in_goal
-        # The engine counts pattern changes; without that count, the pattern itself is the key.
-        changes = getattr(sim.lights, "rebuilds", None)
-        lights_key = (self._world_key, id(sim.lights),
-                      changes if changes is not None else hash(sim.light_intensities.tobytes()))
+        # The light field counts its pattern changes: a new count means new lights.
+        lights_key = (self._world_key, id(sim.lights), sim.lights.rebuilds)
         prev = self._latest
         same_lights = prev is not None and prev.lights_key == lights_key
         intensities = prev.intensities if same_lights else sim.light_intensities.copy()
