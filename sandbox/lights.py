@@ -113,8 +113,8 @@ class _AxisLayout:
         for lo, step, first, count in zip(self.strip_lo, self.strip_step, self.strip_first, self.strip_count):
             knots_x += [lo, lo + step * count]
             knots_g += [first, first + count]
-        self._knots_x, self._knots_g = np.array(knots_x), np.array(knots_g, dtype=float)
-        self._row_base = (self.pad - self.first_cell) * self.per_cell
+        self.knots_x, self.knots_g = np.array(knots_x), np.array(knots_g, dtype=float)
+        self.row_base = (self.pad - self.first_cell) * self.per_cell
 
     def locate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Row index of the sample at or before each ``x`` in its strip, and the
@@ -125,9 +125,9 @@ class _AxisLayout:
         a sample is doubled); ``np.interp`` evaluates it in one call."""
         x = x.clip(0.0, self.limit) - self.origin
         cell = np.floor(x * (1.0 / self.pitch))
-        g = np.interp(x - cell * self.pitch, self._knots_x, self._knots_g)
+        g = np.interp(x - cell * self.pitch, self.knots_x, self.knots_g)
         i = g.astype(np.intp)
-        row = cell.astype(np.intp) * self.per_cell + (self._row_base + i)
+        row = cell.astype(np.intp) * self.per_cell + (self.row_base + i)
         return row, g - i
 
 
@@ -149,7 +149,8 @@ class LightField:
         k = brightness_kernel(ax.dx.reshape(-1, 1), ax.dx.reshape(1, -1), config.light_height, config.light_falloff)
         self.kernel = (k * (ax.member.reshape(-1, 1) & ax.member.reshape(1, -1))).astype(self.DTYPE)
         self._values = np.zeros((ax.length, ax.length), dtype=self.DTYPE)
-        self._flat = self._values.reshape(-1)
+        #: The sampled field as one flat array (a view), for compiled samplers.
+        self.values_flat = self._values.reshape(-1)
         self.intensities = np.zeros((n, n))
         self.rebuilds = 0
         self._incremental = 0
@@ -200,7 +201,7 @@ class LightField:
         rows, frac = self.axis.locate(pts)  # x and y located together
         flat = rows[..., 0] * n + rows[..., 1]
         fu, fv = frac[..., 0], frac[..., 1]
-        f = self._flat
+        f = self.values_flat
         f00 = f.take(flat)
         f10 = f.take(flat + n) - f00
         f01 = f.take(flat + 1) - f00

@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from . import metrics, robots
+from . import kernels, metrics, robots
 from .config import Config, param
 from .controller import Controller, Goal, make_goal
 from .lights import LightField
@@ -60,6 +60,7 @@ class Simulation:
         self.controller = Controller(cfg, self.goal)
         self.lights = LightField(cfg)
         self.lights.set_intensities(self.controller.intensities)
+        self._layout = kernels.sample_layout(self.lights)
         n = cfg.robots
         self.steps_done = 0
         self._charge = np.full(n, float(cfg.start_charge))
@@ -93,37 +94,20 @@ class Simulation:
         if self.controller.advance():
             self.lights.set_intensities(self.controller.intensities)
             self.timings["lights"] += time.perf_counter() - t0
-        nr = self.world.n_robots
-        if nr:
-            positions, headings = state[:nr, 0:2], state[:nr, 2]
-            lum = self._read_light(positions, headings)
-            moving = self._charge > 0.0
-            np.multiply(self._command, moving[:, None], out=self._applied)
-            v, w = self._applied[:, 0], self._applied[:, 1]
-            self._charge = robots.charge_step(self._charge, lum, v, w, cfg)
-            self.world.set_robot_velocities(v * np.cos(headings), v * np.sin(headings), w)
+        world = self.world
+        if world.n_robots:
+            # Photocells, commands, energy and velocities: SPEC §4, compiled.
+            kernels.robot_step(
+                state, world.n_robots, self._due[self.steps_done % cfg.command_period],
+                self.lights.values_flat, self._layout, cfg.sensor_offset, cfg.k_drive, cfg.k_turn,
+                cfg.eta_in, cfg.metabolic, cfg.eta_out, cfg.capacity, 1.0 / world.damping_per_step,
+                self._command, self._readings, self._charge, self._applied, world.velocities)
+            world.push_velocities()
         t0 = time.perf_counter()
-        self.world.step()
+        world.step()
         self.timings["physics"] += time.perf_counter() - t0
         self.steps_done += 1
         self._fresh = False
-
-    def _read_light(self, positions: np.ndarray, headings: np.ndarray) -> np.ndarray:
-        """Luminosity at every robot's centre; robots whose turn it is also read
-        their photocells and set a new command. One field lookup for both."""
-        cfg = self.world.config
-        due = self._due[self.steps_done % cfg.command_period]
-        if len(due) == 0:
-            return self.lights.sample(positions)
-        cells = robots.sensor_points(positions[due], headings[due], cfg.sensor_offset).reshape(-1, 2)
-        lum = self.lights.sample(np.concatenate([positions, cells]))
-        nr = len(positions)
-        readings = lum[nr:].reshape(-1, 4)
-        self._readings[due] = readings
-        v, w = robots.braitenberg(readings, cfg.k_drive, cfg.k_turn)
-        self._command[due, 0] = v
-        self._command[due, 1] = w
-        return lum[:nr]
 
     def _sync(self) -> np.ndarray:
         if not self._fresh:

@@ -76,10 +76,11 @@ class World:
         self._buffer = batch.Buffer()
         # pymunk.batch lists the space's static body (holding the walls) last.
         self.state = np.zeros((self.n_robots + self.n_boxes + 1, 6))
-        # pymunk reads velocities straight from this array's memory.
-        self._velocities = np.zeros((len(self.state), 3))
+        #: Velocities for the next step, (vx, vy, w) per row of :attr:`state`;
+        #: pymunk reads them straight from this array's memory.
+        self.velocities = np.zeros((len(self.state), 3))
         self._velocity_buffer = batch.Buffer()
-        self._velocity_buffer.set_float_buf(self._velocities.reshape(-1))
+        self._velocity_buffer.set_float_buf(self.velocities.reshape(-1))
         self.read()
 
     # -- construction -----------------------------------------------------
@@ -161,13 +162,10 @@ class World:
         self.state[:] = np.frombuffer(self._buffer.float_buf()).reshape(self.state.shape)
         return self.state
 
-    def set_robot_velocities(self, vx: np.ndarray, vy: np.ndarray, w: np.ndarray) -> None:
-        """Give robots these velocities for the next step; boxes keep theirs (as last read)."""
-        n, scale, out = self.n_robots, 1.0 / self.damping_per_step, self._velocities
-        out[:] = self.state[:, 3:6]
-        np.multiply(vx, scale, out=out[:n, 0])
-        np.multiply(vy, scale, out=out[:n, 1])
-        np.multiply(w, scale, out=out[:n, 2])
+    def push_velocities(self) -> None:
+        """Hand :attr:`velocities` (one (vx, vy, w) row per body, in :attr:`state`'s
+        order) to pymunk in one call. Robots' rows must already be divided
+        by :attr:`damping_per_step`; other rows should hold their current values."""
         batch.set_space_bodies(self.space, _VELOCITY, self._velocity_buffer)
 
     def step(self) -> None:
