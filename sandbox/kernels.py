@@ -142,3 +142,21 @@ def robot_step(state, n_robots, due, field, lay, offset, k_drive, k_turn, eta_in
         velocities[b, 0] = state[b, 3]
         velocities[b, 1] = state[b, 4]
         velocities[b, 2] = state[b, 5]
+
+
+_warm = False
+
+
+def warm_up() -> None:
+    """Compile (or load from numba's on-disk cache) before the first real step,
+    so that a first step does not take seconds: a benchmark times only
+    stepping, and a live view does not stall when it starts."""
+    global _warm
+    if _warm:
+        return
+    lay = SampleLayout(4.0, 0.0, 1.0, 1.0, np.array([0.0, 1.0]), np.array([0.0, 2.0]), 3, 4, 24)
+    field = np.zeros(24 * 24, dtype=np.float32)
+    state = np.zeros((3, 6))
+    robot_step(state, 1, np.zeros(1, dtype=np.intp), field, lay, 0.1, 5.0, 20.0, 0.4, 0.01, 0.1, 20.0, 1.0,
+               np.zeros((1, 2)), np.zeros((1, 4)), np.zeros(1), np.zeros((1, 2)), np.zeros((3, 3)))
+    _warm = True

@@ -45,6 +45,7 @@ class Simulation:
             shape = shape_vertices(self.config.shape if shape == "from-config" else shape)
         self.shape_vertices = None if shape is None else np.asarray(shape, dtype=float)
         self.history: list[metrics.Sample] = []
+        kernels.warm_up()
         self.reset(self.config.seed if seed is None else seed)
 
     # ------------------------------------------------------------------ life
