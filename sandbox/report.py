@@ -158,6 +158,23 @@ def _first_cycle_section(first: dict) -> list[str]:
                        for a, b in zip(first["fraction_in_goal"], first["mean_outside_distance"])])]
 
 
+def _escape_lines(by_case: dict[str, list[dict]]) -> list[str]:
+    """Every sample that found a box centre beyond the construction wall's inner face (should be none)."""
+    hits = []
+    for case, trials in by_case.items():
+        for t in trials:
+            s = t["samples"]
+            for step, n in zip(s["step"], s["boxes_escaped"]):
+                if n > 0:
+                    hits.append(f"`{case}` seed {t['seed']} step {int(step)}: {int(n)}")
+    samples = sum(len(t["samples"]["step"]) for ts in by_case.values() for t in ts)
+    if not hits:
+        return [f"- boxes outside the construction wall: none in any of the {samples} samples"]
+    return [f"- **boxes outside the construction wall** in {len(hits)} of {samples} samples "
+            f"(a box centre past the wall's inner face): {'; '.join(hits[:10])}"
+            + (" ..." if len(hits) > 10 else "")]
+
+
 def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: list[dict]) -> str:
     trials = [t for ts in by_case.values() for t in ts]
     steps = sorted({int(t["steps"]) for t in trials})
@@ -182,7 +199,8 @@ def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: l
             f"(each case uses the same seeds)",
             f"- compute: {cpu / 3600:.2f} CPU-hours, {cpu / len(trials):.0f} CPU-s per trial "
             f"({wall / len(trials):.0f} s wall-clock) on average, on {len(hosts)} host(s)",
-            f"- base parameters changed from the defaults: {_overrides_text(base_changes)}"]
+            f"- base parameters changed from the defaults: {_overrides_text(base_changes)}",
+            *_escape_lines(by_case)]
     if meta.get("cases"):
         out += ["", "Cases:", ""]
         out += [f"- `{c['label']}`: {_overrides_text(c.get('overrides', {}))}" for c in meta["cases"]

@@ -305,3 +305,16 @@ def test_second_sweep_into_a_busy_folder_is_refused(tmp_path, capsys):
     lock.write_text(f"{socket.gethostname()} 999999999")  # its process is gone: a stale lock
     assert sweep(out, "--no-report", trials=1, cases="square", workers=1) == 0
     assert not lock.exists()
+
+
+def test_report_lists_every_sample_with_a_box_outside_the_construction_wall():
+    from sandbox.report import _escape_lines
+
+    def trial(seed, escaped):
+        return {"seed": seed, "samples": {"step": np.array([0, 1000, 2000]), "boxes_escaped": np.array(escaped)}}
+
+    clean = {"circle": [trial(0, [0, 0, 0])]}
+    assert _escape_lines(clean) == ["- boxes outside the construction wall: none in any of the 3 samples"]
+    dirty = {"circle": [trial(0, [0, 0, 0])], "star": [trial(4, [0, 2, 0])]}
+    (line,) = _escape_lines(dirty)
+    assert "1 of 6 samples" in line and "`star` seed 4 step 1000: 2" in line
