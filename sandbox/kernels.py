@@ -24,9 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-#: Photocell directions from the heading (front, back, left, right), as in
-#: ``robots._SENSOR_ANGLES``; added to the heading before cos/sin, as there.
-_HALF_PI = np.pi / 2
+from .robots import SENSOR_ANGLES  # numba freezes this global array as a constant
 
 
 class SampleLayout(NamedTuple):
@@ -104,10 +102,10 @@ def _refresh_commands(state, due, field, lay, offset, k_drive, k_turn, command, 
     """Robots in ``due`` read their photocells and set (v, w) (Braitenberg)."""
     for d in due:
         x, y, h = state[d, 0], state[d, 1], state[d, 2]
-        cells = (h, h + np.pi, h + _HALF_PI, h + -_HALF_PI)
         for k in range(4):
-            px = math.cos(cells[k]) * offset + x
-            py = math.sin(cells[k]) * offset + y
+            a = h + SENSOR_ANGLES[k]  # front, back, left, right, as robots.sensor_points
+            px = math.cos(a) * offset + x
+            py = math.sin(a) * offset + y
             readings[d, k] = sample_point(px, py, field, lay)
         command[d, 0] = k_drive * (readings[d, 0] - readings[d, 1])
         command[d, 1] = k_turn * (readings[d, 2] - readings[d, 3])

@@ -15,12 +15,12 @@ FRONT, BACK, LEFT, RIGHT = range(4)
 SENSOR_NAMES = ("front", "back", "left", "right")
 
 #: Direction of each photocell in the robot's frame, as an angle from its heading.
-_SENSOR_ANGLES = np.array([0.0, np.pi, np.pi / 2, -np.pi / 2])
+SENSOR_ANGLES = np.array([0.0, np.pi, np.pi / 2, -np.pi / 2])
 
 
 def sensor_points(positions: np.ndarray, headings: np.ndarray, offset: float) -> np.ndarray:
     """Floor points under each robot's four photocells, shape (n, 4, 2)."""
-    a = headings[:, None] + _SENSOR_ANGLES[None, :]
+    a = headings[:, None] + SENSOR_ANGLES[None, :]
     out = np.empty(a.shape + (2,))
     np.multiply(np.cos(a), offset, out=out[..., 0])
     np.multiply(np.sin(a), offset, out=out[..., 1])
