@@ -154,10 +154,6 @@ class LightField:
         self.intensities = np.zeros((n, n))
         self.rebuilds = 0
         self._incremental = 0
-        # A regular grid of the field for display (computed on demand).
-        self.spacing = config.light_pitch / 8
-        self.size = n * 8 + 1
-        self._display: np.ndarray | None = None
 
     def set_intensities(self, intensities: np.ndarray) -> bool:
         """Switch to a new pattern; returns whether anything changed."""
@@ -178,7 +174,6 @@ class LightField:
         else:
             self._add_lights(changed, delta)
         self.intensities = new.copy()
-        self._display = None
         self.rebuilds += 1
         return True
 
@@ -208,12 +203,10 @@ class LightField:
         f11 = f.take(flat + (n + 1)) - f00 - f10 - f01
         return f00 + fu * f10 + fv * (f01 + fu * f11)
 
-    @property
-    def field(self) -> np.ndarray:
-        """The field on a regular grid (``size`` x ``size`` points, ``spacing``
-        apart, indexed [ix, iy]) for display; computed when first asked for."""
-        if self._display is None:
-            c = np.arange(self.size) * self.spacing
-            gx, gy = np.meshgrid(c, c, indexing="ij")
-            self._display = self.sample(np.stack([gx, gy], axis=-1))
-        return self._display
+    def display_grid(self, per_pitch: int = 8) -> np.ndarray:
+        """The field on a regular grid over the whole floor, ``per_pitch`` points
+        per light pitch plus the far edge, indexed [ix, iy] (for display)."""
+        cfg = self.config
+        c = np.linspace(0.0, cfg.arena_size, cfg.lights_per_side * per_pitch + 1)
+        gx, gy = np.meshgrid(c, c, indexing="ij")
+        return self.sample(np.stack([gx, gy], axis=-1))

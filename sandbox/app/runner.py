@@ -289,13 +289,6 @@ class Runner:
             with self._series_lock:
                 self._series.append(sample)
 
-    def _display_field(self, per_pitch: int = 4) -> np.ndarray:
-        """The sensed luminosity on a grid of ``per_pitch`` points per light pitch."""
-        cfg = self.sim.world.config
-        c = np.linspace(0.0, cfg.arena_size, cfg.lights_per_side * per_pitch + 1)
-        gx, gy = np.meshgrid(c, c, indexing="ij")
-        return self.sim.lights.sample(np.stack([gx, gy], axis=-1)).astype(np.float32)
-
     def _snapshot(self) -> None:
         sim = self.sim
         self._frame += 1
@@ -320,7 +313,10 @@ class Runner:
         intensities = prev.intensities if same_lights else sim.light_intensities.copy()
         field = None
         if self.want_field:
-            field = prev.field if same_lights and prev.field is not None else self._display_field()
+            if same_lights and prev.field is not None:
+                field = prev.field
+            else:
+                field = sim.lights.display_grid(per_pitch=4).astype(np.float32)
         if prev is not None and prev.goal_key == self._goal_key:
             goal_outline, goal_vertices = prev.goal_outline, prev.goal_vertices
         else:
