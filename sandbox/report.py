@@ -15,7 +15,8 @@ from pathlib import Path
 
 from . import figures, stats
 from .config import Config, params
-from .sweep import METRICS, SAMPLE_COLUMNS, ResultStore, SweepError
+from .metrics import SAMPLE_FIELDS
+from .sweep import METRICS, ResultStore, SweepError
 
 SWEEP_FILE = "sweep.json"
 FIGURES_DIR = "figures"
@@ -90,12 +91,12 @@ def _write_rows(path: Path, rows: list[dict]) -> None:
 def _write_results_csv(by_case: dict[str, list[dict]], path: Path) -> None:
     with path.open("w", newline="") as fh:
         writer = csv.writer(fh)
-        writer.writerow(["case", "seed", *SAMPLE_COLUMNS])
+        writer.writerow(["case", "seed", *SAMPLE_FIELDS])
         for case, trials in by_case.items():
             for t in trials:
                 s = t["samples"]
                 for i in range(len(s["step"])):
-                    writer.writerow([case, t["seed"], *(_plain(s[c][i]) for c in SAMPLE_COLUMNS)])
+                    writer.writerow([case, t["seed"], *(_plain(s[c][i]) for c in SAMPLE_FIELDS)])
 
 
 def _write_final_csv(by_case: dict[str, list[dict]], path: Path) -> None:

@@ -17,8 +17,6 @@ from .config import CASES, Config
 from .metrics import SAMPLE_FIELDS, Sample
 from .simulation import Simulation
 
-TRACE_FIELDS = SAMPLE_FIELDS
-
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:
     from .cli import add_config_arguments
@@ -55,7 +53,7 @@ def open_trace(path: str | None) -> tuple[IO[str] | None, Any]:
         handle = open(path, "w", newline="", encoding="utf-8")
     except OSError as exc:
         raise UserError(f"cannot write trace file {path}: {exc.strerror or exc}") from None
-    writer = csv.DictWriter(handle, fieldnames=TRACE_FIELDS)
+    writer = csv.DictWriter(handle, fieldnames=SAMPLE_FIELDS)
     writer.writeheader()
     return handle, writer
 

@@ -37,7 +37,6 @@ import numpy as np
 from .config import Config
 from .metrics import SAMPLE_FIELDS
 
-SAMPLE_COLUMNS = SAMPLE_FIELDS
 METRICS = ("fraction_in_goal", "mean_outside_distance")
 TRIALS_DIR = "trials"
 FAILURES_FILE = "failures.json"
@@ -182,9 +181,9 @@ class ResultStore:
         tmp = csv_path.with_suffix(".csv.tmp")
         with tmp.open("w", newline="") as fh:
             writer = csv.writer(fh)
-            writer.writerow(["case", "seed", *SAMPLE_COLUMNS])
+            writer.writerow(["case", "seed", *SAMPLE_FIELDS])
             for s in result["samples"]:
-                writer.writerow([case, result["seed"], *(_fmt(s[c]) for c in SAMPLE_COLUMNS)])
+                writer.writerow([case, result["seed"], *(_fmt(s[c]) for c in SAMPLE_FIELDS)])
         os.replace(tmp, csv_path)
         meta = {k: v for k, v in result.items() if k != "samples"}
         meta["case"] = case
@@ -241,7 +240,7 @@ def read_samples(path: Path) -> dict[str, np.ndarray]:
     if not rows:
         raise ValueError("no samples")
     out: dict[str, np.ndarray] = {}
-    for c in SAMPLE_COLUMNS:
+    for c in SAMPLE_FIELDS:
         values = [r[c] for r in rows]
         out[c] = np.array(values) if c == "phase" else np.array(values, dtype=float)
     out["step"] = out["step"].astype(int)
