@@ -17,7 +17,7 @@ import importlib
 import sys
 from typing import Any, Sequence
 
-from .config import (CASES, STRATEGY_DEFAULTS, Config, ConfigError, case_config, load_config_file, params)
+from .config import CASES, STRATEGY_DEFAULTS, Config, ConfigError, params, read_config_values
 from .shapes import ShapeError
 
 #: subcommand name -> (module, function that adds its parser)
@@ -79,14 +79,18 @@ def add_config_arguments(parser: argparse.ArgumentParser, *, with_case: bool = T
 
 
 def config_from_args(args: argparse.Namespace) -> Config:
-    """Defaults, then the config file, then the case, then explicit flags."""
-    config = Config()
+    """Defaults, then the config file, then the case, then explicit flags.
+
+    The profile (from whichever of those names it last) supplies the values
+    that none of them sets: a value given anywhere wins over the profile.
+    """
+    explicit: dict[str, Any] = {}
     if getattr(args, "config", None):
-        config = load_config_file(args.config, config)
+        explicit.update(read_config_values(args.config))
     if getattr(args, "case", None):
-        config = case_config(args.case, config)
-    typed = {p.name: getattr(args, p.name) for p in params() if getattr(args, p.name, None) is not None}
-    return config.replace(**typed)
+        explicit.update(CASES[args.case])
+    explicit.update({p.name: getattr(args, p.name) for p in params() if getattr(args, p.name, None) is not None})
+    return Config().replace(**explicit)
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:

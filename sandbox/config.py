@@ -10,6 +10,7 @@ Defaults follow ``SPEC.md``.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 from dataclasses import dataclass, field
@@ -26,6 +27,12 @@ class ConfigError(ValueError):
     """A configuration value or file a user gave is not acceptable."""
 
 
+#: The two profiles (SPEC §9). The default is the authors' program: it is
+#: what produced the paper's tables.
+AUTHORS_CODE, PAPER_TEXT = "authors-code", "paper-text"
+PROFILES_NAMES = (AUTHORS_CODE, PAPER_TEXT)
+
+
 def _param(
     default: Any,
     help: str,
@@ -36,15 +43,35 @@ def _param(
     group: str,
     choices: tuple[str, ...] | None = None,
     rebuild: bool = True,
+    paper: Any = None,
 ) -> Any:
-    """Declare one parameter. ``rebuild`` says whether a change needs a reset."""
-    meta = dict(help=help, unit=unit, low=low, high=high, group=group, choices=choices, rebuild=rebuild)
-    return field(default=default, metadata=meta)
+    """Declare one parameter. ``rebuild`` says whether a change needs a reset.
+
+    ``paper``, when given, is the parameter's value in the ``paper-text``
+    profile and ``default`` its value in ``authors-code``: the parameter is
+    then *profiled*, and a :class:`Config` that is not given it explicitly
+    takes the value of its profile.
+    """
+    meta = dict(help=help, unit=unit, low=low, high=high, group=group, choices=choices, rebuild=rebuild,
+                profiled=paper is not None, profile_values={AUTHORS_CODE: default, PAPER_TEXT: paper})
+    # A profiled field defaults to None ("whatever the profile says"), resolved in __post_init__.
+    return field(default=None if paper is not None else default, metadata=meta)
 
 
 @dataclass(frozen=True)
 class Config:
-    """The full, typed configuration of one simulation run."""
+    """The full, typed configuration of one simulation run.
+
+    ``profile`` names a bundle of values for the parameters where the
+    paper's text and the authors' released program differ (SPEC §9); every
+    one of them can still be set on its own, and an explicit value always
+    wins over the profile's.
+    """
+
+    profile: str = _param(
+        AUTHORS_CODE, "bundle of model values: 'authors-code' (the authors' released program, which produced "
+        "the paper's tables) or 'paper-text' (the paper's written model); any value set explicitly wins",
+        group="model", choices=PROFILES_NAMES)
 
     # --- arena (SPEC §2) -------------------------------------------------
     arena_size: float = _param(64.0, "side of the square arena", unit="m", low=2.0, high=2000.0, group="arena")
@@ -54,6 +81,10 @@ class Config:
     robot_spawn_size: float = _param(
         32.0, "side of the central square robots start in (outside the construction area)",
         unit="m", low=1.0, high=2000.0, group="arena")
+    assembly_centre: str = _param(
+        "light", "where the construction area, spawn square, goal and light outlines are centred: 'arena' "
+        "(the arena's centre, between four lights) or 'light' (the light half a pitch up and right of it, "
+        "as the authors' program does)", group="arena", choices=("light", "arena"), paper="arena")
     dt: float = _param(1 / 30, "physics time step (one world step)", unit="s", low=1e-4, high=1.0, group="arena")
 
     # --- bodies (SPEC §2) ------------------------------------------------
@@ -66,22 +97,38 @@ class Config:
     box_size: float = _param(
         0.25, "hexagon size: apothem or circumradius, see box_size_is", unit="m", low=0.01, high=10.0, group="bodies")
     box_size_is: str = _param(
-        "apothem", "what box_size measures: 'apothem' (paper text) or 'circumradius' (authors' code)",
-        group="bodies", choices=("apothem", "circumradius"))
+        "circumradius", "what box_size measures: 'apothem' (paper text) or 'circumradius' (authors' program)",
+        group="bodies", choices=("apothem", "circumradius"), paper="apothem")
     box_density: float = _param(0.5, "box density", unit="kg/m^2", low=1e-3, high=1e4, group="bodies")
     box_friction: float = _param(1.0, "box friction coefficient", low=0.0, high=10.0, group="bodies")
     box_elasticity: float = _param(0.1, "box restitution", low=0.0, high=1.0, group="bodies")
     box_damping: float = _param(
         10.0, "linear and angular damping of boxes (the box slides only while pushed)",
         unit="1/s", low=0.0, high=1000.0, group="bodies")
+    box_damping_model: str = _param(
+        "box2d", "how box_damping c slows a box each step: 'exponential', v *= exp(-c dt) (paper text), or "
+        "'box2d', v *= 1 / (1 + c dt) (Box2D, the authors' program)", group="bodies",
+        choices=("box2d", "exponential"), paper="exponential")
 
     # --- light grid (SPEC §3) --------------------------------------------
     light_pitch: float = _param(1.0, "spacing of the overhead lights", unit="m", low=0.05, high=100.0, group="lights")
-    light_height: float = _param(1.0, "height of the lights above the floor", unit="m", low=0.01, high=100.0, group="lights")
+    light_height: float = _param(
+        2.0, "height of the lights above the floor (paper text 1, authors' program 2)",
+        unit="m", low=0.01, high=100.0, group="lights", paper=1.0)
     light_falloff: float = _param(
-        1.0, "falloff exponent k in B = I / d^k (paper 1, authors' code 2)", low=0.0, high=6.0, group="lights")
+        2.0, "falloff exponent k in B = I / d^k, d the 3-D distance (paper text 1, authors' program 2)",
+        low=0.0, high=6.0, group="lights", paper=1.0)
+    light_angle: str = _param(
+        "squared-offsets", "angle factor of a light: 'elevation', sin(theta) = h / d (paper text), or "
+        "'squared-offsets', sin(atan2(h, hypot(dx^2, dy^2))) (the authors' program: the offsets enter "
+        "squared, so the field stays local)", group="lights", choices=("squared-offsets", "elevation"),
+        paper="elevation")
     light_range: float = _param(
         12.8, "lights further than this in x or y do not reach a point", unit="m", low=0.1, high=2000.0, group="lights")
+    light_window: str = _param(
+        "cells", "which lights reach a point: 'range', those within light_range in x and y (paper text), or "
+        "'cells', light cells floor(x)-W .. floor(x)+W-1 with W = floor(light_range / pitch), never the last "
+        "row or column (the authors' program)", group="lights", choices=("cells", "range"), paper="range")
     light_intensity: float = _param(1.0, "intensity of a light that is on", low=0.0, high=1000.0, group="lights")
     field_samples: int = _param(
         6, "luminosity-field samples per light pitch, at least (more is finer and slower to rebuild)",
@@ -89,15 +136,33 @@ class Config:
 
     # --- robots (SPEC §4) ------------------------------------------------
     sensor_offset: float = _param(
-        0.1, "distance of each photocell from the robot's centre", unit="m", low=0.0, high=10.0, group="robot")
+        0.1, "distance of each photocell from the robot's centre along each body axis",
+        unit="m", low=0.0, high=10.0, group="robot")
+    photocells: str = _param(
+        "corners", "where the four photocells sit: 'axes', front/back/left/right (paper text), or 'corners', "
+        "(+-offset, +-offset) in the body frame (the authors' program)", group="robot",
+        choices=("corners", "axes"), paper="axes")
+    steering: str = _param(
+        "front", "which photocells steer, w = k_turn (left - right): 'sides', every cell on each side (paper "
+        "text), or 'front', only the front pair (the authors' program); the same for 'axes' photocells",
+        group="robot", choices=("front", "sides"), paper="sides")
     k_drive: float = _param(5.0, "forward speed gain: v = k_drive (front - back)", low=0.0, high=1e4, group="robot", rebuild=False)
     k_turn: float = _param(20.0, "turn rate gain: w = k_turn (left - right)", low=0.0, high=1e4, group="robot", rebuild=False)
     command_period: int = _param(
         50, "steps a robot holds its command before it reads its photocells again",
         unit="steps", low=1, high=100_000, group="robot")
+    motor: str = _param(
+        "set-once", "'continuous': the command is the body's velocity every step (paper text); 'set-once': at "
+        "each refresh the velocity is set once along the heading, then collisions change it and it persists, "
+        "robots undamped (the authors' program)", group="robot", choices=("set-once", "continuous"),
+        paper="continuous")
     eta_in: float = _param(0.4, "charge gained per unit of luminosity per step", low=0.0, high=1e4, group="robot", rebuild=False)
     metabolic: float = _param(0.01, "charge spent per step just to live", low=0.0, high=1e4, group="robot", rebuild=False)
-    eta_out: float = _param(0.1, "charge spent per unit of |v| + |w| per step", low=0.0, high=1e4, group="robot", rebuild=False)
+    eta_out: float = _param(0.1, "charge spent per unit of motion per step, see energy_turn_cost", low=0.0, high=1e4, group="robot", rebuild=False)
+    energy_turn_cost: str = _param(
+        "signed", "motion cost: 'absolute', eta_out (|v| + |w|) of the command (paper text), or 'signed', "
+        "eta_out (speed + w) of the body's actual motion with w signed, so turning clockwise gains charge "
+        "(the authors' program)", group="robot", choices=("signed", "absolute"), paper="absolute")
     capacity: float = _param(20.0, "largest charge a robot stores", low=0.0, high=1e6, group="robot", rebuild=False)
     start_charge: float = _param(0.0, "charge of every robot at reset", low=0.0, high=1e6, group="robot")
 
@@ -106,11 +171,22 @@ class Config:
         "circle", "goal shape: 'circle', a name in shapes/, or a polygon file", group="controller", rebuild=False)
     update_every: int = _param(100, "steps between controller updates", unit="steps", low=1, high=1_000_000, group="controller", rebuild=False)
     scale_rate: float = _param(
-        0.975, "outline scale factor per update while contracting (its inverse while dilating)",
+        0.975, "outline scale factor per update while contracting (see size_schedule for dilating)",
         low=0.5, high=0.9999, group="controller", rebuild=False)
+    size_schedule: str = _param(
+        "program", "'clamped': contract by scale_rate and dilate by its inverse, clamped to the smallest and "
+        "largest size (paper text); 'program': contract until the first size below the smallest, which is lit, "
+        "grow back to it, dilate by 2 - scale_rate until the first size above the largest, which is skipped "
+        "(the authors' program)", group="controller", choices=("program", "clamped"), paper="clamped",
+        rebuild=False)
     hold_steps: int = _param(
-        25, "world steps the outline holds at its smallest size (the paper's t)",
-        unit="steps", low=0, high=1_000_000, group="controller", rebuild=False)
+        100, "world steps the smallest outline stays lit (paper text: t = 25 steps; the authors' program: one "
+        "controller update)", unit="steps", low=0, high=1_000_000, group="controller", rebuild=False, paper=25)
+    min_size_rule: str = _param(
+        "inradius", "smallest outline: 'equal-area', the goal's equal-area radius plus one robot diameter "
+        "(paper text), or 'inradius', the drawn outline's inradius equals the goal's plus one robot diameter "
+        "(the authors' program)", group="controller", choices=("inradius", "equal-area"), paper="equal-area",
+        rebuild=False)
     band: float = _param(
         0.5, "a light is on when its centre is within this distance of the outline",
         unit="m", low=0.0, high=100.0, group="controller", rebuild=False)
@@ -119,12 +195,28 @@ class Config:
     polygon_max_area: float = _param(
         0.5, "largest polygon outline, as a fraction of the arena's area (capped to stay inside)",
         low=0.01, high=1.0, group="controller", rebuild=False)
+    polygon_max_rule: str = _param(
+        "grow", "largest polygon: 'fit', the largest scale inside the arena (one pitch clear) up to "
+        "polygon_max_area (paper text), or 'grow', the file's outline grown by 1.05 until it covers "
+        "polygon_max_area or reaches the arena's edge, keeping that step (the authors' program)",
+        group="controller", choices=("grow", "fit"), paper="fit", rebuild=False)
     flare: float = _param(
         0.0, "flare amount f (0 = off; 1.75 when switched on): corners pushed out by max(1, 90 f / angle)",
         low=0.0, high=10.0, group="strategies", rebuild=False)
+    flare_mode: str = _param(
+        "scaled-outline", "'on-goal': convex corners of the goal pushed out, sizes from the goal (paper text); "
+        "'scaled-outline': every corner pushed out by 90 f / |angle between its edges|, and that outline, "
+        "matched to the goal's area, is what is scaled and sized (the authors' program)",
+        group="strategies", choices=("scaled-outline", "on-goal"), paper="on-goal", rebuild=False)
     switch: float = _param(
-        0.0, "switch to a circle this fraction of the way from smallest to largest (0 = off; 0.25 when on)",
+        0.0, "switch to a circle (0 = off; 0.25 when on): see switch_mode for what the amount means",
         low=0.0, high=1.0, group="strategies", rebuild=False)
+    switch_mode: str = _param(
+        "inradius", "'fraction': a circle from 'switch' of the way between smallest and largest, both ways "
+        "(paper text); 'inradius': only while dilating, once the polygon's inradius passes switch x half the "
+        "arena (8 m), light a circle of that radius, grow it to the circle's largest, contract it and restore "
+        "the polygon below the same radius (the authors' program)", group="strategies",
+        choices=("inradius", "fraction"), paper="fraction", rebuild=False)
     no_corners: float = _param(
         0.0, "fraction of band lights nearest convex corners that stay off (0 = off; 0.5 when on)",
         low=0.0, high=1.0, group="strategies", rebuild=False)
@@ -140,8 +232,13 @@ class Config:
     collision_slop: float = _param(0.01, "allowed overlap between shapes", unit="m", low=0.0, high=1.0, group="physics")
 
     def __post_init__(self) -> None:
-        for p in dataclasses.fields(self):
-            check_value(p.name, getattr(self, p.name))
+        check_value("profile", self.profile)
+        for f in dataclasses.fields(self):
+            if getattr(self, f.name) is None and f.metadata["profiled"]:
+                # Not given: the profile's value (the dataclass is frozen, hence object.__setattr__).
+                object.__setattr__(self, f.name, f.metadata["profile_values"][self.profile])
+        for f in dataclasses.fields(self):
+            check_value(f.name, getattr(self, f.name))
         if self.construction_size >= self.arena_size:
             raise ConfigError("construction_size must be smaller than arena_size")
         if self.robot_spawn_size > self.arena_size:
@@ -155,6 +252,15 @@ class Config:
     @property
     def lights_per_side(self) -> int:
         return int(round(self.arena_size / self.light_pitch))
+
+    @property
+    def centre(self) -> float:
+        """x (and y) of the assembly centre: construction area, spawn square,
+        goal and light outlines are centred on (centre, centre)."""
+        if self.assembly_centre == "arena":
+            return self.arena_size / 2.0
+        # The light cell at or up and right of the arena centre (the program's ceil(width / 2)).
+        return (self.lights_per_side // 2 + 0.5) * self.light_pitch
 
     @property
     def box_apothem(self) -> float:
@@ -172,11 +278,25 @@ class Config:
         return 2.0 * math.sqrt(3.0) * self.box_apothem**2
 
     def replace(self, **changes: Any) -> "Config":
-        """A copy with some values changed (validated like the original)."""
+        """A copy with some values changed (validated like the original).
+
+        Changing ``profile`` takes every profiled value from the new profile,
+        except those given in the same call.
+        """
         unknown = set(changes) - set(param_names())
         if unknown:
             raise ConfigError(f"unknown parameter(s): {', '.join(sorted(unknown))}")
-        return dataclasses.replace(self, **{k: coerce(k, v) for k, v in changes.items()})
+        values = {k: coerce(k, v) for k, v in changes.items()}
+        if "profile" in values:
+            for p in params():
+                if p.profiled and p.name not in values:
+                    values[p.name] = None  # resolved to the new profile's value
+        return dataclasses.replace(self, **values)
+
+    def differences_from_profile(self) -> dict[str, Any]:
+        """Profiled values that differ from this config's profile (a user's overrides)."""
+        return {p.name: getattr(self, p.name) for p in params()
+                if p.profiled and getattr(self, p.name) != p.value_in(self.profile)}
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
@@ -198,6 +318,11 @@ class Param:
     group: str
     choices: tuple[str, ...] | None
     rebuild: bool
+    profiled: bool  # whether the profile sets it; then ``default`` is its authors-code value
+    paper: Any  # its value in the paper-text profile (the default where not profiled)
+
+    def value_in(self, profile: str) -> Any:
+        return self.paper if profile == PAPER_TEXT else self.default
 
 
 _TYPES = {"float": float, "int": int, "str": str, float: float, int: int, str: str}
@@ -205,10 +330,21 @@ _TYPES = {"float": float, "int": int, "str": str, float: float, int: int, str: s
 
 def params() -> Iterator[Param]:
     """The declared parameters, in declaration order."""
+    return iter(_param_table().values())
+
+
+@functools.lru_cache(maxsize=None)
+def _param_table() -> dict[str, Param]:
+    return {p.name: p for p in _declared_params()}
+
+
+def _declared_params() -> Iterator[Param]:
     for f in dataclasses.fields(Config):
         m = f.metadata
-        yield Param(f.name, _TYPES[f.type], f.default, m["help"], m["unit"], m["low"], m["high"],
-                    m["group"], m["choices"], m["rebuild"])
+        default = m["profile_values"][AUTHORS_CODE] if m["profiled"] else f.default
+        paper = m["profile_values"][PAPER_TEXT] if m["profiled"] else f.default
+        yield Param(f.name, _TYPES[f.type], default, m["help"], m["unit"], m["low"], m["high"],
+                    m["group"], m["choices"], m["rebuild"], m["profiled"], paper)
 
 
 def param_names() -> list[str]:
@@ -216,10 +352,10 @@ def param_names() -> list[str]:
 
 
 def param(name: str) -> Param:
-    for p in params():
-        if p.name == name:
-            return p
-    raise ConfigError(f"unknown parameter {name!r}")
+    try:
+        return _param_table()[name]
+    except KeyError:
+        raise ConfigError(f"unknown parameter {name!r}") from None
 
 
 def coerce(name: str, value: Any) -> Any:
@@ -260,6 +396,16 @@ def load_config_file(path: str | Path, base: Config | None = None) -> Config:
     Unknown names are an error (a typo should not silently do nothing). Sections
     are allowed and flattened, so a file may group values as the panel does.
     """
+    values = read_config_values(path)
+    try:
+        return (base or Config()).replace(**values)
+    except ConfigError as exc:
+        raise ConfigError(f"config file {path}: {exc}") from None
+
+
+def read_config_values(path: str | Path) -> dict[str, Any]:
+    """The ``name = value`` pairs of a TOML or JSON config file, checked
+    (every name known, every value acceptable) but not applied."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -281,9 +427,10 @@ def load_config_file(path: str | Path, base: Config | None = None) -> Config:
     if "config" in data and isinstance(data["config"], dict):
         flat = _flatten(data["config"])
     try:
-        return (base or Config()).replace(**flat)
+        Config().replace(**flat)
     except ConfigError as exc:
         raise ConfigError(f"config file {path}: {exc}") from None
+    return flat
 
 
 def _flatten(data: dict[str, Any]) -> dict[str, Any]:
@@ -320,8 +467,13 @@ def case_config(name: str, base: Config | None = None) -> Config:
 
 def markdown_table() -> str:
     """The parameter table in README.md (a test keeps the two in step)."""
-    rows = ["| flag | default | unit | what it is |", "| --- | --- | --- | --- |"]
+    rows = ["| flag | default (`authors-code`) | `paper-text` | unit | what it is |",
+            "| --- | --- | --- | --- | --- |"]
     for p in params():
-        default = f"{p.default:.6g}" if isinstance(p.default, float) else str(p.default)
-        rows.append(f"| `--{p.name.replace('_', '-')}` | {default} | {p.unit} | {p.help} |")
+        paper = _cell(p.paper) if p.profiled else "same"
+        rows.append(f"| `--{p.name.replace('_', '-')}` | {_cell(p.default)} | {paper} | {p.unit} | {p.help} |")
     return "\n".join(rows)
+
+
+def _cell(value: Any) -> str:
+    return f"{value:.6g}" if isinstance(value, float) else str(value)

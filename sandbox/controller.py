@@ -1,13 +1,38 @@
 """The open-loop light-field controller (SPEC §5, the paper's Algorithm 1).
 
 A band of lights follows an outline (the goal polygon or a circle) scaled
-about the arena centre. The scale shrinks by ``scale_rate`` every
+about the assembly centre. The scale shrinks by ``scale_rate`` every
 ``update_every`` steps down to the smallest size, holds there for
 ``hold_steps``, grows back to the largest size, and the cycle repeats. The
 controller never looks at robots or boxes.
 
-``scale`` is measured relative to the goal: at scale 1 the outline is the
-goal shape itself, whose area equals the total area of the boxes.
+``scale`` is measured relative to the outline at scale 1 (see
+:mod:`sandbox.outlines`): for a plain polygon or the circle, the goal itself,
+whose area equals the total area of the boxes.
+
+Two schedules (``Config.size_schedule``):
+
+* ``clamped`` (paper text): each update multiplies the scale by
+  ``scale_rate`` (contracting) or its inverse (dilating) and clamps it to the
+  smallest and largest sizes; the smallest is held ``hold_steps`` steps.
+* ``program`` (the authors' program, ``main.cc``): each update lights the
+  current size, then multiplies it by ``scale_rate`` (contracting) or
+  ``2 - scale_rate`` (dilating). The first size found below the smallest is
+  lit for ``hold_steps`` steps, then grown back to at least the smallest
+  (a circle grows by a fixed 0.6 m, the program's ``delta``); the first size
+  found above the largest is not lit: the scale turns and shrinks from it.
+
+And two readings of *switch to circle* (``Config.switch_mode``):
+
+* ``fraction`` (paper text): the outline is a circle of the goal's
+  equal-area radius times the scale whenever it is at least ``switch`` of
+  the way from the smallest to the largest size, both ways;
+* ``inradius`` (the authors' program): only while dilating, once the
+  polygon's inradius exceeds ``switch`` times half the arena (the program's
+  fixed 8 m is 0.25 of 32 m), the polygon is frozen and a circle of that
+  radius takes its place; the circle grows to the circle's largest size,
+  contracts, and the frozen polygon returns once the circle's radius falls
+  below the same threshold.
 """
 
 from __future__ import annotations
@@ -17,12 +42,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import geometry
+from . import geometry, outlines
 from .config import Config
 from .lights import light_centres
 
 CONTRACTING, HOLDING, DILATING = "contracting", "holding", "dilating"
 CIRCLE_DRAW_VERTICES = 96
+#: After holding, the authors' program grows a circle back by this much (its ``delta``, m).
+PROGRAM_CIRCLE_REGROWTH = 0.6
 
 
 @dataclass(frozen=True)
@@ -32,6 +59,8 @@ class Goal:
     centre: np.ndarray
     area: float
     vertices: np.ndarray | None  # absolute, file order
+    #: Area of the polygon as its file drew it (the program sizes outlines from it).
+    file_area: float = 0.0
 
     @property
     def is_circle(self) -> bool:
@@ -62,12 +91,13 @@ class Goal:
 
 
 def make_goal(config: Config, vertices: np.ndarray | None) -> Goal:
-    """Fit the user's polygon (or a circle) to the arena centre and the boxes' total area."""
-    centre = np.full(2, config.arena_size / 2.0)
+    """Fit the user's polygon (or a circle) to the assembly centre and the boxes' total area."""
+    centre = np.full(2, config.centre)
     area = max(config.boxes, 1) * config.box_area
     if vertices is None:
         return Goal(centre, area, None)
-    return Goal(centre, area, geometry.fit_to_area(vertices, area, centre))
+    vertices = np.asarray(vertices, dtype=float)
+    return Goal(centre, area, geometry.fit_to_area(vertices, area, centre), abs(geometry.signed_area(vertices)))
 
 
 class Controller:
@@ -77,35 +107,67 @@ class Controller:
         self.config = config
         self.goal = goal
         self._centres = light_centres(config).reshape(-1, 2)
+        self.strategies = dict(flare=config.flare, switch=config.switch, no_corners=config.no_corners)
+        self._pending: dict[str, float] = {}
         self._set_limits()
         self.scale = self.max_scale
+        #: Radius of the circle lit in place of the polygon (switch_mode 'inradius'), else None.
+        self.circle_radius: float | None = None
         self.phase = CONTRACTING
         self.cycle = 0  # completed contract -> hold -> dilate cycles
         self.updates = 0
         self._until_update = config.update_every
         self._hold_left = 0
-        self.strategies = dict(flare=config.flare, switch=config.switch, no_corners=config.no_corners)
-        self._pending: dict[str, float] = {}
         self.outline = np.empty((0, 2))
         self.corners = np.empty((0, 2))
         self.intensities = np.zeros((config.lights_per_side,) * 2)
-        self._redraw()
+        if self._program:
+            self._program_update()
+        else:
+            self._redraw()
+
+    @property
+    def _program(self) -> bool:
+        return self.config.size_schedule == "program"
 
     # -- sizes ------------------------------------------------------------
     def _set_limits(self) -> None:
-        """Smallest scale: the goal grown by one robot diameter; largest: see below."""
-        self.min_scale = (self.goal.radius + 2.0 * self.config.robot_radius) / self.goal.radius
-        self.max_scale = max(self._largest_scale(), self.min_scale)
-
-    def _largest_scale(self) -> float:
+        """The outline at scale 1 for the current strategies, and its smallest and largest scales."""
         cfg, goal = self.config, self.goal
         if goal.is_circle:
-            return cfg.circle_max * cfg.arena_size / 2.0 / goal.radius
-        by_area = math.sqrt(cfg.polygon_max_area * cfg.arena_size**2 / goal.area)
-        # Keep the goal shape (one light pitch clear of the wall) inside the arena.
-        reach = np.abs(goal.vertices - goal.centre).max()
-        by_fit = (cfg.arena_size / 2.0 - cfg.light_pitch) / reach
-        return min(by_area, by_fit)
+            self.shape = None
+            self.min_scale = (goal.radius + 2.0 * cfg.robot_radius) / goal.radius
+            largest = outlines.max_circle_scale(cfg, goal.radius)
+        else:
+            self.shape = outlines.outline_shape(goal.vertices - goal.centre, goal.area, goal.file_area,
+                                                self.strategies["flare"], cfg.flare_mode)
+            self.min_scale = outlines.min_polygon_scale(cfg, self.shape, goal.radius)
+            largest = outlines.max_polygon_scale(cfg, self.shape, goal.area)
+        self.max_scale = max(largest, self.min_scale)
+
+    @property
+    def min_radius(self) -> float:
+        """The smallest outline's inradius (its radius for a circle)."""
+        return self.min_scale * (self.goal.radius if self.shape is None else self.shape.inradius)
+
+    @property
+    def inradius(self) -> float:
+        """The lit outline's inradius (its radius for a circle)."""
+        if self.circle_radius is not None:
+            return self.circle_radius
+        return self.scale * (self.goal.radius if self.shape is None else self.shape.inradius)
+
+    @property
+    def max_radius(self) -> float:
+        """The largest inradius (radius for a circle) the lit outline may have now."""
+        if self.circle_radius is not None:
+            return self.circle_max_radius
+        return self.max_scale * (self.goal.radius if self.shape is None else self.shape.inradius)
+
+    @property
+    def circle_max_radius(self) -> float:
+        cfg = self.config
+        return cfg.circle_max * cfg.arena_size / 2.0
 
     @property
     def progress(self) -> float:
@@ -116,8 +178,10 @@ class Controller:
     @property
     def is_circle(self) -> bool:
         """Whether the lit outline is currently a circle."""
+        if self.goal.is_circle or self.circle_radius is not None:
+            return True
         switch = self.strategies["switch"]
-        return self.goal.is_circle or (switch > 0 and self.progress >= switch - 1e-12)
+        return self.config.switch_mode == "fraction" and switch > 0 and self.progress >= switch - 1e-12
 
     # -- live changes -----------------------------------------------------
     def reconfigure(self, config: Config) -> None:
@@ -127,6 +191,8 @@ class Controller:
         self._set_limits()
         self.scale = min(max(self.scale, self.min_scale), self.max_scale)
         self._until_update = min(self._until_update, config.update_every)
+        if self.config.switch_mode != "inradius":
+            self.circle_radius = None
         self._redraw()
 
     def set_strategies(self, **values: float) -> None:
@@ -136,6 +202,18 @@ class Controller:
             raise ValueError(f"unknown strategies: {sorted(unknown)}")
         self._pending.update(values)
 
+    def _take_pending_strategies(self) -> None:
+        if not self._pending:
+            return
+        flare_changed = self._pending.get("flare", self.strategies["flare"]) != self.strategies["flare"]
+        self.strategies.update(self._pending)
+        self._pending.clear()
+        if flare_changed:
+            self._set_limits()
+            self.scale = min(max(self.scale, self.min_scale), self.max_scale)
+        if self.strategies["switch"] <= 0:
+            self.circle_radius = None
+
     # -- time -------------------------------------------------------------
     def advance(self) -> bool:
         """One world step. Returns whether the light pattern may have changed."""
@@ -144,6 +222,8 @@ class Controller:
             if self._hold_left > 0:
                 return False
             self.phase = DILATING
+            if self._program:
+                self._grow_back()
             return self._update()
         self._until_update -= 1
         if self._until_update > 0:
@@ -153,8 +233,20 @@ class Controller:
     def _update(self) -> bool:
         self._until_update = self.config.update_every
         self.updates += 1
-        self.strategies.update(self._pending)
-        self._pending.clear()
+        self._take_pending_strategies()
+        if self._program:
+            self._program_update()
+            return True
+        if self.circle_radius is not None:
+            self._clamped_circle_step()
+        else:
+            self._clamped_step()
+        self._switch_shape()
+        self._redraw()
+        return True
+
+    # -- the paper text's schedule ------------------------------------------
+    def _clamped_step(self) -> None:
         rate = self.config.scale_rate
         if self.phase == CONTRACTING:
             self.scale *= rate
@@ -166,31 +258,85 @@ class Controller:
             self.scale /= rate
             if self.scale >= self.max_scale:
                 self.scale = self.max_scale
-                self.phase = CONTRACTING
-                self.cycle += 1
+                self._turn_to_contracting()
+
+    def _clamped_circle_step(self) -> None:
+        """The circle lit in the polygon's place (switch_mode 'inradius') under
+        the clamped schedule: it turns at the circle's largest size; the
+        polygon returns below the switch threshold (see _switch_shape)."""
+        rate = self.config.scale_rate
+        if self.phase == CONTRACTING:
+            self.circle_radius *= rate
+        else:
+            self.circle_radius = min(self.circle_radius / rate, self.circle_max_radius)
+            if self.circle_radius >= self.circle_max_radius:
+                self._turn_to_contracting()
+
+    def _turn_to_contracting(self) -> None:
+        self.phase = CONTRACTING
+        self.cycle += 1
+
+    # -- the authors' program's schedule ------------------------------------
+    def _program_update(self) -> None:
+        """One update of the program's main loop: light the current size, then
+        step it (see the module docstring)."""
+        rate = self.config.scale_rate
+        if self.inradius < self.min_radius and self.phase == CONTRACTING:
+            # First size below the smallest: lit while holding, then grown back.
+            self.phase = HOLDING if self.config.hold_steps > 0 else DILATING
+            self._hold_left = self.config.hold_steps
+            self._redraw()
+            if self.phase == DILATING:
+                self._grow_back()
+                self._program_update()
+            return
+        if self.phase == DILATING and self.inradius > self.max_radius * (1 + 1e-12):
+            # First size above the largest: not lit; turn and shrink from it.
+            self._turn_to_contracting()
+            self._step_size(rate)
+            return
+        self._switch_shape()
         self._redraw()
-        return True
+        self._step_size(rate if self.phase == CONTRACTING else 2.0 - rate)
+
+    def _switch_shape(self) -> None:
+        """switch_mode 'inradius': a circle in the polygon's place while it is large."""
+        if self.goal.is_circle or self.config.switch_mode != "inradius" or self.strategies["switch"] <= 0:
+            return
+        threshold = self.strategies["switch"] * self.config.arena_size / 2.0
+        if self.circle_radius is None and self.phase == DILATING and self.inradius > threshold:
+            self.circle_radius = self.inradius  # the polygon stays frozen at this scale
+        elif self.circle_radius is not None and self.phase == CONTRACTING and self.circle_radius < threshold:
+            self.circle_radius = None  # the frozen polygon returns
+
+    def _step_size(self, factor: float) -> None:
+        if self.circle_radius is not None:
+            self.circle_radius *= factor
+        else:
+            self.scale *= factor
+
+    def _grow_back(self) -> None:
+        """After the hold: back to at least the smallest size (a circle goal by the program's 0.6 m)."""
+        if self.goal.is_circle:
+            self.scale += PROGRAM_CIRCLE_REGROWTH / self.goal.radius
+            return
+        grow = 2.0 - self.config.scale_rate
+        while self.inradius < self.min_radius:
+            self._step_size(grow)
 
     # -- pattern ----------------------------------------------------------
     def _redraw(self) -> None:
         """Recompute the outline and which lights are on."""
         cfg, goal = self.config, self.goal
         if self.is_circle:
-            radius = goal.radius * self.scale
+            radius = self.circle_radius if self.circle_radius is not None else goal.radius * self.scale
             self.outline = geometry.regular_polygon(radius, CIRCLE_DRAW_VERTICES, goal.centre)
             self.corners = np.empty((0, 2))
             dist = np.abs(np.hypot(*(self._centres - goal.centre).T) - radius)
             on = dist <= cfg.band + 1e-9
         else:
-            relative = goal.vertices - goal.centre
-            is_corner = geometry.interior_angles(relative) < 180.0
-            if self.strategies["flare"] > 0:
-                relative, original = geometry.flare(relative, self.strategies["flare"])
-                convex = np.zeros(len(relative), dtype=bool)
-                convex[original] = is_corner
-                is_corner = convex
-            self.outline = goal.centre + self.scale * relative
-            self.corners = self.outline[is_corner]
+            self.outline = goal.centre + self.scale * self.shape.vertices
+            self.corners = self.outline[self.shape.corners]
             on = geometry.distance_to_outline(self._centres, self.outline) <= cfg.band + 1e-9
             if self.strategies["no_corners"] > 0 and len(self.corners):
                 on = self._darken_corners(on)

@@ -1,8 +1,10 @@
 """The robots' per-step work, compiled with numba: one call per world step.
 
 Each step every robot reads the light at its centre, charges and spends
-energy, and is given a velocity; robots at their refresh step also read
-their four photocells and set a new command. Written with numpy (see
+energy, and is given a velocity (every robot with the paper text's
+'continuous' motor; only refreshed and stopped ones with the authors'
+'set-once' motor); robots at their refresh step also read their four
+photocells and set a new command. Written with numpy (see
 :mod:`sandbox.robots` and :meth:`sandbox.lights.LightField.sample`), that
 is about 40 small array operations on 200 robots, each paying numpy's
 per-call overhead; here it is one compiled loop. That halved the time our
@@ -24,7 +26,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .robots import SENSOR_ANGLES  # numba freezes this global array as a constant
+from .robots import PHOTOCELLS
 
 
 class SampleLayout(NamedTuple):
@@ -97,31 +99,62 @@ def sample_point(x, y, field, lay):
     return f00 + fu * f10 + fv * (f01 + fu * f11)
 
 
+class RobotParams(NamedTuple):
+    """The robot model's numbers, as the kernels take them (see :func:`robot_params`)."""
+
+    angles: np.ndarray  # direction of each photocell from the heading
+    reach: float  # distance of each photocell from the centre
+    drive: np.ndarray  # v = k_drive * drive . readings
+    turn: np.ndarray  # w = k_turn * turn . readings
+    k_drive: float
+    k_turn: float
+    eta_in: float
+    metabolic: float
+    eta_out: float
+    capacity: float
+    signed_turn_cost: bool
+
+
+def robot_params(config) -> RobotParams:
+    """The kernels' view of a :class:`sandbox.config.Config`."""
+    cells = PHOTOCELLS[config.photocells]
+    return RobotParams(cells.angles, float(config.sensor_offset * cells.reach), cells.drive,
+                       cells.turn[config.steering], float(config.k_drive), float(config.k_turn),
+                       float(config.eta_in), float(config.metabolic), float(config.eta_out),
+                       float(config.capacity), config.energy_turn_cost == "signed")
+
+
 @njit(cache=True)
-def _refresh_commands(state, due, field, lay, offset, k_drive, k_turn, command, readings):
+def _refresh_commands(state, due, field, lay, rp, command, readings):
     """Robots in ``due`` read their photocells and set (v, w) (Braitenberg)."""
     for d in due:
         x, y, h = state[d, 0], state[d, 1], state[d, 2]
+        v = 0.0
+        w = 0.0
         for k in range(4):
-            a = h + SENSOR_ANGLES[k]  # front, back, left, right, as robots.sensor_points
-            px = math.cos(a) * offset + x
-            py = math.sin(a) * offset + y
+            a = h + rp.angles[k]  # as robots.sensor_points
+            px = math.cos(a) * rp.reach + x
+            py = math.sin(a) * rp.reach + y
             readings[d, k] = sample_point(px, py, field, lay)
-        command[d, 0] = k_drive * (readings[d, 0] - readings[d, 1])
-        command[d, 1] = k_turn * (readings[d, 2] - readings[d, 3])
+        for k in range(4):  # as robots.weighted: left to right
+            v = v + rp.drive[k] * readings[d, k]
+            w = w + rp.turn[k] * readings[d, k]
+        command[d, 0] = rp.k_drive * v
+        command[d, 1] = rp.k_turn * w
 
 
 @njit(cache=True)
-def robot_step(state, n_robots, due, field, lay, offset, k_drive, k_turn, eta_in, metabolic, eta_out,
-               capacity, velocity_scale, command, readings, charge, applied, velocities):
-    """One world step of robot work, in place.
+def robot_step_continuous(state, n_robots, due, field, lay, rp, velocity_scale, command, readings, charge,
+                          applied, velocities):
+    """One world step of the paper text's robots, in place: the command is the
+    body's velocity every step, along its current heading.
 
     ``state`` rows are (x, y, angle, vx, vy, w) for robots, then boxes, then
     the static body; ``velocities`` receives (vx, vy, w) for every row:
     robots' new ones (divided by the space's damping factor, so they arrive
     unchanged) and everything else's current ones, ready for pymunk.batch.
     """
-    _refresh_commands(state, due, field, lay, offset, k_drive, k_turn, command, readings)
+    _refresh_commands(state, due, field, lay, rp, command, readings)
     for r in range(n_robots):
         lum = sample_point(state[r, 0], state[r, 1], field, lay)
         moving = 1.0 if charge[r] > 0.0 else 0.0  # an empty robot cannot move
@@ -129,9 +162,9 @@ def robot_step(state, n_robots, due, field, lay, offset, k_drive, k_turn, eta_in
         w = command[r, 1] * moving
         applied[r, 0] = v
         applied[r, 1] = w
-        gained = eta_in * lum
-        spent = metabolic + eta_out * (abs(v) + abs(w))
-        charge[r] = min(max(charge[r] + gained - spent, 0.0), capacity)
+        gained = rp.eta_in * lum
+        spent = rp.metabolic + rp.eta_out * (abs(v) + abs(w))
+        charge[r] = min(max(charge[r] + gained - spent, 0.0), rp.capacity)
         h = state[r, 2]
         velocities[r, 0] = v * math.cos(h) * velocity_scale
         velocities[r, 1] = v * math.sin(h) * velocity_scale
@@ -140,6 +173,48 @@ def robot_step(state, n_robots, due, field, lay, offset, k_drive, k_turn, eta_in
         velocities[b, 0] = state[b, 3]
         velocities[b, 1] = state[b, 4]
         velocities[b, 2] = state[b, 5]
+
+
+@njit(cache=True)
+def robot_step_set_once(state, n_robots, due, field, lay, rp, command, readings, charge, applied, writes):
+    """One world step of the authors' program's robots, in place.
+
+    A robot at its refresh step reads its photocells and its body's velocity
+    is set, once, to ``v`` along its current heading and ``w``; otherwise the
+    body keeps whatever velocity the physics left it (robots are undamped).
+    Every robot then pays for its actual motion (see
+    :func:`sandbox.robots.charge_step_actual`) and a robot left with no
+    charge is stopped. ``state`` is updated to match; each velocity to hand
+    to pymunk is a row (robot, vx, vy, w) of ``writes``. Returns their number.
+    """
+    _refresh_commands(state, due, field, lay, rp, command, readings)
+    n = 0
+    for d in due:
+        h = state[d, 2]
+        v = command[d, 0]
+        state[d, 3] = v * math.cos(h)
+        state[d, 4] = v * math.sin(h)
+        state[d, 5] = command[d, 1]
+        writes[n, 0], writes[n, 1], writes[n, 2], writes[n, 3] = d, state[d, 3], state[d, 4], state[d, 5]
+        n += 1
+    for r in range(n_robots):
+        lum = sample_point(state[r, 0], state[r, 1], field, lay)
+        vx, vy, w = state[r, 3], state[r, 4], state[r, 5]
+        turn = w if rp.signed_turn_cost else abs(w)
+        c = charge[r] + (rp.eta_in * lum - rp.metabolic - rp.eta_out * turn - rp.eta_out * math.sqrt(vx * vx + vy * vy))
+        if c <= 0.0:
+            c = 0.0
+            if vx != 0.0 or vy != 0.0 or w != 0.0:  # can't move: stopped (a no-op when still)
+                state[r, 3] = state[r, 4] = state[r, 5] = 0.0
+                writes[n, 0], writes[n, 1], writes[n, 2], writes[n, 3] = r, 0.0, 0.0, 0.0
+                n += 1
+        elif c > rp.capacity:
+            c = rp.capacity
+        charge[r] = c
+        h = state[r, 2]
+        applied[r, 0] = state[r, 3] * math.cos(h) + state[r, 4] * math.sin(h)  # forward speed
+        applied[r, 1] = state[r, 5]
+    return n
 
 
 _warm = False
@@ -155,6 +230,12 @@ def warm_up() -> None:
     lay = SampleLayout(4.0, 0.0, 1.0, 1.0, np.array([0.0, 1.0]), np.array([0.0, 2.0]), 3, 4, 24)
     field = np.zeros(24 * 24, dtype=np.float32)
     state = np.zeros((3, 6))
-    robot_step(state, 1, np.zeros(1, dtype=np.intp), field, lay, 0.1, 5.0, 20.0, 0.4, 0.01, 0.1, 20.0, 1.0,
-               np.zeros((1, 2)), np.zeros((1, 4)), np.zeros(1), np.zeros((1, 2)), np.zeros((3, 3)))
+    for signed in (False, True):
+        cells = PHOTOCELLS["axes"]
+        rp = RobotParams(cells.angles, 0.1, cells.drive, cells.turn["sides"], 5.0, 20.0, 0.4, 0.01, 0.1, 20.0, signed)
+        due = np.zeros(1, dtype=np.intp)
+        robot_step_continuous(state, 1, due, field, lay, rp, 1.0, np.zeros((1, 2)), np.zeros((1, 4)), np.zeros(1),
+                              np.zeros((1, 2)), np.zeros((3, 3)))
+        robot_step_set_once(state, 1, due, field, lay, rp, np.zeros((1, 2)), np.zeros((1, 4)), np.zeros(1),
+                            np.zeros((1, 2)), np.zeros((2, 4)))
     _warm = True

@@ -1,8 +1,18 @@
 """The overhead light grid and the luminosity it casts on the floor (SPEC §3).
 
-A floor point ``p`` receives ``Lum(p) = sum_i I_i / d_i^k * sin(theta_i)`` from
-every light ``i`` within ``light_range`` in x and in y, where ``d_i`` is the
-3-D distance and ``sin(theta_i) = height / d_i``.
+A floor point ``p`` receives ``Lum(p) = sum_i I_i / d_i^k * a_i`` from every
+light ``i`` that reaches it, where ``d_i`` is the 3-D distance and ``a_i``
+the angle factor. Two readings of the model (see ``Config``):
+
+* paper text: ``a = sin(theta) = height / d``, and a light reaches ``p`` when it
+  is within ``light_range`` of it in x and in y;
+* the authors' program: ``a = sin(atan2(height, hypot(dx^2, dy^2)))``, the
+  horizontal offsets entering *squared* (so beyond a metre or two the field
+  falls off about as 1 / rho^4), and a light reaches ``p`` when its cell
+  index is within ``floor(p / pitch) - W .. floor(p / pitch) + W - 1`` in x and
+  in y (``W = floor(light_range / pitch)``, one more cell below than above)
+  and it is not in the grid's last row or column, which the program's loop
+  bound never reaches.
 
 The pattern changes only when the controller updates it, so the field is
 kept at sample points and read by bilinear interpolation. Two things make
@@ -35,25 +45,57 @@ def light_centres(config: Config) -> np.ndarray:
     return np.stack([gx, gy], axis=-1)
 
 
-def brightness_kernel(dx: np.ndarray, dy: np.ndarray, height: float, falloff: float) -> np.ndarray:
+def brightness_kernel(dx: np.ndarray, dy: np.ndarray, height: float, falloff: float,
+                      angle: str = "elevation") -> np.ndarray:
     """What a light of intensity 1 gives a point at horizontal offset (dx, dy):
-    ``1 / d^k * height / d``."""
+    ``1 / d^k`` times the angle factor, ``height / d`` ('elevation') or
+    ``height / sqrt(height^2 + dx^4 + dy^4)`` ('squared-offsets', the
+    program's ``sin(atan2(h, hypot(dx * dx, dy * dy)))``)."""
     d2 = dx * dx + dy * dy + height * height
-    return height * d2 ** (-(falloff + 1.0) / 2.0)
+    if angle == "elevation":
+        return height * d2 ** (-(falloff + 1.0) / 2.0)
+    dx2, dy2 = dx * dx, dy * dy
+    return d2 ** (-falloff / 2.0) * height / np.sqrt(height * height + dx2 * dx2 + dy2 * dy2)
+
+
+def window_cells(config: Config) -> int:
+    """W of the program's window: a point in light cell c is reached by cells c - W .. c + W - 1."""
+    return int(np.floor(config.light_range / config.light_pitch + 1e-9))
+
+
+def reaching_lights(config: Config) -> np.ndarray:
+    """(n, n) mask of the lights that can light anything: all of them, but for
+    the program's window, which never reaches the grid's last row and column."""
+    mask = np.ones((config.lights_per_side,) * 2, dtype=bool)
+    if config.light_window == "cells":
+        mask[-1, :] = mask[:, -1] = False
+    return mask
+
+
+def in_window(points: np.ndarray, centres: np.ndarray, config: Config) -> np.ndarray:
+    """Whether each light (centres, (L, 2)) reaches each point (points, (m, 2)): shape (m, L)."""
+    d = np.abs(points[:, None, :] - centres[None, :, :])
+    near = (d <= config.light_range + 1e-9).all(axis=-1)
+    if config.light_window == "range":
+        return near
+    pitch, w = config.light_pitch, window_cells(config)
+    point_cell = np.floor(points / pitch).astype(int)[:, None, :]
+    light_cell = np.floor(centres / pitch).astype(int)[None, :, :]
+    offset = light_cell - point_cell
+    return near & ((offset >= -w) & (offset <= w - 1)).all(axis=-1)
 
 
 def luminosity_direct(points: np.ndarray, intensities: np.ndarray, config: Config) -> np.ndarray:
     """Evaluate the SPEC §3 formula exactly at ``points`` (m, 2). Slow; the reference."""
     points = np.atleast_2d(np.asarray(points, dtype=float))
     centres = light_centres(config).reshape(-1, 2)
-    weights = np.asarray(intensities, dtype=float).reshape(-1)
+    weights = (np.asarray(intensities, dtype=float) * reaching_lights(config)).reshape(-1)
     on = weights != 0
     centres, weights = centres[on], weights[on]
     dx = points[:, None, 0] - centres[None, :, 0]
     dy = points[:, None, 1] - centres[None, :, 1]
-    in_range = (np.abs(dx) <= config.light_range + 1e-9) & (np.abs(dy) <= config.light_range + 1e-9)
-    b = brightness_kernel(dx, dy, config.light_height, config.light_falloff) * in_range
-    return b @ weights
+    b = brightness_kernel(dx, dy, config.light_height, config.light_falloff, config.light_angle)
+    return (b * in_window(points, centres, config)) @ weights
 
 
 
@@ -69,8 +111,12 @@ class _AxisLayout:
     def __init__(self, config: Config):
         pitch, reach = config.light_pitch, config.light_range
         target = pitch / config.field_samples
-        # Where, within a pitch, a light column enters or leaves range.
-        cuts = sorted({round((0.5 * pitch + reach) % pitch, 12), round((0.5 * pitch - reach) % pitch, 12)})
+        # Where, within a pitch, a light column enters or leaves range; the
+        # program's window also changes at every cell edge (offset 0).
+        cuts = {round((0.5 * pitch + reach) % pitch, 12), round((0.5 * pitch - reach) % pitch, 12)}
+        if config.light_window == "cells":
+            cuts.add(0.0)
+        cuts = sorted(cuts)
         self.pitch = pitch
         self.origin = cuts[0]
         edges = [c - self.origin for c in cuts] + [pitch]
@@ -95,6 +141,10 @@ class _AxisLayout:
         centre_rel = t * pitch + 0.5 * pitch - self.origin  # light centre minus cell start
         mids_arr = np.array(mids)[strip_of_sample]
         in_range = np.abs(centre_rel[:, None] - mids_arr[None, :]) <= reach
+        if config.light_window == "cells":
+            # The origin is then a cell edge, so t is the light's cell minus the point's.
+            w = window_cells(config)
+            in_range &= ((t >= -w) & (t <= w - 1))[:, None]
         keep = in_range.any(axis=1)
         #: For a light in column lx, cells lx - t (t in ``light_offsets``) hold samples it reaches.
         self.light_offsets = t[keep]
@@ -146,12 +196,15 @@ class LightField:
         n = config.lights_per_side
         self.axis = ax = _AxisLayout(config)
         # Every light adds this block (rows: x samples, columns: y samples).
-        k = brightness_kernel(ax.dx.reshape(-1, 1), ax.dx.reshape(1, -1), config.light_height, config.light_falloff)
+        k = brightness_kernel(ax.dx.reshape(-1, 1), ax.dx.reshape(1, -1), config.light_height, config.light_falloff,
+                              config.light_angle)
         self.kernel = (k * (ax.member.reshape(-1, 1) & ax.member.reshape(1, -1))).astype(self.DTYPE)
         self._values = np.zeros((ax.length, ax.length), dtype=self.DTYPE)
         #: The sampled field as one flat array (a view), for compiled samplers.
         self.values_flat = self._values.reshape(-1)
         self.intensities = np.zeros((n, n))
+        #: Lights whose light reaches the floor at all (see reaching_lights).
+        self._reaching = reaching_lights(config)
         self.rebuilds = 0
         self._incremental = 0
 
@@ -160,16 +213,17 @@ class LightField:
         new = np.asarray(intensities, dtype=float)
         if new.shape != self.intensities.shape:
             raise ValueError(f"expected intensities of shape {self.intensities.shape}, got {new.shape}")
-        delta = new - self.intensities
-        changed = np.argwhere(delta != 0)
-        if len(changed) == 0:
+        if (new == self.intensities).all():
             return False
+        effective = new * self._reaching
+        delta = effective - self.intensities * self._reaching
+        changed = np.argwhere(delta != 0)
         self._incremental += 1
-        if len(changed) > np.count_nonzero(new) or self._incremental > self.FRESH_EVERY:
+        if len(changed) > np.count_nonzero(effective) or self._incremental > self.FRESH_EVERY:
             # Cheaper, or due: start afresh (also clears float32 rounding
             # that adding and removing lights accumulates).
             self._values.fill(0.0)
-            self._add_lights(np.argwhere(new != 0), new)
+            self._add_lights(np.argwhere(effective != 0), effective)
             self._incremental = 0
         else:
             self._add_lights(changed, delta)

@@ -42,6 +42,7 @@ def mean_outside_distance(box_positions: np.ndarray, goal: Goal, in_goal: np.nda
     return float(goal.distance(outside).mean())
 
 
-def escaped(box_positions: np.ndarray, arena_size: float, construction_size: float) -> np.ndarray:
-    """Boxes whose centre lies outside the construction wall (must never happen)."""
-    return np.any(np.abs(box_positions - arena_size / 2.0) > construction_size / 2.0, axis=1)
+def escaped(box_positions: np.ndarray, centre: float, construction_size: float) -> np.ndarray:
+    """Boxes whose centre lies outside the construction wall, centred on
+    (centre, centre) (must never happen)."""
+    return np.any(np.abs(box_positions - centre) > construction_size / 2.0, axis=1)

@@ -62,12 +62,14 @@ class Simulation:
         self.lights = LightField(cfg)
         self.lights.set_intensities(self.controller.intensities)
         self._layout = kernels.sample_layout(self.lights)
+        self._robot_params = kernels.robot_params(cfg)
         n = cfg.robots
         self.steps_done = 0
         self._charge = np.full(n, float(cfg.start_charge))
         self._readings = np.zeros((n, 4))
         self._command = np.zeros((n, 2))  # (v, w) held between refreshes
         self._applied = np.zeros((n, 2))  # what the robot actually did (0 when empty)
+        self._writes = np.zeros((2 * n, 4))  # (robot, vx, vy, w) rows for the 'set-once' motor
         # Each robot refreshes its command at its own random phase; robots due
         # at step s are those with (s + phase) % period == 0, listed per residue.
         phase = rng.integers(0, cfg.command_period, n)
@@ -97,13 +99,20 @@ class Simulation:
             self.timings["lights"] += time.perf_counter() - t0
         world = self.world
         if world.n_robots:
-            # Photocells, commands, energy and velocities: SPEC §4, compiled.
-            kernels.robot_step(
-                state, world.n_robots, self._due[self.steps_done % cfg.command_period],
-                self.lights.values_flat, self._layout, cfg.sensor_offset, cfg.k_drive, cfg.k_turn,
-                cfg.eta_in, cfg.metabolic, cfg.eta_out, cfg.capacity, 1.0 / world.damping_per_step,
-                self._command, self._readings, self._charge, self._applied, world.velocities)
-            world.push_velocities()
+            # Photocells, commands, energy and velocities: SPEC §4 and §9, compiled.
+            due = self._due[self.steps_done % cfg.command_period]
+            if cfg.motor == "continuous":
+                kernels.robot_step_continuous(
+                    state, world.n_robots, due, self.lights.values_flat, self._layout, self._robot_params,
+                    1.0 / world.damping_per_step, self._command, self._readings, self._charge, self._applied,
+                    world.velocities)
+                world.push_velocities()
+            else:
+                count = kernels.robot_step_set_once(
+                    state, world.n_robots, due, self.lights.values_flat, self._layout, self._robot_params,
+                    self._command, self._readings, self._charge, self._applied, self._writes)
+                if count:
+                    world.set_robot_velocities(self._writes, count)
         t0 = time.perf_counter()
         world.step()
         self.timings["physics"] += time.perf_counter() - t0
@@ -141,6 +150,7 @@ class Simulation:
             # The world keeps the values it was built with; the controller
             # takes the new ones (its cycle position is kept).
             self.world.config = self.world.config.replace(**live)
+            self._robot_params = kernels.robot_params(self.world.config)
             self.controller.reconfigure(self.world.config.replace(**{k: getattr(config, k) for k in strategies}))
         if strategies:
             self.controller.set_strategies(**strategies)
@@ -220,19 +230,20 @@ class Simulation:
 
     def sensor_points(self, index: int) -> np.ndarray:
         """Where robot ``index``'s four photocells are now, shape (4, 2)."""
+        cfg = self.world.config
         return robots.sensor_points(self.robot_positions[index : index + 1], self.robot_headings[index : index + 1],
-                                    self.config.sensor_offset)[0]
+                                    cfg.sensor_offset, cfg.photocells)[0]
 
     # ----------------------------------------------------------- metrics
     def measure(self) -> metrics.Sample:
         boxes = self.box_positions
         in_goal = self.goal.contains(boxes)
-        cfg = self.config
+        cfg = self.world.config  # what the world was built with
         return metrics.Sample(
             step=self.steps_done,
             fraction_in_goal=metrics.fraction_in_goal(in_goal),
             mean_outside_distance=metrics.mean_outside_distance(boxes, self.goal, in_goal),
-            boxes_escaped=int(metrics.escaped(boxes, cfg.arena_size, cfg.construction_size).sum()),
+            boxes_escaped=int(metrics.escaped(boxes, cfg.centre, cfg.construction_size).sum()),
             charged_robots=int((self._charge > 0).sum()),
             cycle=self.controller.cycle,
             phase=self.controller.phase,

@@ -13,6 +13,7 @@ import numpy as np
 import pymunk
 import pymunk.batch as batch
 
+from . import undamped
 from .config import Config
 
 # Collision categories: the construction wall only meets boxes.
@@ -67,12 +68,17 @@ class World:
         self.n_robots, self.n_boxes = config.robots, config.boxes
         self.space = self._make_space()
         self._add_walls()
+        self.robot_bodies: list[pymunk.Body] = []
         self._add_robots(rng)
         self._add_boxes(rng)
-        # Damping is applied by the space to every body; robots are
-        # velocity-driven, so their commanded velocity is divided by the
-        # per-step damping factor to arrive unchanged (see set_robot_velocities).
+        # Damping is applied by the space to every body. With the 'continuous'
+        # motor a robot's commanded velocity is divided by the per-step damping
+        # factor to arrive unchanged (see push_velocities); with 'set-once'
+        # robots are undamped, as in Box2D where only the boxes have damping.
         self.damping_per_step = self.space.damping ** config.dt
+        if config.motor == "set-once":
+            for body in self.robot_bodies:
+                undamped.make_undamped(body)
         self._buffer = batch.Buffer()
         # pymunk.batch lists the space's static body (holding the walls) last.
         self.state = np.zeros((self.n_robots + self.n_boxes + 1, 6))
@@ -92,15 +98,15 @@ class World:
         space.gravity = (0.0, 0.0)
         space.iterations = cfg.iterations
         space.collision_slop = cfg.collision_slop
-        space.damping = math.exp(-cfg.box_damping)
+        space.damping = box_damping_per_second(cfg)
         return space
 
     def _add_walls(self) -> None:
         cfg = self.config
-        c = cfg.arena_size / 2.0
-        self._add_square_wall(c, c + WALL_RADIUS, pymunk.ShapeFilter(categories=OUTER_WALL))
+        half = cfg.arena_size / 2.0
+        self._add_square_wall(half, half + WALL_RADIUS, pymunk.ShapeFilter(categories=OUTER_WALL))
         box_only = pymunk.ShapeFilter(categories=CONSTRUCTION_WALL, mask=BOX)
-        self._add_square_wall(c, cfg.construction_size / 2.0 + WALL_RADIUS, box_only)
+        self._add_square_wall(cfg.centre, cfg.construction_size / 2.0 + WALL_RADIUS, box_only)
 
     def _add_square_wall(self, centre: float, half: float, shape_filter: pymunk.ShapeFilter) -> None:
         body = self.space.static_body
@@ -114,7 +120,7 @@ class World:
 
     def _add_robots(self, rng: np.random.Generator) -> None:
         cfg = self.config
-        c, r = cfg.arena_size / 2.0, cfg.robot_radius
+        c, r = cfg.centre, cfg.robot_radius
         low, high = c - cfg.robot_spawn_size / 2.0 + r, c + cfg.robot_spawn_size / 2.0 - r
         keep_out = cfg.construction_size / 2.0 + r
 
@@ -134,10 +140,11 @@ class World:
             shape.elasticity = cfg.robot_elasticity
             shape.filter = robot_filter
             self.space.add(body, shape)
+            self.robot_bodies.append(body)
 
     def _add_boxes(self, rng: np.random.Generator) -> None:
         cfg = self.config
-        c, half = cfg.arena_size / 2.0, cfg.construction_size / 2.0
+        c, half = cfg.centre, cfg.construction_size / 2.0
         margin = cfg.box_circumradius + 0.01  # clear of the wall's inner face
         positions = sample_separated(rng, self.n_boxes, c - half + margin, c + half - margin, 2 * cfg.box_apothem)
         angles = rng.uniform(0.0, math.pi / 3, self.n_boxes)
@@ -168,5 +175,24 @@ class World:
         by :attr:`damping_per_step`; other rows should hold their current values."""
         batch.set_space_bodies(self.space, _VELOCITY, self._velocity_buffer)
 
+    def set_robot_velocities(self, writes: np.ndarray, count: int) -> None:
+        """Set the velocity of a few robots: ``writes[:count]`` rows are
+        (robot index, vx, vy, angular velocity)."""
+        bodies = self.robot_bodies
+        for index, vx, vy, w in writes[:count].tolist():
+            body = bodies[int(index)]
+            body.velocity = (vx, vy)
+            body.angular_velocity = w
+
     def step(self) -> None:
         self.space.step(self.config.dt)
+
+
+def box_damping_per_second(config: Config) -> float:
+    """pymunk's ``Space.damping``: the fraction of velocity a body keeps after
+    one second, chosen so that one step keeps ``exp(-c dt)`` (exponential)
+    or, as Box2D integrates damping, ``1 / (1 + c dt)``."""
+    c, dt = config.box_damping, config.dt
+    if config.box_damping_model == "exponential":
+        return math.exp(-c)
+    return (1.0 / (1.0 + c * dt)) ** (1.0 / dt)

@@ -20,8 +20,62 @@ def test_spec_defaults():
     assert (c.arena_size, c.construction_size, c.robots, c.boxes) == (64, 16, 200, 500)
     assert (c.k_drive, c.k_turn, c.command_period) == (5, 20, 50)
     assert (c.eta_in, c.metabolic, c.eta_out, c.capacity, c.start_charge) == (0.4, 0.01, 0.1, 20, 0)
-    assert (c.update_every, c.scale_rate, c.hold_steps, c.light_range) == (100, 0.975, 25, 12.8)
+    assert (c.update_every, c.scale_rate, c.light_range) == (100, 0.975, 12.8)
     assert c.lights_per_side == 64
+
+
+def test_default_profile_is_the_authors_program():
+    """SPEC §9: every row has its own parameter, and the default profile takes the program's values."""
+    c = Config()
+    assert c.profile == "authors-code"
+    assert (c.light_height, c.light_falloff, c.light_angle, c.light_window) == (2.0, 2.0, "squared-offsets", "cells")
+    assert (c.box_size_is, c.photocells, c.steering, c.motor) == ("circumradius", "corners", "front", "set-once")
+    assert (c.energy_turn_cost, c.box_damping_model, c.min_size_rule) == ("signed", "box2d", "inradius")
+    assert (c.hold_steps, c.flare_mode, c.switch_mode) == (100, "scaled-outline", "inradius")
+    assert (c.size_schedule, c.polygon_max_rule, c.centre) == ("program", "grow", 32.5)
+
+
+def test_paper_text_profile():
+    c = Config(profile="paper-text")
+    assert (c.light_height, c.light_falloff, c.light_angle, c.light_window) == (1.0, 1.0, "elevation", "range")
+    assert (c.box_size_is, c.photocells, c.steering, c.motor) == ("apothem", "axes", "sides", "continuous")
+    assert (c.energy_turn_cost, c.box_damping_model, c.min_size_rule) == ("absolute", "exponential", "equal-area")
+    assert (c.hold_steps, c.flare_mode, c.switch_mode) == (25, "on-goal", "fraction")
+    assert (c.size_schedule, c.polygon_max_rule, c.centre) == ("clamped", "fit", 32.0)
+    assert c.differences_from_profile() == {}
+
+
+def test_explicit_values_win_over_the_profile():
+    c = Config(profile="paper-text", light_height=2.0)
+    assert (c.light_height, c.light_falloff) == (2.0, 1.0)
+    assert c.differences_from_profile() == {"light_height": 2.0}
+    # Changing the profile takes the new profile's values, except those given with it.
+    back = c.replace(profile="authors-code", motor="continuous")
+    assert (back.light_height, back.motor, back.photocells) == (2.0, "continuous", "corners")
+    assert Config().replace(profile="paper-text").light_height == 1.0
+
+
+def test_a_profile_and_overrides_from_files_and_flags(tmp_path):
+    from sandbox.cli import build_parser, config_from_args
+
+    f = tmp_path / "c.toml"
+    f.write_text('light_height = 3.0\n')
+    args = build_parser("run").parse_args(["run", "--config", str(f), "--profile", "paper-text", "--k-turn", "7"])
+    c = config_from_args(args)
+    # The flag's profile does not undo the file's explicit value.
+    assert (c.profile, c.light_height, c.light_falloff, c.k_turn) == ("paper-text", 3.0, 1.0, 7.0)
+
+
+def test_a_result_file_reproduces_its_profile_and_values(tmp_path):
+    original = Config(profile="paper-text", light_falloff=2.0)
+    js = tmp_path / "r.json"
+    js.write_text(json.dumps({"config": original.to_dict()}))
+    assert load_config_file(js) == original
+
+
+def test_bad_profile():
+    with pytest.raises(ConfigError, match="profile"):
+        Config().replace(profile="mine")
 
 
 @pytest.mark.parametrize("bad", [dict(robots=-1), dict(k_drive=float("nan")), dict(box_size_is="side"),

@@ -12,23 +12,29 @@ from sandbox.shapes import shape_vertices
 
 
 def controller(shape="circle", **changes) -> Controller:
-    cfg = Config(**changes)
+    """A controller of the paper text's model (profile paper-text)."""
+    cfg = Config(profile="paper-text", **changes)
     return Controller(cfg, make_goal(cfg, shape_vertices(shape)))
 
 
+@pytest.mark.parametrize("profile, box_area, centre", [
+    ("paper-text", 2 * math.sqrt(3) * 0.25**2, 32.0),       # hexagon of apothem 0.25
+    ("authors-code", 1.5 * math.sqrt(3) * 0.25**2, 32.5),   # hexagon of circumradius 0.25, on a light
+])
 @pytest.mark.parametrize("shape", ["circle", "square", "star", "l-shape"])
-def test_goal_area_equals_total_box_area(shape):
-    cfg = Config()
+def test_goal_area_equals_total_box_area(shape, profile, box_area, centre):
+    cfg = Config(profile=profile)
     goal = make_goal(cfg, shape_vertices(shape))
-    box_area = 2 * math.sqrt(3) * 0.25**2
     assert goal.area == pytest.approx(500 * box_area)
+    assert goal.centre.tolist() == [centre, centre]
     if not goal.is_circle:
         assert abs(geometry.signed_area(goal.vertices)) == pytest.approx(500 * box_area)
-        assert geometry.centroid(goal.vertices) == pytest.approx([32.0, 32.0])
+        assert geometry.centroid(goal.vertices) == pytest.approx([centre, centre])
 
 
 def test_box_size_as_circumradius():
     cfg = Config(box_size_is="circumradius")
+    assert cfg.box_area == pytest.approx(0.16238, abs=1e-5)  # the program's 81.19 m^2 for 500 boxes
     assert cfg.box_apothem == pytest.approx(0.25 * math.cos(math.pi / 6))
 
 
@@ -120,10 +126,11 @@ def test_no_corners_turns_off_the_requested_fraction_nearest_corners():
     assert d[on_plain & ~on_dark].max() <= d[on_dark].min() + 1e-9
 
 
+@pytest.mark.parametrize("profile", ["paper-text", "authors-code"])
 @pytest.mark.parametrize("strategy", [dict(), dict(flare=1.75), dict(no_corners=0.5), dict(flare=1.75, no_corners=0.5)])
-def test_clockwise_and_counter_clockwise_files_behave_the_same(strategy):
+def test_clockwise_and_counter_clockwise_files_behave_the_same(strategy, profile):
     star = shape_vertices("star")
-    cfg = Config(**strategy)
+    cfg = Config(profile=profile, **strategy)
     ccw = Controller(cfg, make_goal(cfg, star))
     cw = Controller(cfg, make_goal(cfg, star[::-1].copy()))
     for _ in range(30):

@@ -10,8 +10,8 @@ from sandbox.simulation import Simulation
 
 
 class NumpySimulation(Simulation):
-    """The simulation with the robots' step written with numpy, as
-    :mod:`sandbox.robots` and ``LightField.sample`` state the model."""
+    """The simulation with the robots' step of :mod:`sandbox.robots` (numpy),
+    the readable statement of the model, in place of the compiled kernels."""
 
     def _step_once(self) -> None:
         cfg = self.world.config
@@ -19,33 +19,27 @@ class NumpySimulation(Simulation):
         if self.controller.advance():
             self.lights.set_intensities(self.controller.intensities)
         nr = self.world.n_robots
-        positions, headings = state[:nr, 0:2], state[:nr, 2]
         due = self._due[self.steps_done % cfg.command_period]
-        cells = robots.sensor_points(positions[due], headings[due], cfg.sensor_offset).reshape(-1, 2)
-        lum = self.lights.sample(np.concatenate([positions, cells]))
-        readings = lum[nr:].reshape(-1, 4)
-        self._readings[due] = readings
-        v, w = robots.braitenberg(readings, cfg.k_drive, cfg.k_turn)
-        self._command[due, 0], self._command[due, 1] = v, w
-        moving = self._charge > 0.0
-        np.multiply(self._command, moving[:, None], out=self._applied)
-        v, w = self._applied[:, 0], self._applied[:, 1]
-        self._charge = robots.charge_step(self._charge, lum[:nr], v, w, cfg)
-        scale = 1.0 / self.world.damping_per_step
-        out = self.world.velocities
-        out[:] = state[:, 3:6]
-        out[:nr, 0] = v * np.cos(headings) * scale
-        out[:nr, 1] = v * np.sin(headings) * scale
-        out[:nr, 2] = w * scale
-        self.world.push_velocities()
+        args = (state, nr, due, self.lights.sample, cfg, self._command, self._readings, self._charge, self._applied)
+        if cfg.motor == "continuous":
+            velocities = robots.reference_step_continuous(*args)
+            out = self.world.velocities
+            out[:] = state[:, 3:6]
+            out[:nr] = velocities * (1.0 / self.world.damping_per_step)  # as the kernel rounds it
+            self.world.push_velocities()
+        else:
+            for r in robots.reference_step_set_once(*args):
+                body = self.world.robot_bodies[r]
+                body.velocity = tuple(state[r, 3:5])
+                body.angular_velocity = state[r, 5]
         self.world.step()
         self.steps_done += 1
         self._fresh = False
 
 
-@pytest.mark.parametrize("falloff", [1.0, 2.0])
-def test_compiled_sampler_equals_numpy_sampler(falloff):
-    cfg = Config(light_falloff=falloff)
+@pytest.mark.parametrize("profile, falloff", [("paper-text", 1.0), ("paper-text", 2.0), ("authors-code", 2.0)])
+def test_compiled_sampler_equals_numpy_sampler(profile, falloff):
+    cfg = Config(profile=profile, light_falloff=falloff)
     field = LightField(cfg)
     rng = np.random.default_rng(3)
     field.set_intensities((rng.random((cfg.lights_per_side,) * 2) < 0.2).astype(float))
@@ -63,9 +57,10 @@ def test_compiled_sampler_equals_numpy_sampler(falloff):
     np.testing.assert_array_equal(got, expected)
 
 
-def test_compiled_step_equals_numpy_step_bit_for_bit():
-    cfg = Config(robots=60, boxes=120, arena_size=32.0, construction_size=8.0, robot_spawn_size=16.0,
-                 update_every=20)
+@pytest.mark.parametrize("profile", ["paper-text", "authors-code"])
+def test_compiled_step_equals_numpy_step_bit_for_bit(profile):
+    cfg = Config(profile=profile, robots=60, boxes=120, arena_size=32.0, construction_size=8.0,
+                 robot_spawn_size=16.0, update_every=20)
     fast, slow = Simulation(cfg, seed=5), NumpySimulation(cfg, seed=5)
     for _ in range(6):
         fast.step(250)

@@ -25,9 +25,12 @@ def test_light_centres_sit_mid_cell():
     assert c[10, 3].tolist() == [10.5, 3.5]
 
 
+PAPER = Config(profile="paper-text")
+
+
 @pytest.mark.parametrize("k, expected_diag", [(1.0, 0.5), (2.0, 2 ** -1.5)])
 def test_single_light_by_hand(k, expected_diag):
-    cfg = Config(light_falloff=k)
+    cfg = PAPER.replace(light_falloff=k)
     pattern = one_light(cfg, 20, 30)
     # Straight below: d = h = 1, sin = 1 -> 1.
     # One metre to the side: d = sqrt(2), B = 1/d^k, sin = 1/sqrt(2) -> 2^-(k+1)/2.
@@ -37,7 +40,7 @@ def test_single_light_by_hand(k, expected_diag):
 
 
 def test_two_lights_add_and_height_matters():
-    cfg = Config(light_height=2.0)
+    cfg = PAPER.replace(light_height=2.0)
     pattern = one_light(cfg, 10, 10) + one_light(cfg, 12, 10)
     # Midway between them: each at horizontal 1 m, d = sqrt(1 + 4) = sqrt(5).
     # B = 1/sqrt(5), sin = 2/sqrt(5) -> 2/5 each, 4/5 together.
@@ -45,7 +48,7 @@ def test_two_lights_add_and_height_matters():
 
 
 def test_lights_out_of_range_do_not_count():
-    cfg = Config()
+    cfg = PAPER
     pattern = one_light(cfg, 0, 0)
     # 13 m away in x: beyond the 12.8 m range, so nothing at all.
     assert luminosity_direct(np.array([[13.5, 0.5]]), pattern, cfg)[0] == 0.0
@@ -66,6 +69,50 @@ def test_kernel_formula():
     assert brightness_kernel(np.array(3.0), np.array(4.0), 1.0, 1.0) == pytest.approx(1.0 / 26.0)
 
 
+# --- the authors' program (SPEC §9 rows 1-4) --------------------------------
+
+def test_program_single_light_by_hand():
+    """Height 2 m, B = I / d^2 and the angle factor sin(atan2(h, hypot(dx^2, dy^2)))."""
+    cfg = Config()
+    pattern = one_light(cfg, 20, 30)  # centre (20.5, 30.5)
+    points = np.array([[20.5, 30.5], [21.5, 30.5], [22.5, 30.5], [22.5, 31.5]])
+    expected = [
+        1 / 4 * 1.0,                        # below: d^2 = 4, angle factor 1
+        1 / 5 * 2 / math.sqrt(4 + 1),       # dx = 1
+        1 / 8 * 2 / math.sqrt(4 + 16),      # dx = 2: the squared offset, 2 / sqrt(4 + 2^4)
+        1 / 9 * 2 / math.sqrt(4 + 16 + 1),  # dx = 2, dy = 1
+    ]
+    assert luminosity_direct(points, pattern, cfg) == pytest.approx(expected)
+    # The quirk: the paper's elevation angle would give sin = h / d = 2 / sqrt(8) at dx = 2.
+    assert expected[2] < 1 / 8 * 2 / math.sqrt(8) * 0.7
+
+
+def test_program_window_is_one_cell_longer_below_than_above():
+    """The program sums light cells floor(x) - 12 .. floor(x) + 11, so a light
+    reaches points up to 12.5 m away on one side but only 11.5 m on the other."""
+    cfg = Config()
+    pattern = one_light(cfg, 20, 30)  # cell 20, centre x = 20.5
+    lum = luminosity_direct(np.array([[32.9, 30.5], [33.0, 30.5], [9.0, 30.5], [8.99, 30.5]]), pattern, cfg)
+    dx = 12.4
+    assert lum[0] == pytest.approx(1 / (dx**2 + 4) * 2 / math.sqrt(4 + dx**4))  # cell 32 = 20 + 12: reached
+    assert lum[1] == 0.0  # cell 33: not reached, though only 12.5 m away (< 12.8 m)
+    assert lum[2] > 0.0  # cell 9 = 20 - 11: reached, 11.5 m away
+    assert lum[3] == 0.0  # cell 8 = 20 - 12 on that side: not reached, 11.51 m away
+    # The paper's window is symmetric: both 12.5 m and 11.51 m are in range.
+    paper = luminosity_direct(np.array([[33.0, 30.5], [8.99, 30.5]]), pattern, PAPER)
+    assert (paper > 0).all()
+
+
+def test_program_never_reads_the_last_row_or_column():
+    cfg = Config()
+    last = one_light(cfg, 63, 10)
+    assert luminosity_direct(np.array([[63.5, 10.5], [60.0, 10.5]]), last, cfg).tolist() == [0.0, 0.0]
+    field = LightField(cfg)
+    field.set_intensities(last)
+    assert field.display_grid().max() == 0.0
+    assert luminosity_direct(np.array([[63.5, 10.5]]), one_light(cfg, 62, 10), cfg)[0] > 0.0
+
+
 def band_pattern(cfg: Config, shape: str, scale_steps: int = 0) -> np.ndarray:
     controller = Controller(cfg, make_goal(cfg, shape_vertices(shape)))
     for _ in range(scale_steps):
@@ -73,10 +120,10 @@ def band_pattern(cfg: Config, shape: str, scale_steps: int = 0) -> np.ndarray:
     return controller.intensities
 
 
-@pytest.mark.parametrize("k", [1.0, 2.0])
+@pytest.mark.parametrize("profile, k", [("paper-text", 1.0), ("paper-text", 2.0), ("authors-code", 2.0)])
 @pytest.mark.parametrize("shape, updates", [("circle", 0), ("star", 30), ("square", 50)])
-def test_sampled_field_matches_formula_within_one_percent(k, shape, updates, rng):
-    cfg = Config(light_falloff=k)
+def test_sampled_field_matches_formula_within_one_percent(profile, k, shape, updates, rng):
+    cfg = Config(profile=profile, light_falloff=k)
     pattern = band_pattern(cfg, shape, updates)
     field = LightField(cfg)
     field.set_intensities(pattern)
@@ -105,7 +152,7 @@ def test_incremental_updates_agree_with_a_fresh_field(rng):
 
 
 def test_points_outside_arena_are_clamped():
-    cfg = Config()
+    cfg = PAPER
     field = LightField(cfg)
     field.set_intensities(one_light(cfg, 0, 0))
     inside = field.sample(np.array([[0.0, 0.5]]))

@@ -9,7 +9,7 @@ from sandbox.controller import make_goal
 
 
 def square_goal():
-    cfg = Config(boxes=100)  # total area 100 * 0.2165 = 21.65 m^2
+    cfg = Config(profile="paper-text", boxes=100)  # total area 100 * 0.2165 = 21.65 m^2
     side = np.sqrt(cfg.boxes * cfg.box_area)
     goal = make_goal(cfg, np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float))
     return goal, side
@@ -40,9 +40,12 @@ def test_all_inside_gives_zero_distance():
 
 
 def test_circle_goal_distance():
-    cfg = Config(boxes=100)
+    cfg = Config(boxes=100)  # the authors' program: centred on the light at (32.5, 32.5)
     goal = make_goal(cfg, None)
-    boxes = np.array([[32 + goal.radius + 2.0, 32.0], [32.0, 32.0]])
+    c = 32.5
+    # 100 hexagons of circumradius 0.25: 100 * 1.5 sqrt(3) 0.25^2 = 16.238 m^2, radius sqrt(16.238 / pi).
+    assert goal.radius == pytest.approx(np.sqrt(100 * 1.5 * np.sqrt(3) * 0.0625 / np.pi))
+    boxes = np.array([[c + goal.radius + 2.0, c], [c, c]])
     inside = goal.contains(boxes)
     assert inside.tolist() == [False, True]
     assert metrics.mean_outside_distance(boxes, goal, inside) == pytest.approx(2.0)
@@ -50,4 +53,4 @@ def test_circle_goal_distance():
 
 def test_escaped_boxes():
     boxes = np.array([[32.0, 32.0], [40.5, 32.0], [23.0, 23.0]])
-    assert metrics.escaped(boxes, 64.0, 16.0).tolist() == [False, True, True]
+    assert metrics.escaped(boxes, 32.0, 16.0).tolist() == [False, True, True]

@@ -35,10 +35,11 @@ def test_reset_replays_the_run(small_config):
 def test_initial_placement(small_config):
     sim = Simulation(small_config.replace(robots=150, boxes=300), seed=1)
     robots, boxes = sim.robot_positions, sim.box_positions
-    assert (np.abs(robots - 32) <= 16).all()  # inside the 32 m spawn square
-    assert (np.abs(robots - 32).max(axis=1) >= 8).all()  # outside the construction area
-    assert (np.abs(boxes - 32) < 8).all()
-    assert not escaped(boxes, 64.0, 16.0).any()
+    c = sim.config.centre
+    assert (np.abs(robots - c) <= 16).all()  # inside the 32 m spawn square
+    assert (np.abs(robots - c).max(axis=1) >= 8).all()  # outside the construction area
+    assert (np.abs(boxes - c) < 8).all()
+    assert not escaped(boxes, c, 16.0).any()
 
 
 def test_robots_cross_the_construction_wall_and_boxes_never_do():

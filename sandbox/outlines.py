@@ -1,0 +1,128 @@
+"""The outline the controller lights, and its smallest and largest sizes (SPEC §5, §9).
+
+An :class:`OutlineShape` is a polygon relative to the assembly centre at
+*scale 1*; the controller lights ``centre + scale * vertices``. For a plain
+polygon scale 1 is the goal itself. Flare changes the shape, in one of two
+ways (``Config.flare_mode``):
+
+* ``on-goal`` (paper text): the goal's convex corners are pushed out, and the
+  sizes are those of the goal, so at scale 1 the corners reach past the goal;
+* ``scaled-outline`` (the authors' program): every corner is pushed out by
+  ``90 f / |angle between its edges|`` (reflex corners too), and that new
+  polygon, rescaled to the goal's area, is what is scaled and sized.
+
+Sizes:
+
+* smallest (``min_size_rule``): the goal's equal-area radius plus one robot
+  diameter (paper text), or the outline's inradius (distance from the centre
+  to the outline) equal to its inradius at scale 1 plus one robot diameter
+  (the authors' program);
+* largest for a polygon (``polygon_max_rule``): the largest scale inside the
+  arena, one light pitch clear, up to ``polygon_max_area`` of the arena
+  (paper text), or the file's own outline grown by 1.05 at a time until it
+  covers ``polygon_max_area`` of the arena or reaches its edge, that last
+  step included (the authors' program: so the size depends on the size the
+  file was drawn at, and a star's tips may reach past the walls);
+* largest for a circle: ``circle_max`` of half the arena.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import geometry
+from .config import Config
+
+#: The authors' program grows a polygon to its largest size in steps of this factor.
+PROGRAM_GROWTH_STEP = 1.05
+
+
+@dataclass(frozen=True)
+class OutlineShape:
+    """A polygon outline at scale 1, relative to the assembly centre."""
+
+    vertices: np.ndarray
+    #: Which vertices are convex corners (the no-corners strategy darkens lights near them).
+    corners: np.ndarray
+    #: The polygon the sizes are measured on, at scale 1 (the goal, or the flared outline).
+    sized: np.ndarray
+    #: ``sized`` times this is the polygon at the size its file gave (for polygon_max_rule 'grow').
+    file_scale: float
+
+    @property
+    def inradius(self) -> float:
+        """Distance from the centre to the nearest point of the sized outline at scale 1."""
+        return float(geometry.distance_to_outline(np.zeros((1, 2)), self.sized)[0])
+
+
+def outline_shape(goal_relative: np.ndarray, goal_area: float, file_area: float, flare: float,
+                  flare_mode: str) -> OutlineShape:
+    """The outline at scale 1 for a goal polygon (relative to its centre) and a flare."""
+    file_scale = math.sqrt(file_area / goal_area)
+    convex = geometry.interior_angles(goal_relative) < 180.0
+    if flare <= 0:
+        return OutlineShape(goal_relative, convex, goal_relative, file_scale)
+    if flare_mode == "on-goal":
+        vertices, original = geometry.flare(goal_relative, flare)
+        corners = np.zeros(len(vertices), dtype=bool)
+        corners[original] = convex
+        return OutlineShape(vertices, corners, goal_relative, file_scale)
+    flared = program_flare(goal_relative, flare)
+    to_goal_area = math.sqrt(goal_area / abs(geometry.signed_area(flared)))
+    vertices = flared * to_goal_area
+    corners = geometry.interior_angles(vertices) < 180.0
+    return OutlineShape(vertices, corners, vertices, file_scale / to_goal_area)
+
+
+def program_flare(relative: np.ndarray, amount: float) -> np.ndarray:
+    """The authors' program's flare: after every vertex insert the midpoint of
+    its edge to the next, then push every original vertex away from the
+    centre by ``max(1, 90 * amount / angle)``, ``angle`` being the angle
+    between its two edges in whole degrees (so reflex corners are pushed too)."""
+    v = np.asarray(relative, dtype=float)
+    to_prev = v - np.roll(v, 1, axis=0)
+    to_next = v - np.roll(v, -1, axis=0)
+    dot = (to_prev * to_next).sum(axis=1)
+    cross = to_prev[:, 0] * to_next[:, 1] - to_prev[:, 1] * to_next[:, 0]
+    angle = np.abs(np.floor(np.degrees(np.arctan2(cross, dot)) + 0.5))
+    factor = np.maximum(1.0, 90.0 * amount / np.maximum(angle, 1.0))
+    out = np.empty((2 * len(v), 2))
+    out[0::2] = v * factor[:, None]
+    out[1::2] = 0.5 * (v + np.roll(v, -1, axis=0))  # midpoints of the edges before flaring
+    return out
+
+
+def min_polygon_scale(config: Config, shape: OutlineShape, goal_radius: float) -> float:
+    """Smallest scale of a polygon outline (see the module docstring)."""
+    gap = 2.0 * config.robot_radius
+    if config.min_size_rule == "inradius":
+        return (shape.inradius + gap) / shape.inradius
+    return (goal_radius + gap) / goal_radius
+
+
+def max_polygon_scale(config: Config, shape: OutlineShape, goal_area: float) -> float:
+    """Largest scale of a polygon outline (see the module docstring)."""
+    arena = config.arena_size
+    reach = np.abs(shape.sized).max()
+    if config.polygon_max_rule == "fit":
+        by_area = math.sqrt(config.polygon_max_area * arena**2 / goal_area)
+        by_fit = (arena / 2.0 - config.light_pitch) / reach
+        return min(by_area, by_fit)
+    # Grow the file's polygon by 1.05 while it covers less than the target
+    # area and stays strictly inside the arena; the step that fails is kept.
+    file_area, file_reach = goal_area * shape.file_scale**2, reach * shape.file_scale
+    target = config.polygon_max_area * arena**2
+    growth = PROGRAM_GROWTH_STEP
+    while True:
+        file_area *= PROGRAM_GROWTH_STEP**2
+        file_reach *= PROGRAM_GROWTH_STEP
+        if file_area >= target or file_reach >= arena / 2.0:
+            return growth * shape.file_scale
+        growth *= PROGRAM_GROWTH_STEP
+
+
+def max_circle_scale(config: Config, goal_radius: float) -> float:
+    return config.circle_max * config.arena_size / 2.0 / goal_radius
