@@ -47,7 +47,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .config import CASES, Config, ConfigError, load_config_file, param_names, params
+from .config import CASES, Config, ConfigError, param_names, params, read_config_values
 from .shapes import ShapeError, shape_vertices
 from .sweep import ResultStore, SweepError, Trial, dask_executor, local_executor, run_trials, slug
 
@@ -74,8 +74,9 @@ def _typed_flags(args: argparse.Namespace) -> dict[str, Any]:
     return {p.name: getattr(args, p.name) for p in params() if getattr(args, p.name, None) is not None}
 
 
-def _base(args: argparse.Namespace) -> Config:
-    return load_config_file(args.config) if getattr(args, "config", None) else Config()
+def _base(args: argparse.Namespace) -> dict[str, Any]:
+    """The config file's values (checked, not yet applied: see _make_case)."""
+    return read_config_values(args.config) if getattr(args, "config", None) else {}
 
 
 def _resolve_shape(config: Config, label: str) -> list | None:
@@ -86,9 +87,10 @@ def _resolve_shape(config: Config, label: str) -> list | None:
     return None if vertices is None else vertices.tolist()
 
 
-def _make_case(label: str, overrides: dict, base: Config, typed: dict, where: str = "") -> Case:
+def _make_case(label: str, overrides: dict, base: dict, typed: dict, where: str = "") -> Case:
+    # One replace, so that a profile named anywhere only fills in what none of them sets.
     try:
-        config = base.replace(**typed).replace(**overrides)
+        config = Config().replace(**{**base, **typed, **overrides})
     except ConfigError as exc:
         raise SweepError(f"{where}case {label!r}: {exc}") from None
     if "seed" in overrides:
@@ -96,7 +98,7 @@ def _make_case(label: str, overrides: dict, base: Config, typed: dict, where: st
     return Case(label, dict(overrides), config, _resolve_shape(config, label))
 
 
-def paper_cases(names: str, base: Config, typed: dict) -> list[Case]:
+def paper_cases(names: str, base: dict, typed: dict) -> list[Case]:
     wanted = list(CASES) if names.strip() == "paper" else [n.strip() for n in names.split(",") if n.strip()]
     if not wanted:
         raise SweepError("--cases is empty; give 'paper' or case names separated by commas")
@@ -114,7 +116,7 @@ def _value_text(name: str, value: Any) -> str:
     return f"{value:g}" if isinstance(value, float) else str(value)
 
 
-def grid_cases(path: str, base: Config, typed: dict) -> tuple[list[Case], list[tuple[str, str]]]:
+def grid_cases(path: str, base: dict, typed: dict) -> tuple[list[Case], list[tuple[str, str]]]:
     """Read a grid file (format in this module's docstring) into cases and extra KS pairs."""
     file = Path(path)
     where = f"grid file {file}: "
@@ -155,8 +157,9 @@ def grid_cases(path: str, base: Config, typed: dict) -> tuple[list[Case], list[t
         return table
 
     base_table = fix_shape(check_table(data.get("base", {}), "[base]"))
+    base = {**base, **base_table}
     try:
-        base = base.replace(**base_table)
+        Config().replace(**base)
     except ConfigError as exc:
         raise SweepError(f"{where}[base]: {exc}") from None
     named = {}
@@ -306,7 +309,7 @@ def _sweep(args: argparse.Namespace) -> int:
     if args.seeds is not None and args.seeds < 0:
         raise SweepError(f"--seeds must be 0 or more (got {args.seeds})")
     base, typed = _base(args), _typed_flags(args)
-    seed_start = args.seeds if args.seeds is not None else base.replace(**typed).seed
+    seed_start = args.seeds if args.seeds is not None else Config().replace(**{**base, **typed}).seed
     if args.grid:
         cases, compare = grid_cases(args.grid, base, typed)
     else:

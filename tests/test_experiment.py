@@ -228,7 +228,7 @@ flare = [0.0, 1.75]
 shape = "star"
 """)
     # [cases.*] alone would add a `case` axis; here it is combined with the grid.
-    cases, compare = grid_cases(str(grid), Config(), {"k_turn": 10.0})
+    cases, compare = grid_cases(str(grid), {}, {"k_turn": 10.0})
     assert len(cases) == 1 * 2 * 2 * 2
     labels = [c.label for c in cases]
     assert "shape=tri,robots=30,flare=1.75" in labels
@@ -248,7 +248,7 @@ shape = "star"
 
 
 def test_paper_cases_and_pairs():
-    cases = paper_cases("paper", Config(), {})
+    cases = paper_cases("paper", {}, {})
     assert [c.label for c in cases] == ["circle", "square", "square-flare", "square-flare-switch", "star",
                                         "star-switch", "star-switch-nocorners"]
     assert cases[0].shape is None and len(cases[4].shape) == 10
@@ -256,7 +256,7 @@ def test_paper_cases_and_pairs():
     assert default_pairs([c.label for c in cases]) == PAPER_PAIRS
     assert default_pairs(["a", "b", "c"]) == [("a", "b"), ("a", "c"), ("b", "c")]
     # explicit flags override the base, and cases override neither population
-    assert paper_cases("square", Config(), {"robots": 7})[0].config.robots == 7
+    assert paper_cases("square", {}, {"robots": 7})[0].config.robots == 7
 
 
 def test_describe_by_hand():
