@@ -220,6 +220,10 @@ class Config:
     no_corners: float = _param(
         0.0, "fraction of band lights nearest convex corners that stay off (0 = off; 0.5 when on)",
         low=0.0, high=1.0, group="strategies", rebuild=False)
+    no_corners_count: str = _param(
+        "at-least", "how many lights no_corners c turns off of n lit: 'round', round(c n), equally near lights "
+        "taken column by column (paper text), or 'at-least', the fewest k with k / n >= c, row by row (the "
+        "authors' program)", group="strategies", choices=("at-least", "round"), paper="round", rebuild=False)
 
     # --- run -------------------------------------------------------------
     steps: int = _param(100_000, "world steps in a run", unit="steps", low=0, high=10**9, group="run", rebuild=False)

@@ -345,12 +345,27 @@ class Controller:
     def _darken_corners(self, on: np.ndarray) -> np.ndarray:
         """The no-corners strategy: switch off the band lights nearest convex corners."""
         lit = np.flatnonzero(on)
-        off = int(round(self.strategies["no_corners"] * len(lit)))
+        off = no_corners_count(self.strategies["no_corners"], len(lit), self.config.no_corners_count)
         if off == 0:
             return on
+        if self.config.no_corners_count == "at-least":
+            # The program breaks ties by its light index, x + y * n (lit lists ix * n + iy).
+            n = self.config.lights_per_side
+            lit = lit[np.argsort((lit % n) * n + lit // n, kind="stable")]
         d = np.hypot(*(self._centres[lit, None, :] - self.corners[None, :, :]).transpose(2, 0, 1)).min(axis=1)
         on = on.copy()
         # Rounded so that equally near lights tie exactly, whatever order the
         # file lists its vertices in; ties then go by light index.
         on[lit[np.argsort(np.round(d, 9), kind="stable")[:off]]] = False
         return on
+
+
+def no_corners_count(fraction: float, lit: int, rule: str) -> int:
+    """How many of ``lit`` lights the no-corners strategy turns off."""
+    if rule == "round":
+        return int(round(fraction * lit))
+    # The program turns lights off while (turned off) / lit < fraction.
+    off = 0
+    while off < lit and off / lit < fraction:
+        off += 1
+    return off

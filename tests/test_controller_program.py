@@ -181,3 +181,15 @@ def test_no_corners_uses_the_flared_outline_vertices():
     c = program("square", flare=1.75, no_corners=0.5)
     assert len(c.corners) == 4
     assert np.allclose(np.abs(c.corners - CENTRE), np.abs(c.corners - CENTRE)[0])
+
+
+def test_no_corners_count_is_at_least_the_fraction():
+    """The program turns lights off while (turned off) / lit < c: for 161 lit
+    lights and c = 0.5 that is 81, where rounding gives 80 (round half to even)."""
+    from sandbox.controller import no_corners_count
+
+    assert no_corners_count(0.5, 161, "at-least") == 81
+    assert no_corners_count(0.5, 161, "round") == 80
+    assert no_corners_count(0.5, 160, "at-least") == 80
+    assert no_corners_count(0.25, 10, "at-least") == 3
+    assert no_corners_count(1.0, 10, "at-least") == 10
