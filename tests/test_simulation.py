@@ -45,12 +45,13 @@ def test_initial_placement(small_config):
 def test_robots_cross_the_construction_wall_and_boxes_never_do():
     cfg = Config(robots=60, boxes=120, update_every=20, start_charge=20.0)
     sim = Simulation(cfg, seed=2)
-    outside = np.abs(sim.robot_positions - 32).max(axis=1) >= 8.25 - 1e-9  # clear of the wall by a radius
+    c = cfg.centre
+    outside = np.abs(sim.robot_positions - c).max(axis=1) >= 8.25 - 1e-9  # clear of the wall by a radius
     assert outside.all()
     crossed = np.zeros(len(outside), bool)
     for _ in range(12):
         sim.step(500)
-        crossed |= np.abs(sim.robot_positions - 32).max(axis=1) < 7.5
+        crossed |= np.abs(sim.robot_positions - c).max(axis=1) < 7.5
         assert sim.measure().boxes_escaped == 0
     assert crossed.sum() >= 5
     assert not sim.has_nan()
