@@ -12,18 +12,26 @@ from PIL import Image, ImageDraw
 from ..config import Config
 from ..controller import Controller, make_goal
 from ..lights import LightField
+from ..robots import PHOTOCELLS
 from ..shapes import shape_vertices
 from . import palette as pal
 
 INTRO = """\
-**Phototaxis.** Each robot has four photocells (front, back, left, right).
-It drives forward by *k_drive x (front - back)* and turns by
-*k_turn x (left - right)*: it climbs toward brighter light and stops where
-the light is brightest. It cannot see other robots, boxes or where it is.
+**Phototaxis.** Each robot has four photocells at the corners of its body
+(front-left, front-right, back-left, back-right). Every 50 steps it reads
+them and sets its motors once: forward speed *k_drive x (front pair - back
+pair)*, turn rate *k_turn x (front-left - front-right)*; it then coasts on
+that command until the next reading (or until it bumps into something). So
+it climbs toward brighter light, overshoots a little, and settles where the
+light is brightest. It cannot see other robots, boxes or where it is.
 
 **Powered by light.** The same light charges the robot's store; moving and
 living spend it. Colour shows charge: **green** full, **red** empty. An empty
 robot stops until light reaches it again.
+
+*This is the authors' program (profile* authors-code*); the paper's text
+describes photocells on the body's axes and a motor that follows the
+command continuously: choose* paper-text *under Population and physics.*
 """
 
 CYCLE = """\
@@ -111,10 +119,12 @@ def phototaxis_picture(config: Config | None = None, size: int = 300) -> np.ndar
     heading = np.radians(60)
     r = 0.45 * k
     draw.ellipse([rx - r, ry - r, rx + r, ry + r], fill=(170, 200, 60), outline=(20, 20, 20))
-    for name, a in (("F", 0.0), ("B", np.pi), ("L", np.pi / 2), ("R", -np.pi / 2)):
+    cells = PHOTOCELLS[cfg.photocells]
+    short = ["".join(word[0].upper() for word in name.split("-")) for name in cells.names]
+    for name, a in zip(short, cells.angles):
         sx, sy = rx + 0.7 * r * np.cos(heading + a), ry - 0.7 * r * np.sin(heading + a)
         draw.ellipse([sx - 4, sy - 4, sx + 4, sy + 4], fill=(255, 255, 255), outline=(0, 0, 0))
-        draw.text((rx + 1.35 * r * np.cos(heading + a) - 3, ry - 1.35 * r * np.sin(heading + a) - 5), name,
+        draw.text((rx + 1.45 * r * np.cos(heading + a) - 5, ry - 1.45 * r * np.sin(heading + a) - 5), name,
                   fill=(255, 255, 255))
     ax, ay = rx + 3.2 * r * np.cos(heading), ry - 3.2 * r * np.sin(heading)
     draw.line([rx + 1.8 * r * np.cos(heading), ry - 1.8 * r * np.sin(heading), ax, ay], fill=(255, 255, 255), width=3)
@@ -125,10 +135,15 @@ def phototaxis_picture(config: Config | None = None, size: int = 300) -> np.ndar
 
 def cycle_picture(config: Config | None = None) -> np.ndarray:
     cfg = config or Config()
-    tiles = []
-    for label, steps in (("start: largest", 0), ("contracting", 3000), ("holding: smallest", 5400)):
-        inten, outline, goal = _pattern(cfg, "circle", steps)
-        tiles.append(_tile(cfg, inten, outline, goal, label))
+    goal = make_goal(cfg, None)
+    ctrl = Controller(cfg, goal)
+    tiles = [_tile(cfg, ctrl.intensities, ctrl.outline, goal.outline(), "start: largest")]
+    for label, phase in (("contracting", None), ("holding: smallest", "holding")):
+        for _ in range(3000 if phase is None else 10**6):
+            ctrl.advance()
+            if ctrl.phase == phase:
+                break
+        tiles.append(_tile(cfg, ctrl.intensities, ctrl.outline, goal.outline(), label))
     return _row(tiles)
 
 

@@ -33,7 +33,11 @@ if TYPE_CHECKING:  # pragma: no cover
 #: Parameters that get their own controls elsewhere (or make no sense live).
 NOT_IN_PARAMETER_FOLDERS = {"shape", "flare", "switch", "no_corners", "steps"}
 GROUP_TITLES = {"bodies": "Population and bodies", "robot": "Robot: gains and energy", "lights": "Light grid",
-                "controller": "Controller cycle", "arena": "Arena", "run": "Run", "physics": "Physics engine"}
+                "controller": "Controller cycle", "arena": "Arena", "run": "Run", "physics": "Physics engine",
+                "model": "Model: the authors' program or the paper's text"}
+MODEL_HELP = ("The paper's text and the authors' released program differ in about a dozen places; the "
+              "program produced the paper's tables. **profile** sets all of the values below at once "
+              "(on reset); each can then be changed on its own.")
 CUSTOM_SHAPE = "(drawn or uploaded)"
 STRATEGY_LABELS = {"flare": "Flare", "switch": "Switch to circle", "no_corners": "No corners"}
 PANEL_HZ = 6.0  # how often read-outs and charts refresh
@@ -492,11 +496,14 @@ class Panel:
             groups: dict[str, list] = {}
             for p in params():
                 if p.name not in NOT_IN_PARAMETER_FOLDERS:
-                    groups.setdefault(p.group, []).append(p)
-            for group in ("bodies", "robot", "lights", "controller", "arena", "run", "physics"):
+                    # Every value a profile sets sits with the profile, so a change of profile shows.
+                    groups.setdefault("model" if p.profiled else p.group, []).append(p)
+            for group in ("model", "bodies", "robot", "lights", "controller", "arena", "run", "physics"):
                 if group not in groups:
                     continue
                 with gui.add_folder(GROUP_TITLES.get(group, group), expand_by_default=group == "bodies"):
+                    if group == "model":
+                        gui.add_markdown(MODEL_HELP)
                     for p in groups[group]:
                         self.param_controls[p.name] = self._param_control(p, getattr(snap.config, p.name))
 
@@ -524,6 +531,8 @@ class Panel:
         value = handle.value
 
         def done(deferred: list[str]) -> None:
+            if name == "profile":
+                self._show_profile_values()
             if deferred:
                 self._pending.update(deferred)
                 self.pending.content = ("**Applies on reset:** " + ", ".join(sorted(self._pending)) +
@@ -537,6 +546,19 @@ class Panel:
             threading.Thread(target=lambda: setattr(handle, "value", current), daemon=True).start()
 
         self.runner.post(lambda sim: sim.update_config(**{name: value}), on_done=done, on_error=failed)
+
+    def _show_profile_values(self) -> None:
+        """After a change of profile, show the values it set (they apply on reset)."""
+        config = self.runner.sim.config
+
+        def show() -> None:
+            for p in params():
+                handle = self.param_controls.get(p.name)
+                if p.profiled and handle is not None and handle.value != getattr(config, p.name):
+                    handle.value = getattr(config, p.name)
+                    self._pending.add(p.name)
+
+        threading.Thread(target=show, daemon=True).start()
 
     # ============================================================== learn
     def _build_learn(self) -> None:
