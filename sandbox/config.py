@@ -234,6 +234,12 @@ class Config:
     iterations: int = _param(10, "pymunk solver iterations per step", low=1, high=100, group="physics")
     threads: int = _param(1, "pymunk solver threads (1 or 2; 2 uses pymunk's threaded solver)", low=1, high=2, group="physics")
     collision_slop: float = _param(0.01, "allowed overlap between shapes", unit="m", low=0.0, high=1.0, group="physics")
+    sleep_time: float = _param(
+        0.0, "bodies that have moved slower than idle_speed for this long sleep until touched (0 = never; "
+        "Box2D, as in the authors' program, uses 0.5 s)", unit="s", low=0.0, high=100.0, group="physics")
+    idle_speed: float = _param(
+        0.01, "speed below which a body counts as at rest, for sleep_time (Box2D: 0.01 m/s)",
+        unit="m/s", low=0.0, high=10.0, group="physics")
 
     def __post_init__(self) -> None:
         check_value("profile", self.profile)

@@ -26,6 +26,7 @@ ROBOT, BOX, OUTER_WALL, CONSTRUCTION_WALL = 1, 2, 4, 8
 WALL_RADIUS = 0.5
 
 _POSE = batch.BodyFields.POSITION | batch.BodyFields.ANGLE | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
+_POSE_AND_ID = _POSE | batch.BodyFields.BODY_ID
 _VELOCITY = batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY
 
 
@@ -69,6 +70,7 @@ class World:
         self.space = self._make_space()
         self._add_walls()
         self.robot_bodies: list[pymunk.Body] = []
+        self.box_bodies: list[pymunk.Body] = []
         self._add_robots(rng)
         self._add_boxes(rng)
         # Damping is applied by the space to every body. With the 'continuous'
@@ -80,13 +82,22 @@ class World:
             for body in self.robot_bodies:
                 undamped.make_undamped(body)
         self._buffer = batch.Buffer()
-        # pymunk.batch lists the space's static body (holding the walls) last.
+        # pymunk.batch lists awake bodies in the order they were added, then
+        # the space's static body (holding the walls), then sleeping bodies
+        # by group: with sleeping on, rows are found from the bodies' ids.
+        bodies = [*self.robot_bodies, *self.box_bodies, self.space.static_body]
+        ids = np.array([b.id for b in bodies], dtype=np.uintp)
+        self._id_order = np.argsort(ids)
+        self._sorted_ids = ids[self._id_order]
+        #: Row of :attr:`state` of each body pymunk.batch listed in the last read.
+        self._rows = np.arange(len(bodies))
         self.state = np.zeros((self.n_robots + self.n_boxes + 1, 6))
         #: Velocities for the next step, (vx, vy, w) per row of :attr:`state`;
         #: pymunk reads them straight from this array's memory.
         self.velocities = np.zeros((len(self.state), 3))
         self._velocity_buffer = batch.Buffer()
         self._velocity_buffer.set_float_buf(self.velocities.reshape(-1))
+        self._velocity_order = np.zeros_like(self.velocities)  # velocities in pymunk.batch's order
         self.read()
 
     # -- construction -----------------------------------------------------
@@ -99,6 +110,9 @@ class World:
         space.iterations = cfg.iterations
         space.collision_slop = cfg.collision_slop
         space.damping = box_damping_per_second(cfg)
+        if cfg.sleep_time > 0:
+            space.sleep_time_threshold = cfg.sleep_time
+            space.idle_speed_threshold = cfg.idle_speed
         return space
 
     def _add_walls(self) -> None:
@@ -160,19 +174,30 @@ class World:
             shape.elasticity = cfg.box_elasticity
             shape.filter = box_filter
             self.space.add(body, shape)
+            self.box_bodies.append(body)
 
     # -- bulk state -------------------------------------------------------
     def read(self) -> np.ndarray:
         """Refresh :attr:`state`: rows (x, y, angle, vx, vy, w): robots, boxes, static body."""
         self._buffer.clear()
-        batch.get_space_bodies(self.space, _POSE, self._buffer)
-        self.state[:] = np.frombuffer(self._buffer.float_buf()).reshape(self.state.shape)
+        if self.config.sleep_time <= 0:
+            batch.get_space_bodies(self.space, _POSE, self._buffer)
+            self.state[:] = np.frombuffer(self._buffer.float_buf()).reshape(self.state.shape)
+            return self.state
+        batch.get_space_bodies(self.space, _POSE_AND_ID, self._buffer)
+        ids = np.frombuffer(self._buffer.int_buf(), dtype=np.uintp)
+        self._rows = self._id_order[np.searchsorted(self._sorted_ids, ids)]
+        self.state[self._rows] = np.frombuffer(self._buffer.float_buf()).reshape(self.state.shape)
         return self.state
 
     def push_velocities(self) -> None:
         """Hand :attr:`velocities` (one (vx, vy, w) row per body, in :attr:`state`'s
         order) to pymunk in one call. Robots' rows must already be divided
-        by :attr:`damping_per_step`; other rows should hold their current values."""
+        by :attr:`damping_per_step`; other rows should hold their current values.
+        (This wakes every body: the 'continuous' motor keeps everything awake.)"""
+        if self.config.sleep_time > 0:
+            self._velocity_order[:] = self.velocities[self._rows]
+            self._velocity_buffer.set_float_buf(self._velocity_order.reshape(-1))
         batch.set_space_bodies(self.space, _VELOCITY, self._velocity_buffer)
 
     def set_robot_velocities(self, writes: np.ndarray, count: int) -> None:

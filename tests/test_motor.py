@@ -87,3 +87,14 @@ def test_a_robot_out_of_charge_is_stopped():
     before = sim.robot_positions.copy()
     sim.step(100)
     assert np.array_equal(sim.robot_positions, before)
+
+
+def test_state_rows_stay_with_their_bodies_when_bodies_sleep():
+    """pymunk lists sleeping bodies after the awake ones; the state must not mix them up."""
+    sim = Simulation(Config(robots=30, boxes=80, sleep_time=0.2, update_every=10**6), seed=2)
+    sim.step(600)
+    world = sim.world
+    assert any(b.is_sleeping for b in world.box_bodies)
+    bodies = [*world.robot_bodies, *world.box_bodies]
+    expected = np.array([[b.position.x, b.position.y, b.angle] for b in bodies])
+    np.testing.assert_array_equal(world.state[: len(bodies), :3], expected)
