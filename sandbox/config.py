@@ -102,6 +102,14 @@ class Config:
     box_density: float = _param(0.5, "box density", unit="kg/m^2", low=1e-3, high=1e4, group="bodies")
     box_friction: float = _param(1.0, "box friction coefficient", low=0.0, high=10.0, group="bodies")
     box_elasticity: float = _param(0.1, "box restitution", low=0.0, high=1.0, group="bodies")
+    box_skin: float = _param(
+        0.01, "rounding radius added around each box's hexagon for collisions (Box2D, the authors' engine, "
+        "gives every polygon a 0.01 m skin, so boxes touch 0.02 m apart)", unit="m", low=0.0, high=1.0,
+        group="bodies", paper=0.0)
+    wall_friction: float = _param(
+        0.4472, "friction coefficient between the walls and a body of friction 1 (Box2D's default wall "
+        "friction 0.2 mixed with 1.0 as sqrt(0.2 x 1.0) in the authors' program; pymunk multiplies the two)",
+        low=0.0, high=10.0, group="bodies", paper=1.0)
     box_damping: float = _param(
         10.0, "linear and angular damping of boxes (the box slides only while pushed)",
         unit="1/s", low=0.0, high=1000.0, group="bodies")
@@ -233,7 +241,9 @@ class Config:
     # --- physics engine tuning (not part of the model) -------------------
     iterations: int = _param(10, "pymunk solver iterations per step", low=1, high=100, group="physics")
     threads: int = _param(1, "pymunk solver threads (1 or 2; 2 uses pymunk's threaded solver)", low=1, high=2, group="physics")
-    collision_slop: float = _param(0.01, "allowed overlap between shapes", unit="m", low=0.0, high=1.0, group="physics")
+    collision_slop: float = _param(
+        0.005, "allowed overlap between shapes (Box2D, the authors' engine, allows its linearSlop, 0.005 m)",
+        unit="m", low=0.0, high=1.0, group="physics", paper=0.01)
     sleep_time: float = _param(
         0.0, "bodies that have moved slower than idle_speed for this long sleep until touched (0 = never; "
         "Box2D, as in the authors' program, uses 0.5 s)", unit="s", low=0.0, high=100.0, group="physics")

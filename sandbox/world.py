@@ -127,7 +127,7 @@ class World:
         corners = square_corners(centre, half)
         for a, b in zip(corners, corners[1:] + corners[:1]):
             seg = pymunk.Segment(body, a, b, WALL_RADIUS)
-            seg.friction = 1.0
+            seg.friction = self.config.wall_friction
             seg.elasticity = 0.0
             seg.filter = shape_filter
             self.space.add(seg)
@@ -168,7 +168,7 @@ class World:
             body = pymunk.Body()
             body.position = tuple(p)
             body.angle = float(a)
-            shape = pymunk.Poly(body, vertices, radius=0.0)
+            shape = pymunk.Poly(body, vertices, radius=cfg.box_skin)
             shape.density = cfg.box_density
             shape.friction = cfg.box_friction
             shape.elasticity = cfg.box_elasticity
