@@ -36,9 +36,76 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                    help="measure the browser sandbox with a headless Chromium client connected instead")
     p.add_argument("--seconds", type=float, default=20.0, help="how long --live measures (default 20)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    p.add_argument("--compare-reference", metavar="PATH",
+                   help="also time a locally built binary of the authors' program (github AdamBignell/push) on "
+                   "the paper's circle trial, 100,000 steps, as whole processes, in turn with ours; prints the ratio")
+    p.add_argument("--rounds", type=int, default=1, help="with --compare-reference: alternate this many times "
+                   "and report medians (default 1)")
     add_config_arguments(p)
     p.set_defaults(func=bench_command)
     return p
+
+
+#: The paper's circle case as the authors' program takes it (its README's flags; -x, headless, must come last).
+REFERENCE_ARGS = ["-r", "200", "-b", "500", "-z", "0.5", "-s", "0.5", "-t", "C", "-y", "H", "-g", "50",
+                  "-d", "0", "-c", "0", "-x"]
+REFERENCE_STEPS = 100_000  # fixed in the program
+
+
+def time_process(command: list[str], cwd: str) -> dict[str, Any]:
+    """Wall time, CPU time and peak memory of one whole process (its own
+    resource usage, from wait4, not the running maximum over all children)."""
+    import os
+    import subprocess
+
+    with open(os.path.join(cwd, "out.txt"), "w+") as out:
+        started = time.perf_counter()
+        process = subprocess.Popen(command, cwd=cwd, stdout=out, stderr=subprocess.STDOUT)
+        _, status, usage = os.wait4(process.pid, 0)
+        wall = time.perf_counter() - started
+        process.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        lines = out.read().strip().splitlines()
+    if process.returncode != 0:
+        raise RuntimeError(f"{os.path.basename(command[0])} exited with code {process.returncode}: "
+                           f"{lines[-1] if lines else 'no output'}")
+    return {"wall_seconds": round(wall, 2), "cpu_seconds": round(usage.ru_utime + usage.ru_stime, 2),
+            "peak_rss_mb": round(usage.ru_maxrss / 1024.0, 1), "last_line": lines[-1] if lines else ""}
+
+
+def compare_reference(binary: str, rounds: int, config: Config) -> dict[str, Any]:
+    """Time the authors' program and ours on the same 100,000-step circle trial, in turn."""
+    import os
+    import statistics
+    import tempfile
+
+    from .cli import UserError
+
+    path = os.path.abspath(os.path.expanduser(binary))
+    if not (os.path.isfile(path) and os.access(path, os.X_OK)):
+        raise UserError(f"--compare-reference: {binary} is not an executable file (build the authors' program first)")
+    if rounds < 1:
+        raise UserError(f"--rounds must be at least 1, got {rounds}")
+    ours_cmd = [sys.executable, "-m", "sandbox", "run", "--case", "circle", "--steps", str(REFERENCE_STEPS),
+                "--seed", str(config.seed), "--no-progress", "--profile", config.profile]
+    runs: dict[str, list[dict[str, Any]]] = {"reference": [], "ours": []}
+    with tempfile.TemporaryDirectory() as scratch:  # the program may write files where it runs
+        for _ in range(rounds):
+            for name, command in (("reference", [path, *REFERENCE_ARGS]), ("ours", ours_cmd)):
+                try:
+                    runs[name].append(time_process(command, scratch))
+                except (OSError, RuntimeError) as exc:
+                    raise UserError(f"--compare-reference: {exc}") from None
+    result: dict[str, Any] = {"steps": REFERENCE_STEPS, "rounds": rounds}
+    for name, measured in runs.items():
+        wall = statistics.median(m["wall_seconds"] for m in measured)
+        result[name] = {"wall_seconds": wall, "steps_per_second": round(REFERENCE_STEPS / wall, 1),
+                        "cpu_seconds": statistics.median(m["cpu_seconds"] for m in measured),
+                        "peak_rss_mb": max(m["peak_rss_mb"] for m in measured),
+                        "every_wall_seconds": [m["wall_seconds"] for m in measured],
+                        "last_line": measured[-1]["last_line"]}
+    result["speedup"] = round(result["reference"]["wall_seconds"] / result["ours"]["wall_seconds"], 2)
+    return result
 
 
 def scaled(config: Config, k: float) -> Config:
@@ -118,7 +185,9 @@ def bench_command(args: argparse.Namespace) -> int:
     if args.steps is None:
         args.steps = 20_000  # a benchmark default: two full cycles, not a whole trial
     config = scaled(config_from_args(args), args.scale)
-    if args.live:
+    if args.compare_reference:
+        result = compare_reference(args.compare_reference, args.rounds, config)
+    elif args.live:
         if not args.seconds > 0:
             raise UserError(f"--seconds must be positive, got {args.seconds}")
         try:
