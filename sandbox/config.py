@@ -245,8 +245,9 @@ class Config:
         0.005, "allowed overlap between shapes (Box2D, the authors' engine, allows its linearSlop, 0.005 m)",
         unit="m", low=0.0, high=1.0, group="physics", paper=0.01)
     sleep_time: float = _param(
-        0.0, "bodies that have moved slower than idle_speed for this long sleep until touched (0 = never; "
-        "Box2D, as in the authors' program, uses 0.5 s)", unit="s", low=0.0, high=100.0, group="physics")
+        0.5, "a group of touching bodies that has moved slower than idle_speed for this long sleeps until "
+        "something awake touches it (0 = never; Box2D, the authors' engine, uses 0.5 s)", unit="s", low=0.0,
+        high=100.0, group="physics", paper=0.0)
     idle_speed: float = _param(
         0.01, "speed below which a body counts as at rest, for sleep_time (Box2D: 0.01 m/s)",
         unit="m/s", low=0.0, high=10.0, group="physics")
