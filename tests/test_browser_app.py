@@ -237,7 +237,7 @@ def test_parameters_and_inspector(app, page):
     wait_until(lambda: app.runner.sim.world.config.k_turn == 15, what="the live gain")
     click_button(page, "Follow a random robot")
     wait_until(lambda: app.runner.latest.robot is not None, what="a followed robot")
-    page.get_by_text("front", exact=True).wait_for(timeout=10_000)
+    page.get_by_text("front-left", exact=True).wait_for(timeout=10_000)
     page.get_by_label("Camera follows", exact=True).check()
     client = next(iter(app.server.get_clients().values()))
 
@@ -248,6 +248,28 @@ def test_parameters_and_inspector(app, page):
     wait_until(camera_on_robot, what="the camera to follow the robot")
     click_button(page, "Stop following")
     wait_until(lambda: app.runner.selected is None, what="stop following")
+
+
+def test_profile_switch_shows_its_values_and_applies_on_reset(app, page):
+    runner = app.runner
+    model = "Model: the authors' program or the paper's text"
+    if not page.get_by_text(model, exact=True).first.is_visible():  # an earlier test may have left it open
+        open_folder(page, "Population and physics")
+    open_folder(page, model)
+    height = page.get_by_label("light height (m)", exact=True)
+    assert float(height.input_value()) == 2.0
+    choose(page, "profile", "paper-text")
+    wait_until(lambda: runner.sim.config.profile == "paper-text", what="the profile setting")
+    wait_until(lambda: float(height.input_value()) == 1.0, what="the panel to show the paper's light height")
+    assert page.get_by_label("motor", exact=True).input_value() == "continuous"
+    assert runner.sim.world.config.profile == "authors-code"  # not before a reset
+    click_button(page, "Reset (same seed)")
+    wait_until(lambda: runner.sim.world.config.profile == "paper-text", what="the reset to apply the profile")
+    assert runner.sim.world.config.light_height == 1.0 and runner.sim.world.config.motor == "continuous"
+    choose(page, "profile", "authors-code")
+    wait_until(lambda: float(height.input_value()) == 2.0, what="the program's light height")
+    click_button(page, "Reset (same seed)")
+    wait_until(lambda: runner.sim.world.config.profile == "authors-code", what="the program's model again")
 
 
 def test_second_browser_and_disconnect(app, browser, page):

@@ -24,6 +24,7 @@ import viser.uplot
 from ..config import STRATEGY_DEFAULTS, params
 from ..metrics import SAMPLE_FIELDS
 from ..shapes import ShapeError, builtin_shape_names, load_polygon, polygon_to_text, shape_vertices, validate_polygon
+from ..robots import PHOTOCELLS
 from . import learn
 from .runner import Snapshot
 
@@ -421,13 +422,13 @@ class Panel:
         r = snap.robot
         if r is None:
             return ""
-        f, b, left, right = r.sensors
+        names = PHOTOCELLS[snap.world_config.photocells].names
         v, w = r.command
         av, aw = r.applied
         cap = snap.world_config.capacity
         state = "moving" if r.charge > 0 else "**out of charge: stopped**"
-        return ("| photocell | reading |\n|---|---|\n"
-                f"| front | {f:.3f} |\n| back | {b:.3f} |\n| left | {left:.3f} |\n| right | {right:.3f} |\n\n"
+        cells = "".join(f"| {name} | {reading:.3f} |\n" for name, reading in zip(names, r.sensors))
+        return ("| photocell | reading |\n|---|---|\n" + cells + "\n"
                 f"**Command** v = {v:+.3f} m/s, w = {w:+.3f} rad/s  \n"
                 f"**Doing** v = {av:+.3f}, w = {aw:+.3f} ({state})  \n"
                 f"**Charge** {r.charge:.2f} / {cap:g} &nbsp; at ({r.position[0]:.1f}, {r.position[1]:.1f}) m")

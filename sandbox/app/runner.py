@@ -34,7 +34,7 @@ class RobotView:
     index: int
     position: np.ndarray
     heading: float
-    sensors: np.ndarray  # front, back, left, right at the last refresh
+    sensors: np.ndarray  # the four photocells (robots.PHOTOCELLS order) at the last refresh
     sensor_points: np.ndarray  # (4, 2)
     command: np.ndarray  # held (v, w)
     applied: np.ndarray  # (v, w) actually applied (0 when out of charge)
