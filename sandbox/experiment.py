@@ -252,17 +252,30 @@ def write_meta(out: Path, cases: list[Case], compare: list, command: str, trials
 
 
 def _command_line(args: argparse.Namespace) -> str:
+    """The sweep command for the report, with paths made relative (a report
+    should not carry the folders of the machine it ran on)."""
     parts = ["phototaxis", "sweep"]
-    parts += ["--grid", args.grid] if args.grid else ["--cases", args.cases]
+    parts += ["--grid", _portable(args.grid)] if args.grid else ["--cases", args.cases]
     parts += ["--trials", str(args.trials)]
     if args.seeds is not None:
         parts += ["--seeds", str(args.seeds)]
     if args.config:
-        parts += ["--config", args.config]
+        parts += ["--config", _portable(args.config)]
     for name, value in _typed_flags(args).items():
-        parts += ["--" + name.replace("_", "-"), str(value)]
-    parts += ["--out", args.out]
+        parts += ["--" + name.replace("_", "-"), _portable(str(value)) if name == "shape" else str(value)]
+    parts += ["--out", _portable(args.out)]
     return shlex.join(parts)
+
+
+def _portable(path: str) -> str:
+    """``path`` relative to the working folder if it lies under it, else only its last part."""
+    p = Path(path)
+    if not p.is_absolute():
+        return path
+    try:
+        return p.relative_to(Path.cwd()).as_posix()
+    except ValueError:
+        return p.name
 
 
 # ------------------------------------------------------------------ CLI

@@ -13,7 +13,7 @@ import datetime as _dt
 import json
 from pathlib import Path
 
-from . import figures, stats
+from . import figures, reference, stats
 from .config import Config, params
 from .metrics import SAMPLE_FIELDS
 from .sweep import METRICS, ResultStore, SweepError
@@ -147,6 +147,62 @@ def _overrides_text(overrides: dict) -> str:
     return ", ".join(f"{k} = {v!r}" for k, v in overrides.items()) or "(base values)"
 
 
+def _against_reference_section(by_case: dict[str, list[dict]], tables: dict) -> list[str]:
+    """The paper's cases side by side with the paper's tables and the authors' program."""
+    cases = [c for c in by_case if c in reference.PAPER]
+    if not cases:
+        return []
+    ours = {m: {r.case: r for r in tables[m]} for m in METRICS}
+    out = ["", "## Against the paper and the authors' program", "",
+           f"The paper's Tables II and III; the authors' released program, measured by this project "
+           f"(seeds {reference.PROGRAM_SEEDS}, mean ± standard error); and this sweep (mean ± standard error). "
+           f"*Within* says whether this sweep's mean is within {reference.FRACTION_TOLERANCE * 100:g} points "
+           f"(fraction) or {reference.DISTANCE_TOLERANCE:g} m (distance) of the program's.", ""]
+    for i, (metric, title, tolerance, digits) in enumerate((
+            ("fraction_in_goal", "Fraction of boxes in the goal", reference.FRACTION_TOLERANCE, 3),
+            ("mean_outside_distance", "Mean distance of the boxes outside the goal (m)",
+             reference.DISTANCE_TOLERANCE, 2))):
+        rows = []
+        for c in cases:
+            mine, (prog, prog_se) = ours[metric][c], reference.PROGRAM[c][i]
+            rows.append([f"`{c}`", stats.fmt(reference.PAPER[c][i], digits),
+                         f"{stats.fmt(prog, digits)} ± {stats.fmt(prog_se, digits)}",
+                         f"{stats.fmt(mine.mean, digits)} ± {stats.fmt(mine.sem, digits)}",
+                         f"{mine.mean - prog:+.{digits}f}", "yes" if abs(mine.mean - prog) <= tolerance else "**no**"])
+        out += [f"**{title}**", "", _md_table(["case", "paper", "program", "here", "here − program", "within"], rows),
+                ""]
+    means = {c: (ours["fraction_in_goal"][c].mean, ours["mean_outside_distance"][c].mean) for c in cases}
+    program = {c: (reference.PROGRAM[c][0][0], reference.PROGRAM[c][1][0]) for c in reference.PROGRAM}
+    paper = dict(reference.PAPER)
+    rows = []
+    for f in reference.FINDINGS:
+        if not all(c in means for c in f.needs):
+            continue
+        value = f.measure(means)
+        rows.append([f.text, f.shown.format(f.measure(paper)), f.shown.format(f.measure(program)),
+                     f.shown.format(value), "yes" if f.holds(value) else "**no**"])
+    if rows:
+        out += ["**The paper's findings**", "", _md_table(["finding", "paper", "program", "here", "holds"], rows), ""]
+    dips = [[f"`{c}`", f"{_largest_dip(by_case[c]):.3f}", f"{reference.PROGRAM_DIPS[c]:.3f}",
+             "yes" if _largest_dip(by_case[c]) <= reference.DIP_TOLERANCE else "**no**"] for c in cases]
+    out += ["**Dips.** The largest drop of the case's mean fraction-in-goal series (Figure 4) below its best "
+            f"value so far, here and in the program; a faithful model has none above "
+            f"{reference.DIP_TOLERANCE * 100:g} points.", "",
+            _md_table(["case", "largest dip here", "program", f"at most {reference.DIP_TOLERANCE:g}"], dips)]
+    return out
+
+
+def _largest_dip(trials: list[dict]) -> float:
+    """Largest drop of the mean fraction-in-goal series (over trials, sample by sample) below its running best."""
+    n = min(len(t["samples"]["fraction_in_goal"]) for t in trials)
+    mean = [sum(float(t["samples"]["fraction_in_goal"][i]) for t in trials) / len(trials) for i in range(n)]
+    best, dip = float("-inf"), 0.0
+    for value in mean:
+        best = max(best, value)
+        dip = max(dip, best - value)
+    return dip
+
+
 def _first_cycle_section(first: dict) -> list[str]:
     if not any(r.n for r in first["fraction_in_goal"]):
         return ["", "_No trial ran long enough to finish a compression cycle, so there is no after-one-cycle table._"]
@@ -216,6 +272,7 @@ def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: l
             "", "## Table III. Mean distance of boxes outside the goal at the final step (m)", "",
             "Lower is better; 0 when every box is inside.", "",
             _summary_table(tables["mean_outside_distance"], 3),
+            *_against_reference_section(by_case, tables),
             *_first_cycle_section(first),
             "", "## Table IV. Two-sample Kolmogorov–Smirnov tests: fraction in goal at the final step", "",
             "`scipy.stats.ks_2samp`, two-sided. A small p-value says the two cases' distributions differ.", "",
