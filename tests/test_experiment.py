@@ -91,6 +91,19 @@ def check_outputs(out: Path, cases: list[str], seeds: list[int], steps: int = 25
         assert f"`{case}`" in report
     for link in ("figures/fraction_in_goal.png", "figures/mean_outside_distance.png", "figures/final_layouts.png"):
         assert f"]({link})" in report and (out / link).is_file()
+    # The paper's cases are set beside the paper's tables and the authors' program.
+    assert "## Against the paper and the authors' program" in report
+    assert "| flare pushes the square's stray boxes out at least 1.8x | x2.96 | x2.12 |" in report
+    assert "**Dips.**" in report
+
+
+def test_largest_dip_of_the_mean_series():
+    from sandbox.report import _largest_dip
+
+    trials = [{"samples": {"fraction_in_goal": [0.3, 0.7, 0.6, 0.8, 0.75]}},
+              {"samples": {"fraction_in_goal": [0.3, 0.7, 0.7, 0.8, 0.70]}}]
+    # Mean series 0.3, 0.7, 0.65, 0.8, 0.725: the largest drop below the best so far is 0.075.
+    assert _largest_dip(trials) == pytest.approx(0.075)
 
 
 def test_local_sweep_outputs_and_resume(tmp_path, capsys):
