@@ -35,6 +35,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--live", action="store_true",
                    help="measure the browser sandbox with a headless Chromium client connected instead")
     p.add_argument("--seconds", type=float, default=20.0, help="how long --live measures (default 20)")
+    p.add_argument("--steps-per-frame", type=int, default=20, metavar="N",
+                   help="with --live: the app's speed setting, 1-100 (default 20, the app's default)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.add_argument("--compare-reference", metavar="PATH",
                    help="also time a locally built binary of the authors' program (github AdamBignell/push) on "
@@ -194,7 +196,9 @@ def bench_command(args: argparse.Namespace) -> int:
             from .app import live_bench
         except ImportError as exc:
             raise UserError(f"--live needs the browser app: {exc}") from None
-        result = live_bench.run(config, args.seconds)
+        if not 1 <= args.steps_per_frame <= 100:
+            raise UserError(f"--steps-per-frame must be between 1 and 100, got {args.steps_per_frame}")
+        result = live_bench.run(config, args.seconds, steps_per_frame=args.steps_per_frame)
     else:
         if config.steps <= 0:
             raise UserError("--steps must be at least 1 for a benchmark")

@@ -204,3 +204,68 @@ def test_serve_defaults_to_this_machine_only():
 
     args = build_parser("serve").parse_args(["serve"])
     assert args.host == "127.0.0.1" and args.port == 8080
+
+
+# ------------------------------------------------- the simulation's own process
+def where_am_i(sim) -> int:
+    """A command: the id of the process it runs in."""
+    import os
+
+    return os.getpid()
+
+
+@pytest.fixture(scope="module")
+def process_runner():
+    from sandbox.app.process import ProcessRunner
+
+    r = ProcessRunner(SMALL, shape=None, fps=60, steps_per_frame=2)
+    r.start()
+    yield r
+    r.stop()
+
+
+def test_the_simulation_runs_in_another_process(process_runner):
+    import functools
+    import os
+
+    from sandbox.simulation import Simulation
+
+    r = process_runner
+    assert r.call(where_am_i) == r.process.pid != os.getpid()
+    step = r.latest.step
+    wait_until(lambda: r.latest.step > step + 10)
+    seen = []
+    r.post(functools.partial(Simulation.update_config, robots=-1), on_error=seen.append)
+    wait_until(lambda: seen)
+    assert "robots" in str(seen[0])
+    r.set_playing(False)
+    wait_until(lambda: not r.latest.playing)
+    paused_at = r.latest.step
+    r.step_once(3)
+    wait_until(lambda: r.latest.step == paused_at + 3)
+    r.reset(5)
+    wait_until(lambda: r.latest.seed == 5 and r.latest.step == 0)
+    wait_until(lambda: [s.step for s in r.series()] == [0])
+    r.set_playing(True)
+    wait_until(lambda: len(r.series()) >= 2)
+
+
+def test_a_crashed_simulation_process_is_reported_and_restarted(process_runner):
+    import os
+    import signal
+
+    r = process_runner
+    crashes = []
+    r.on_crash(crashes.append)
+    r.select(2)
+    r.reset(9)
+    wait_until(lambda: r.latest.seed == 9 and r.latest.robot is not None)
+    old = r.process.pid
+    os.kill(old, signal.SIGKILL)  # as a crash in the engine would end it
+    wait_until(lambda: crashes, timeout=30)
+    assert "exit code" in crashes[0]
+    wait_until(lambda: r.process.pid != old and r.process.is_alive(), timeout=60)
+    step = r.latest.step
+    wait_until(lambda: r.latest.step > step + 10 or r.latest.step < step, timeout=30)  # running again
+    assert r.latest.seed == 9 and r.restarts == 1
+    wait_until(lambda: r.latest.robot is not None and r.latest.robot.index == 2)  # its selection came back

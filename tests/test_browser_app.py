@@ -117,8 +117,8 @@ def test_page_loads_and_draws_the_arena(app, page):
         return off.mean() > 0.2
 
     wait_until(arena_drawn, 30, "the light grid to be drawn")
-    start = app.runner.sim.steps_done
-    wait_until(lambda: app.runner.sim.steps_done > start + 20, what="the simulation to run")
+    start = app.runner.latest.step
+    wait_until(lambda: app.runner.latest.step > start + 20, what="the simulation to run")
     assert page.get_by_text("Phase", exact=False).count() > 0
 
 
@@ -126,17 +126,17 @@ def test_run_controls(app, page):
     runner = app.runner
     click_button(page, "Pause")
     wait_until(lambda: not runner.playing, what="pause")
-    before = runner.sim.steps_done
+    before = runner.latest.step
     time.sleep(0.3)
-    assert runner.sim.steps_done == before
+    assert runner.latest.step == before
     click_button(page, "Step")
-    wait_until(lambda: runner.sim.steps_done == before + 1, what="one step")
+    wait_until(lambda: runner.latest.step == before + 1, what="one step")
     click_button(page, "Reset (same seed)")
-    seed = runner.sim.seed
-    wait_until(lambda: runner.sim.steps_done == 0, what="reset")
-    assert runner.sim.seed == seed
+    seed = runner.latest.seed
+    wait_until(lambda: runner.latest.step == 0, what="reset")
+    assert runner.latest.seed == seed
     click_button(page, "Reset (new seed)")
-    wait_until(lambda: runner.sim.seed != seed, what="a new seed")
+    wait_until(lambda: runner.latest.seed != seed, what="a new seed")
     thumb = page.get_by_role("slider").first  # "Steps per frame", the first slider of the panel
     speed = runner.steps_per_frame
     thumb.focus()
@@ -163,13 +163,13 @@ def test_shape_picker_changes_the_goal(app, page):
 def test_each_strategy_reaches_the_simulation(app, page, label, name):
     from sandbox.config import STRATEGY_DEFAULTS
 
-    steps = app.runner.sim.steps_done
+    steps = app.runner.latest.step
     page.get_by_label(label, exact=True).check()
-    wait_until(lambda: app.runner.sim.controller.strategies[name] == STRATEGY_DEFAULTS[name],
+    wait_until(lambda: app.runner.latest.strategies[name] == STRATEGY_DEFAULTS[name],
                what=f"{name} in the controller")
-    assert app.runner.sim.steps_done >= steps  # no reset happened
+    assert app.runner.latest.step >= steps  # no reset happened
     page.get_by_label(label, exact=True).uncheck()
-    wait_until(lambda: app.runner.sim.controller.strategies[name] == 0.0, what=f"{name} off")
+    wait_until(lambda: app.runner.latest.strategies[name] == 0.0, what=f"{name} off")
 
 
 def test_drawing_by_clicks_creates_a_valid_goal(app, page):
@@ -196,10 +196,10 @@ def test_upload_valid_and_invalid_files(app, page):
     upload = page.locator("input[type=file]")
     upload.set_input_files(files=[{"name": "my-square.txt", "mimeType": "text/plain", "buffer": SQUARE}])
     wait_until(lambda: app.runner.latest.shape_name == "my-square.txt", what="the uploaded goal")
-    steps = app.runner.sim.steps_done
+    steps = app.runner.latest.step
     upload.set_input_files(files=[{"name": "bowtie.txt", "mimeType": "text/plain", "buffer": BOWTIE}])
     notification(page, "crosses itself")
-    wait_until(lambda: app.runner.sim.steps_done > steps + 20, what="the simulation to keep running")
+    wait_until(lambda: app.runner.latest.step > steps + 20, what="the simulation to keep running")
     assert app.runner.latest.shape_name == "my-square.txt"
     upload.set_input_files(files=[{"name": "junk.bin", "mimeType": "application/octet-stream",
                                    "buffer": b"\x00\x01\x02garbage"}])
@@ -227,14 +227,14 @@ def test_parameters_and_inspector(app, page):
     robots = page.get_by_label("robots", exact=True)
     robots.fill("25")
     robots.press("Tab")
-    wait_until(lambda: app.runner.sim.config.robots == 25, what="the robots setting")
+    wait_until(lambda: app.runner.latest.config.robots == 25, what="the robots setting")
     notification(page, "Applies on reset")
-    assert app.runner.sim.world.n_robots == 40  # not before a reset
+    assert len(app.runner.latest.robot_positions) == 40  # not before a reset
     open_folder(page, "Robot: gains and energy")
     gain = page.get_by_label("k turn", exact=True)
     gain.fill("15")
     gain.press("Tab")
-    wait_until(lambda: app.runner.sim.world.config.k_turn == 15, what="the live gain")
+    wait_until(lambda: app.runner.latest.world_config.k_turn == 15, what="the live gain")
     click_button(page, "Follow a random robot")
     wait_until(lambda: app.runner.latest.robot is not None, what="a followed robot")
     page.get_by_text("front-left", exact=True).wait_for(timeout=10_000)
@@ -259,17 +259,17 @@ def test_profile_switch_shows_its_values_and_applies_on_reset(app, page):
     height = page.get_by_label("light height (m)", exact=True)
     assert float(height.input_value()) == 2.0
     choose(page, "profile", "paper-text")
-    wait_until(lambda: runner.sim.config.profile == "paper-text", what="the profile setting")
+    wait_until(lambda: runner.latest.config.profile == "paper-text", what="the profile setting")
     wait_until(lambda: float(height.input_value()) == 1.0, what="the panel to show the paper's light height")
     assert page.get_by_label("motor", exact=True).input_value() == "continuous"
-    assert runner.sim.world.config.profile == "authors-code"  # not before a reset
+    assert runner.latest.world_config.profile == "authors-code"  # not before a reset
     click_button(page, "Reset (same seed)")
-    wait_until(lambda: runner.sim.world.config.profile == "paper-text", what="the reset to apply the profile")
-    assert runner.sim.world.config.light_height == 1.0 and runner.sim.world.config.motor == "continuous"
+    wait_until(lambda: runner.latest.world_config.profile == "paper-text", what="the reset to apply the profile")
+    assert runner.latest.world_config.light_height == 1.0 and runner.latest.world_config.motor == "continuous"
     choose(page, "profile", "authors-code")
     wait_until(lambda: float(height.input_value()) == 2.0, what="the program's light height")
     click_button(page, "Reset (same seed)")
-    wait_until(lambda: runner.sim.world.config.profile == "authors-code", what="the program's model again")
+    wait_until(lambda: runner.latest.world_config.profile == "authors-code", what="the program's model again")
 
 
 def test_second_browser_and_disconnect(app, browser, page):
@@ -279,8 +279,8 @@ def test_second_browser_and_disconnect(app, browser, page):
     wait_until(lambda: len(app.server.get_clients()) == 2, what="two clients")
     other.close()
     wait_until(lambda: len(app.server.get_clients()) == 1, what="one client again")
-    steps = app.runner.sim.steps_done
-    wait_until(lambda: app.runner.sim.steps_done > steps + 20, what="the simulation to keep running")
+    steps = app.runner.latest.step
+    wait_until(lambda: app.runner.latest.step > steps + 20, what="the simulation to keep running")
     assert not app.runner.errors
 
 

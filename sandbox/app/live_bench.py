@@ -28,7 +28,7 @@ def chromium_path() -> str | None:
     return None
 
 
-def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 10, fps: float = 30.0,
+def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 20, fps: float = 30.0,
         warmup: float = 5.0) -> dict[str, Any]:
     """Measure the live app for ``seconds`` (after ``warmup``) with one headless browser."""
     from ..cli import UserError
@@ -56,9 +56,9 @@ def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 10, fps
                 time.sleep(warmup)
                 page.evaluate("""() => { window.__frames = 0; const tick = () => { window.__frames++;
                                  requestAnimationFrame(tick); }; requestAnimationFrame(tick); }""")
-                steps0, frames0, t0 = app.runner.sim.steps_done, app.frames_drawn, time.perf_counter()
+                steps0, frames0, t0 = app.runner.latest.step, app.frames_drawn, time.perf_counter()
                 time.sleep(seconds)
-                steps1, frames1, t1 = app.runner.sim.steps_done, app.frames_drawn, time.perf_counter()
+                steps1, frames1, t1 = app.runner.latest.step, app.frames_drawn, time.perf_counter()
                 browser_frames = page.evaluate("() => window.__frames")
                 clients = len(app.server.get_clients())
             finally:

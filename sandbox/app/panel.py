@@ -10,6 +10,7 @@ The parameter folders are generated from the engine's declaration
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import tempfile
 import threading
@@ -21,12 +22,13 @@ import numpy as np
 import viser
 import viser.uplot
 
-from ..config import STRATEGY_DEFAULTS, params
+from ..config import STRATEGY_DEFAULTS, Config, params
 from ..metrics import SAMPLE_FIELDS
-from ..shapes import ShapeError, builtin_shape_names, load_polygon, polygon_to_text, shape_vertices, validate_polygon
 from ..robots import PHOTOCELLS
+from ..shapes import ShapeError, builtin_shape_names, load_polygon, polygon_to_text, shape_vertices, validate_polygon
+from ..simulation import Simulation
 from . import learn
-from .runner import Snapshot
+from .runner import Snapshot, update_config_and_report
 
 if TYPE_CHECKING:  # pragma: no cover
     from .server import App
@@ -82,6 +84,8 @@ class Panel:
         self._record_started = 0.0
         self._last_record_time = 0.0
         self._pending: set[str] = set()
+        #: The settings in force, as the simulation last reported them (pending values included).
+        self._settings: Config = self.runner.latest.config
         self._shape_picked_at = 0.0
         snap = self.runner.latest
         self._build_run(snap)
@@ -318,7 +322,7 @@ class Panel:
         def failed(exc: BaseException) -> None:
             notify_error(client, "Strategy not changed", str(exc))
 
-        self.runner.post(lambda sim: sim.set_strategies(**{name: value}), on_error=failed)
+        self.runner.post(functools.partial(Simulation.set_strategies, **{name: value}), on_error=failed)
 
     # ============================================================ metrics
     def _build_metrics(self, snap: Snapshot) -> None:
@@ -531,9 +535,11 @@ class Panel:
     def _param_changed(self, name: str, handle: Any, client: Any) -> None:
         value = handle.value
 
-        def done(deferred: list[str]) -> None:
+        def done(result: tuple[list[str], Config]) -> None:
+            deferred, config = result
+            self._settings = config
             if name == "profile":
-                self._show_profile_values()
+                self._show_profile_values(config)
             if deferred:
                 self._pending.update(deferred)
                 self.pending.content = ("**Applies on reset:** " + ", ".join(sorted(self._pending)) +
@@ -543,14 +549,13 @@ class Panel:
         def failed(exc: BaseException) -> None:
             notify_error(client, f"{name} not changed", str(exc))
             # Put the control back to the value in force.
-            current = getattr(self.runner.sim.config, name)
+            current = getattr(self._settings, name)
             threading.Thread(target=lambda: setattr(handle, "value", current), daemon=True).start()
 
-        self.runner.post(lambda sim: sim.update_config(**{name: value}), on_done=done, on_error=failed)
+        self.runner.post(functools.partial(update_config_and_report, **{name: value}), on_done=done, on_error=failed)
 
-    def _show_profile_values(self) -> None:
+    def _show_profile_values(self, config: Config) -> None:
         """After a change of profile, show the values it set (they apply on reset)."""
-        config = self.runner.sim.config
 
         def show() -> None:
             for p in params():

@@ -27,6 +27,13 @@ from ..simulation import Simulation
 Command = Callable[[Simulation], Any]
 
 
+def update_config_and_report(sim: Simulation, **changes: Any) -> tuple[list[str], Config]:
+    """A command: change parameters; returns those waiting for a reset and the
+    settings now in force (a module-level function, so it can be sent to
+    another process)."""
+    return sim.update_config(**changes), sim.config
+
+
 @dataclasses.dataclass(frozen=True)
 class RobotView:
     """What the inspector shows about one robot."""
@@ -68,6 +75,7 @@ class Snapshot:
     goal_outline: np.ndarray
     goal_vertices: np.ndarray | None  # the fitted polygon (None for the circle)
     sample: Sample
+    strategies: dict  # flare, switch, no_corners as the controller applies them now
     playing: bool
     steps_per_frame: int
     steps_per_second: float
@@ -346,6 +354,7 @@ class Runner:
             goal_outline=goal_outline,
             goal_vertices=goal_vertices,
             sample=self._series[-1] if self._series else sim.measure(),
+            strategies=dict(sim.controller.strategies),
             playing=self.playing,
             steps_per_frame=self.steps_per_frame,
             steps_per_second=self.steps_per_second(),

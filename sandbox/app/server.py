@@ -1,8 +1,9 @@
 """``phototaxis serve``: the browser sandbox.
 
-:class:`App` glues the pieces: a :class:`~sandbox.app.runner.Runner` (the
-simulation thread), a :class:`~sandbox.app.scene.SceneView` (what is drawn)
-and a :class:`~sandbox.app.panel.Panel` (the controls), on one viser server.
+:class:`App` glues the pieces: a runner (the simulation, by default in a
+process of its own: :class:`~sandbox.app.process.ProcessRunner`), a
+:class:`~sandbox.app.scene.SceneView` (what is drawn) and a
+:class:`~sandbox.app.panel.Panel` (the controls), on one viser server.
 Every connected browser sees the same simulation and the same panel.
 """
 
@@ -21,6 +22,7 @@ import viser
 
 from ..config import Config
 from ..shapes import shape_vertices
+from .process import ProcessRunner
 from .runner import Runner, Snapshot
 from .scene import SceneView, configure_scene
 
@@ -31,11 +33,13 @@ class App:
     """A live simulation served to browsers. ``start()`` it, ``stop()`` it."""
 
     def __init__(self, config: Config, *, host: str = "127.0.0.1", port: int = 8080, shape: Any = "from-config",
-                 fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, verbose: bool = False):
+                 fps: float = 30.0, steps_per_frame: int = 20, playing: bool = True, verbose: bool = False,
+                 process: bool = True):
         if isinstance(shape, str) and shape == "from-config":
             shape = shape_vertices(config.shape)  # raises ShapeError before any server starts
         self.config = config
-        self.runner = Runner(config, shape=shape, fps=fps, steps_per_frame=steps_per_frame, playing=playing)
+        kind = ProcessRunner if process else Runner
+        self.runner = kind(config, shape=shape, fps=fps, steps_per_frame=steps_per_frame, playing=playing)
         with contextlib.redirect_stdout(io.StringIO()) if not verbose else contextlib.nullcontext():
             self.server = viser.ViserServer(host=host, port=port, label=TITLE, verbose=verbose)
         try:
@@ -50,6 +54,8 @@ class App:
         self.frames_drawn = 0
         self._frame_lock = threading.Lock()
         self.runner.subscribe(self._on_frame)
+        if process:
+            self.runner.on_crash(self._on_crash)
 
     # ------------------------------------------------------------ set-up
     def _configure_page(self) -> None:
@@ -68,6 +74,11 @@ class App:
             self.panel.update(snap)
             self.panel.on_frame_drawn()
             self.frames_drawn += 1
+
+    def _on_crash(self, why: str) -> None:
+        for client in self.server.get_clients().values():
+            client.add_notification("The simulation crashed", why[0].upper() + why[1:] + ".", color="red",
+                                    auto_close_seconds=20.0)
 
     # -------------------------------------------------------------- life
     @property
@@ -110,8 +121,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                         "0.0.0.0 shares it on the network)")
     p.add_argument("--port", type=int, default=8080, help="port to listen on (default 8080; the next free one if taken)")
     p.add_argument("--paused", action="store_true", help="start paused")
-    p.add_argument("--steps-per-frame", type=int, default=10, metavar="N",
-                   help="speed: world steps between two frames (default 10)")
+    p.add_argument("--steps-per-frame", type=int, default=20, metavar="N",
+                   help="speed: world steps between two frames (default 20: 600 steps/s, 20x real time)")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate the page is updated at (default 30)")
     add_config_arguments(p)
     p.set_defaults(func=serve_command)
@@ -124,8 +135,8 @@ def serve_command(args: argparse.Namespace) -> int:
     config = config_from_args(args)
     if not 0 <= args.port <= 65535:
         raise UserError(f"--port must be between 0 and 65535, got {args.port}")
-    if args.steps_per_frame < 1:
-        raise UserError("--steps-per-frame must be at least 1")
+    if not 1 <= args.steps_per_frame <= 100:
+        raise UserError("--steps-per-frame must be between 1 and 100")
     if not 1 <= args.fps <= 240:
         raise UserError("--fps must be between 1 and 240")
     try:
