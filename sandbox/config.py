@@ -446,12 +446,27 @@ def read_config_values(path: str | Path) -> dict[str, Any]:
     flat = _flatten(data)
     # A result file stores the configuration under "config": accept it as is.
     if "config" in data and isinstance(data["config"], dict):
-        flat = _flatten(data["config"])
+        flat = record_values(data["config"])
     try:
         Config().replace(**flat)
     except ConfigError as exc:
         raise ConfigError(f"config file {path}: {exc}") from None
     return flat
+
+
+def record_values(values: dict[str, Any]) -> dict[str, Any]:
+    """The values of a configuration stored in a result file. Files written
+    before profiles existed hold the model that is now ``paper-text`` and do
+    not say so: they are read with that profile."""
+    values = _flatten(values)
+    if "profile" not in values and "light_falloff" in values:
+        values = {**values, "profile": PAPER_TEXT}
+    return {k: v for k, v in values.items() if k in _param_table()}
+
+
+def config_from_record(values: dict[str, Any]) -> Config:
+    """The :class:`Config` of a result file's ``config`` (see :func:`record_values`)."""
+    return Config().replace(**record_values(values))
 
 
 def _flatten(data: dict[str, Any]) -> dict[str, Any]:

@@ -85,11 +85,11 @@ def _hexagons(centres: np.ndarray, angles: np.ndarray, circumradius: float) -> n
 
 def draw_layout(ax, trial: dict, *, margin: float = 1.0) -> None:
     """One trial's final layout around the construction area: goal outline, boxes, robots."""
-    from .config import Config
+    from .config import config_from_record
 
-    cfg = Config(**trial["config"])
+    cfg = config_from_record(trial["config"])
     final = trial["final"]
-    centre = cfg.arena_size / 2.0
+    centre = cfg.centre
     goal = np.asarray(final["goal_outline"], dtype=float)
     reach = float(np.abs(goal - centre).max()) if len(goal) else 0.0
     half = max(cfg.construction_size / 2.0, reach) + margin

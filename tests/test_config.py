@@ -124,3 +124,13 @@ def test_cases():
     with pytest.raises(ConfigError, match="unknown case"):
         case_config("hexagon")
     assert "seed" in param_names()
+
+
+def test_result_files_from_before_profiles_are_read_as_paper_text(tmp_path):
+    """Results written before profiles existed hold today's paper-text model without saying so."""
+    old = Config(profile="paper-text").to_dict()
+    for name in ("profile", "assembly_centre", "photocells", "motor"):  # keys the old files did not have
+        old.pop(name)
+    js = tmp_path / "old.json"
+    js.write_text(json.dumps({"config": old}))
+    assert load_config_file(js) == Config(profile="paper-text")

@@ -34,7 +34,7 @@ def render(snap: Snapshot, size: int = 640, *, show_field: bool = False, robot: 
     draw = ImageDraw.Draw(img)
     line = max(1, round(size / 400))
     c = s / 2.0
-    draw.polygon(xy(pal.square(c, cfg.construction_size / 2.0)), outline=pal.BOX_WALL, width=line)
+    draw.polygon(xy(pal.square(cfg.centre, cfg.construction_size / 2.0)), outline=pal.BOX_WALL, width=line)
     # Boxes: hexagons.
     r = cfg.box_circumradius
     corners = np.arange(6) * np.pi / 3

@@ -39,7 +39,8 @@ def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0) 
 
 def _geometry_key(cfg: Config, n: int, m: int) -> tuple:
     """What the static scene depends on: a change rebuilds the nodes (a gain does not)."""
-    return (cfg.arena_size, cfg.construction_size, cfg.light_pitch, cfg.robot_radius, cfg.box_circumradius, n, m)
+    return (cfg.arena_size, cfg.construction_size, cfg.centre, cfg.light_pitch, cfg.robot_radius, cfg.box_circumradius,
+            n, m)
 
 
 def configure_scene(server: Any, config: Config) -> None:
@@ -107,7 +108,7 @@ class SceneView:
         self.handles["walls"] = sc.add_line_segments(
             "/arena/walls", pal.closed_segments(pal.square(c, c), Z_LINES), pal.ARENA_WALL, thickness=0.25)
         self.handles["box_wall"] = sc.add_line_segments(
-            "/arena/box_wall", pal.closed_segments(pal.square(c, cfg.construction_size / 2.0), Z_LINES),
+            "/arena/box_wall", pal.closed_segments(pal.square(cfg.centre, cfg.construction_size / 2.0), Z_LINES),
             pal.BOX_WALL, thickness=0.1)
         n, m = len(snap.robot_positions), len(snap.box_positions)
         identity = np.tile(np.array([1.0, 0.0, 0.0, 0.0], np.float32), (max(n, 1), 1))
