@@ -237,10 +237,19 @@ class LightField:
         # Light column lx reaches layout cells lx - t for t in light_offsets
         # (largest t first), i.e. starting at cell lx - t_max.
         start_cell = -int(ax.light_offsets.max()) - ax.first_cell + ax.pad
+        values = self._values
         for ix, iy in indices:
             x0 = (ix + start_cell) * ax.per_cell
             y0 = (iy + start_cell) * ax.per_cell
-            self._values[x0 : x0 + width, y0 : y0 + width] += self.DTYPE(weights[ix, iy]) * k
+            block = values[x0 : x0 + width, y0 : y0 + width]
+            w = weights[ix, iy]
+            # Lights switch on and off far more often than they dim: no temporary then.
+            if w == 1.0:
+                np.add(block, k, out=block)
+            elif w == -1.0:
+                np.subtract(block, k, out=block)
+            else:
+                block += self.DTYPE(w) * k
 
     def sample(self, points: np.ndarray) -> np.ndarray:
         """Luminosity at floor points (..., 2) by bilinear interpolation within
