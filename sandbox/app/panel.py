@@ -28,7 +28,7 @@ from ..robots import PHOTOCELLS
 from ..shapes import ShapeError, builtin_shape_names, load_polygon, polygon_to_text, shape_vertices, validate_polygon
 from ..simulation import Simulation
 from . import learn
-from .runner import Snapshot, update_config_and_report
+from .runner import FASTEST, Snapshot, update_config_and_report
 
 if TYPE_CHECKING:  # pragma: no cover
     from .server import App
@@ -111,8 +111,9 @@ class Panel:
                                              hint="Rebuild the world with the same seed: the same run again")
             self.reset_new = gui.add_button("Reset (new seed)", icon=viser.Icon.DICE,
                                             hint="Rebuild the world with a new random seed")
-            self.speed = gui.add_slider("Steps per frame", 1, 100, 1, self.runner.steps_per_frame,
-                                        hint="Speed: world steps simulated between two pictures")
+            self.speed = gui.add_slider("Steps per frame", 1, FASTEST, 1, self.runner.steps_per_frame,
+                                        hint=f"Speed: world steps simulated between two pictures; {FASTEST}: as "
+                                             "fast as the machine can, the pictures still at the frame rate")
             self.show_field = gui.add_checkbox("Show sensed light", False,
                                                hint="Show the luminosity field the robots sense, as a heat map, "
                                                     "instead of the light grid")

@@ -26,6 +26,11 @@ from ..simulation import Simulation
 
 Command = Callable[[Simulation], Any]
 
+#: The top of the speed slider means "as fast as the machine can": the loop
+#: steps in chunks of FASTEST_CHUNK until the next frame is due.
+FASTEST = 100
+FASTEST_CHUNK = 10
+
 
 def update_config_and_report(sim: Simulation, **changes: Any) -> tuple[list[str], Config]:
     """A command: change parameters; returns those waiting for a reset and the
@@ -254,7 +259,10 @@ class Runner:
         while not self._stop.is_set():
             self._run_commands()
             if self.playing:
-                self.sim.step(self.steps_per_frame)
+                if self.steps_per_frame >= FASTEST:
+                    self._step_for(next_frame + interval)  # as many steps as fit in one frame
+                else:
+                    self.sim.step(self.steps_per_frame)
                 self._record_series()
             self._step_times.append((time.perf_counter(), self.sim.steps_done))
             self._snapshot()
@@ -269,6 +277,13 @@ class Runner:
             if delay > 0:
                 self._wake.wait(delay)
                 self._wake.clear()
+
+    def _step_for(self, deadline: float) -> None:
+        """Step in small chunks until ``deadline`` (at least one chunk)."""
+        while True:
+            self.sim.step(FASTEST_CHUNK)
+            if time.perf_counter() >= deadline or self._stop.is_set() or not self._commands.empty():
+                return
 
     def _publish_loop(self) -> None:
         while not self._stop.is_set():
