@@ -1,34 +1,17 @@
-"""The ``phototaxis`` command line.
+"""Argument parsing shared by every ``phototaxis`` command: one flag per
+declared parameter, config files, cases and profiles, one-line usage errors.
 
-Subcommands live in their own modules and are listed in ``SUBCOMMANDS``:
-each entry names a module and a function ``f(subparsers)`` there that adds
-the subcommand's parser and sets its ``func`` default: a callable taking the
-parsed arguments and returning an exit code. Modules are imported only when needed, so the headless
-commands never import the browser app.
-
-Errors a user can fix (bad flags, bad files, bad values) print one line and
-exit with code 2; a traceback means a bug.
+The commands import this module; it imports none of them (the dispatcher is
+:mod:`sandbox.commands`). Errors a user can fix (bad flags, bad files, bad
+values) are :class:`UserError` and print as one line with exit code 2.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
-import sys
-from typing import Any, Sequence
+from typing import Any
 
-from .config import CASES, STRATEGY_DEFAULTS, Config, ConfigError, params, read_config_values
-from .shapes import ShapeError
-
-#: subcommand name -> (module, function that adds its parser)
-SUBCOMMANDS = {
-    "run": ("sandbox.run", "add_parser"),
-    "bench": ("sandbox.bench", "add_parser"),
-    "serve": ("sandbox.app", "add_parser"),
-    "record": ("sandbox.record", "add_parser"),
-    "sweep": ("sandbox.experiment", "add_sweep_parser"),
-    "report": ("sandbox.experiment", "add_report_parser"),
-}
+from sandbox.model.config import CASES, STRATEGY_DEFAULTS, Config, params, read_config_values
 
 # Flags whose value is optional: given bare, they switch a strategy on at its default amount.
 _STRATEGY_FLAGS = {"flare": "--flare", "switch": "--switch", "no_corners": "--no-corners"}
@@ -91,58 +74,3 @@ def config_from_args(args: argparse.Namespace) -> Config:
         explicit.update(CASES[args.case])
     explicit.update({p.name: getattr(args, p.name) for p in params() if getattr(args, p.name, None) is not None})
     return Config().replace(**explicit)
-
-
-def build_parser(only: str | None = None) -> argparse.ArgumentParser:
-    parser = Parser(
-        prog="phototaxis",
-        description="A light-powered phototaxic robot swarm that pushes boxes into a goal shape. "
-        "With no command, starts the browser sandbox (same as 'phototaxis serve').",
-    )
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
-    for name, (module, adder) in SUBCOMMANDS.items():
-        if only is not None and name != only:
-            continue
-        try:
-            mod = importlib.import_module(module)
-        except ModuleNotFoundError as exc:
-            if exc.name in (module, "viser", "matplotlib", "scipy", "dask", "distributed", "imageio", "PIL"):
-                _missing_command(sub, name, exc)
-                continue
-            raise
-        getattr(mod, adder)(sub)
-    return parser
-
-
-def _missing_command(sub: Any, name: str, exc: ModuleNotFoundError) -> None:
-    p = sub.add_parser(name, help=f"(unavailable: {exc.name} is not installed)")
-
-    def fail(_args: argparse.Namespace) -> int:
-        raise UserError(f"'phototaxis {name}' needs the Python package {exc.name!r}; install it with "
-                        f"pip install -e '.[all]'")
-
-    p.set_defaults(func=fail)
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
-    if not argv or argv[0].startswith("-") and argv[0] not in ("-h", "--help"):
-        argv = ["serve", *argv]
-    only = argv[0] if argv and argv[0] in SUBCOMMANDS else None
-    parser = build_parser(only)
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 2
-    try:
-        return int(args.func(args) or 0)
-    except (UserError, ConfigError, ShapeError) as exc:
-        print(f"phototaxis {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from sandbox.config import Config
+from sandbox.model.config import Config
 
 
 @pytest.fixture

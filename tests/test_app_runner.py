@@ -11,7 +11,7 @@ import pytest
 
 from sandbox.app import palette
 from sandbox.app.runner import Runner
-from sandbox.config import Config
+from sandbox.model.config import Config
 
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 
@@ -176,7 +176,7 @@ def test_upload_validation_leaves_the_simulation_alone(app):
 def test_metrics_csv_and_frames(app):
     wait_until(lambda: app.frames_drawn > 5 and len(app.runner.series()) >= 2)
     lines = app.panel.metrics_csv().splitlines()
-    assert lines[0] == "step,time,fraction_in_goal,mean_outside_distance,boxes_escaped,charged_robots,cycle,phase"
+    assert lines[0] == "step,fraction_in_goal,mean_outside_distance,boxes_escaped,charged_robots,cycle,phase,time"
     assert len(lines) >= 3
     assert not app.runner.errors
 
@@ -191,7 +191,7 @@ def test_recording_from_the_panel(app):
 
 
 def test_serve_command_line_checks_its_flags(capsys):
-    from sandbox.cli import main
+    from sandbox.commands import main
 
     assert main(["serve", "--port", "70000"]) == 2
     assert "--port" in capsys.readouterr().err
@@ -200,7 +200,7 @@ def test_serve_command_line_checks_its_flags(capsys):
 
 
 def test_serve_defaults_to_this_machine_only():
-    from sandbox.cli import build_parser
+    from sandbox.commands import build_parser
 
     args = build_parser("serve").parse_args(["serve"])
     assert args.host == "127.0.0.1" and args.port == 8080
@@ -228,7 +228,7 @@ def test_the_simulation_runs_in_another_process(process_runner):
     import functools
     import os
 
-    from sandbox.simulation import Simulation
+    from sandbox.model.simulation import Simulation
 
     r = process_runner
     assert r.call(where_am_i) == r.process.pid != os.getpid()

@@ -37,7 +37,7 @@ def wait_until(condition, timeout: float = 20.0, what: str = "condition"):
 @pytest.fixture(scope="module")
 def app():
     from sandbox.app.server import App, free_port
-    from sandbox.config import Config
+    from sandbox.model.config import Config
 
     config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
     app = App(config, port=free_port(), steps_per_frame=4, fps=15)
@@ -161,7 +161,7 @@ def test_shape_picker_changes_the_goal(app, page):
 @pytest.mark.parametrize("label,name", [("Flare", "flare"), ("Switch to circle", "switch"),
                                         ("No corners", "no_corners")])
 def test_each_strategy_reaches_the_simulation(app, page, label, name):
-    from sandbox.config import STRATEGY_DEFAULTS
+    from sandbox.model.config import STRATEGY_DEFAULTS
 
     steps = app.runner.latest.step
     page.get_by_label(label, exact=True).check()

@@ -84,8 +84,8 @@ def test_bench_json():
 
 
 def test_bench_scale_grows_the_world():
-    from sandbox.bench import scaled
-    from sandbox.config import Config
+    from sandbox.commands.bench import scaled
+    from sandbox.model.config import Config
 
     c = scaled(Config(), 10)
     assert (c.robots, c.boxes, c.arena_size, c.construction_size) == (2000, 5000, 202.0, 51.0)

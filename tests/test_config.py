@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from sandbox.config import CASES, Config, ConfigError, case_config, load_config_file, param_names, params
+from sandbox.model.config import CASES, Config, ConfigError, case_config, load_config_file, param_names, params
 
 
 def test_every_parameter_is_documented():
@@ -56,7 +56,8 @@ def test_explicit_values_win_over_the_profile():
 
 
 def test_a_profile_and_overrides_from_files_and_flags(tmp_path):
-    from sandbox.cli import build_parser, config_from_args
+    from sandbox.cli import config_from_args
+    from sandbox.commands import build_parser
 
     f = tmp_path / "c.toml"
     f.write_text('light_height = 3.0\n')

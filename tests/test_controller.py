@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from sandbox import geometry
-from sandbox.config import Config
-from sandbox.controller import CONTRACTING, DILATING, HOLDING, Controller, make_goal
+from sandbox.model import geometry
+from sandbox.model.config import Config
+from sandbox.model.controller import CONTRACTING, DILATING, HOLDING, Controller, make_goal
 from sandbox.shapes import shape_vertices
 
 

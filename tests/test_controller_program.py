@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from sandbox import geometry
-from sandbox.config import Config
-from sandbox.controller import CONTRACTING, DILATING, HOLDING, Controller, make_goal
+from sandbox.model import geometry
+from sandbox.model.config import Config
+from sandbox.model.controller import CONTRACTING, DILATING, HOLDING, Controller, make_goal
 from sandbox.shapes import shape_vertices
 
 GOAL_AREA = 500 * 1.5 * math.sqrt(3) * 0.25**2
@@ -103,7 +103,7 @@ def test_flared_square_is_what_is_scaled():
 def test_flare_pushes_reflex_corners_too():
     """The program's angle is the unsigned angle between a corner's edges, so an
     L-shape's reflex (270 degree) corner is pushed out like a right angle."""
-    from sandbox.outlines import program_flare
+    from sandbox.model.outlines import program_flare
 
     ell = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], dtype=float) - [0.75, 0.75]
     out = program_flare(ell, 1.75)
@@ -186,7 +186,7 @@ def test_no_corners_uses_the_flared_outline_vertices():
 def test_no_corners_count_is_at_least_the_fraction():
     """The program turns lights off while (turned off) / lit < c: for 161 lit
     lights and c = 0.5 that is 81, where rounding gives 80 (round half to even)."""
-    from sandbox.controller import no_corners_count
+    from sandbox.model.controller import no_corners_count
 
     assert no_corners_count(0.5, 161, "at-least") == 81
     assert no_corners_count(0.5, 161, "round") == 80

@@ -15,18 +15,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sandbox import cli
-from sandbox.config import Config
-from sandbox.experiment import grid_cases, paper_cases
-from sandbox.stats import PAPER_PAIRS, default_pairs, describe
-from sandbox.sweep import ResultStore, Trial, run_trials
+from sandbox import commands
+from sandbox.model.config import Config
+from sandbox.experiments.plan import grid_cases, paper_cases
+from sandbox.experiments.stats import PAPER_PAIRS, default_pairs, describe
+from sandbox.experiments.executors import run_trials
+from sandbox.experiments.storage import ResultStore
+from sandbox.experiments.trials import Trial
 
 SMALL = ["--robots", "40", "--boxes", "80", "--steps", "2500"]
 CASES = "square,square-flare"  # a pair the paper compares
 
 
 def sweep(out: Path, *extra: str, cases: str = CASES, trials: int = 2, workers: int = 2) -> int:
-    return cli.main(["sweep", "--cases", cases, "--trials", str(trials), "--workers", str(workers),
+    return commands.main(["sweep", "--cases", cases, "--trials", str(trials), "--workers", str(workers),
                      "--no-progress", *SMALL, *extra, "--out", str(out)])
 
 
@@ -98,7 +100,7 @@ def check_outputs(out: Path, cases: list[str], seeds: list[int], steps: int = 25
 
 
 def test_largest_dip_of_the_mean_series():
-    from sandbox.report import _largest_dip
+    from sandbox.experiments.report import _largest_dip
 
     trials = [{"samples": {"fraction_in_goal": [0.3, 0.7, 0.6, 0.8, 0.75]}},
               {"samples": {"fraction_in_goal": [0.3, 0.7, 0.7, 0.8, 0.70]}}]
@@ -133,7 +135,7 @@ def test_local_sweep_outputs_and_resume(tmp_path, capsys):
 
     # The report can be rebuilt elsewhere from the stored trials.
     dest = tmp_path / "paper"
-    assert cli.main(["report", str(out), "--out", str(dest)]) == 0
+    assert commands.main(["report", str(out), "--out", str(dest)]) == 0
     assert (dest / "report.md").is_file() and not (dest / "trials").exists()
     assert "| `square` | 3 |" in (dest / "report.md").read_text()
 
@@ -149,7 +151,7 @@ def test_dask_local_cluster(tmp_path):
 
 def test_scheduler_unreachable_is_a_user_error(tmp_path, capsys, monkeypatch):
     pytest.importorskip("distributed")
-    monkeypatch.setattr("sandbox.sweep.DASK_CONNECT_TIMEOUT", "1s")
+    monkeypatch.setattr("sandbox.experiments.executors.DASK_CONNECT_TIMEOUT", "1s")
     assert sweep(tmp_path / "x", "--scheduler", "tcp://127.0.0.1:9", trials=1) == 2
     last = capsys.readouterr().err.strip().splitlines()[-1]
     assert last.startswith("phototaxis sweep: error: cannot reach the Dask scheduler at tcp://127.0.0.1:9")
@@ -184,7 +186,7 @@ def test_failed_trial_is_retried_once_and_does_not_stop_the_sweep(tmp_path):
 ])
 def test_bad_input_is_one_line_exit_2(tmp_path, capsys, argv, message):
     # tiny runs, in case a check ever lets the sweep through
-    assert cli.main(["sweep", "--steps", "10", "--boxes", "5", "--robots", "5", "--no-progress", *argv,
+    assert commands.main(["sweep", "--steps", "10", "--boxes", "5", "--robots", "5", "--no-progress", *argv,
                      "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and "\n" not in err and "Traceback" not in err
@@ -193,13 +195,13 @@ def test_bad_input_is_one_line_exit_2(tmp_path, capsys, argv, message):
 def test_unwritable_out(tmp_path, capsys):
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
-    assert cli.main(["sweep", "--cases", "square", "--steps", "10", "--no-progress", "--out", str(blocker / "sub")]) == 2
+    assert commands.main(["sweep", "--cases", "square", "--steps", "10", "--no-progress", "--out", str(blocker / "sub")]) == 2
     err = capsys.readouterr().err.strip()
     assert "cannot write results" in err and "\n" not in err
 
 
 def test_report_of_empty_folder(tmp_path, capsys):
-    assert cli.main(["report", str(tmp_path)]) == 2
+    assert commands.main(["report", str(tmp_path)]) == 2
     assert "no sweep results" in capsys.readouterr().err
 
 
@@ -218,7 +220,7 @@ def test_report_of_empty_folder(tmp_path, capsys):
 def test_bad_grid_files(tmp_path, capsys, text, message):
     grid = tmp_path / "grid.toml"
     grid.write_text(text)
-    assert cli.main(["sweep", "--grid", str(grid), "--steps", "10", "--no-progress", "--out", str(tmp_path / "o")]) == 2
+    assert commands.main(["sweep", "--grid", str(grid), "--steps", "10", "--no-progress", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and "\n" not in err
 
@@ -254,7 +256,7 @@ shape = "star"
     small = tmp_path / "small.toml"
     small.write_text("[base]\nboxes = 30\nrobots = 10\nsteps = 1000\n[grid]\ncase = ['star', 'star-switch']\n")
     out = tmp_path / "out"
-    assert cli.main(["sweep", "--grid", str(small), "--trials", "1", "--workers", "1", "--no-progress",
+    assert commands.main(["sweep", "--grid", str(small), "--trials", "1", "--workers", "1", "--no-progress",
                      "--out", str(out)]) == 0
     ks = read_csv(out / "ks_tests.csv")
     assert {(r["a"], r["b"]) for r in ks} == {("star", "star-switch")}
@@ -301,7 +303,7 @@ def test_sigterm_keeps_finished_trials_and_resume_runs_the_rest(tmp_path, capsys
     saved = len(list(out.glob("trials/square/seed-*.json")))
     assert 1 <= saved < 3
     assert not list(out.glob("trials/square/*.tmp"))
-    assert cli.main(argv) == 0
+    assert commands.main(argv) == 0
     assert f"{3 - saved} trial(s) run, {saved} already done" in capsys.readouterr().err
 
 
@@ -321,7 +323,7 @@ def test_second_sweep_into_a_busy_folder_is_refused(tmp_path, capsys):
 
 
 def test_report_lists_every_sample_with_a_box_outside_the_construction_wall():
-    from sandbox.report import _escape_lines
+    from sandbox.experiments.report import _escape_lines
 
     def trial(seed, escaped):
         return {"seed": seed, "samples": {"step": np.array([0, 1000, 2000]), "boxes_escaped": np.array(escaped)}}

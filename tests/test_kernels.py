@@ -3,14 +3,14 @@
 import numpy as np
 import pytest
 
-from sandbox import kernels, robots
-from sandbox.config import Config
-from sandbox.lights import LightField
-from sandbox.simulation import Simulation
+from sandbox.model import kernels, robots
+from sandbox.model.config import Config
+from sandbox.model.lights import LightField
+from sandbox.model.simulation import Simulation
 
 
 class NumpySimulation(Simulation):
-    """The simulation with the robots' step of :mod:`sandbox.robots` (numpy),
+    """The simulation with the robots' step of :mod:`sandbox.model.robots` (numpy),
     the readable statement of the model, in place of the compiled kernels."""
 
     def _step_once(self) -> None:

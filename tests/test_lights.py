@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from sandbox.config import Config
-from sandbox.controller import Controller, make_goal
-from sandbox.lights import LightField, brightness_kernel, light_centres, luminosity_direct
+from sandbox.model.config import Config
+from sandbox.model.controller import Controller, make_goal
+from sandbox.model.lights import LightField, brightness_kernel, light_centres, luminosity_direct
 from sandbox.shapes import shape_vertices
 
 

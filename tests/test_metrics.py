@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from sandbox import metrics
-from sandbox.config import Config
-from sandbox.controller import make_goal
+from sandbox.model import metrics
+from sandbox.model.config import Config
+from sandbox.model.controller import make_goal
 
 
 def square_goal():

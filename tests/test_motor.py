@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from sandbox.config import Config
-from sandbox.simulation import Simulation
-from sandbox.world import World
+from sandbox.model.config import Config
+from sandbox.model.simulation import Simulation
+from sandbox.model.world import World
 
 
 def lone_world(**changes) -> World:

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from sandbox import robots
-from sandbox.config import Config
+from sandbox.model import robots
+from sandbox.model.config import Config
 
 
 def test_sensor_points_follow_heading():
@@ -60,7 +60,7 @@ def test_readings_and_command_of_a_robot_beside_one_light():
     """A robot facing +x, 1 m below a light (program's field): its left cells
     are nearer the light, so it turns left (counter-clockwise) and, level with
     the light, neither drives forward nor back."""
-    from sandbox.lights import luminosity_direct
+    from sandbox.model.lights import luminosity_direct
 
     cfg = Config()
     pattern = np.zeros((64, 64))

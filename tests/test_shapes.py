@@ -7,6 +7,7 @@ import pytest
 from shapely.geometry import Polygon
 
 import sandbox.shapes as shapes
+from sandbox.shapes.builtin import SHAPES_DIR
 from sandbox.shapes import (
     ShapeError, builtin_shape_names, load_polygon, parse_polygon, polygon_to_text,
     shape_vertices, validate_polygon,
@@ -115,7 +116,7 @@ def test_every_builtin_shape_is_a_simple_polygon_with_area(name):
     polygon = Polygon(vertices)
     assert polygon.is_valid and polygon.area > 1.0
     assert 5 <= np.ptp(vertices, axis=0).max() <= 20
-    text = (shapes.SHAPES_DIR / f"{name}.txt").read_text()
+    text = (SHAPES_DIR / f"{name}.txt").read_text()
     assert text.startswith("# ")
 
 
@@ -228,7 +229,7 @@ def test_more_than_one_polygon_is_rejected():
             source="two.geojson")
     rejects("MULTIPOLYGON(((0 0,1 0,0 1,0 0)),((5 5,6 5,5 6,5 5)))", "2 parts", source="two.wkt")
     rejects("<svg><polygon points='0,0 1,0 0,1'/><polygon points='0,0 1,0 0,1'/></svg>",
-            "2 <polygon>", source="two.svg")
+            "2 shape elements", source="two.svg")
 
 
 def test_too_many_vertices_is_rejected():
@@ -246,10 +247,20 @@ def test_empty_input_is_rejected(tmp_path):
         load_polygon(tmp_path / "empty.txt")
 
 
-def test_svg_curves_are_rejected():
-    rejects('<svg><path d="M0 0 L10 0 C10 5 5 10 0 10 Z"/></svg>', "curves are not supported",
-            "'C'", source="curvy.svg")
-    rejects('<svg><path d="M0 0 L10 0 A5 5 0 0 1 0 10 Z"/></svg>', "curves", source="arc.svg")
+def test_svg_curves_and_arcs_are_flattened():
+    """svgelements reads curves; they become short straight pieces of the outline."""
+    curvy = parse_polygon('<svg><path d="M0 0 L10 0 C10 5 5 10 0 10 Z"/></svg>', "curvy.svg")
+    assert len(curvy) > 10 and Polygon(curvy).is_valid
+    arc = parse_polygon('<svg><path d="M0 0 L10 0 A5 5 0 0 1 0 10 Z"/></svg>', "arc.svg")
+    assert len(arc) > 10 and Polygon(arc).area > 50
+
+
+def test_svg_units_and_nested_transforms():
+    svg = ('<svg xmlns="http://www.w3.org/2000/svg"><g transform="rotate(90)"><g transform="translate(1 0)">'
+           '<rect x="0" y="0" width="2mm" height="1mm"/></g></g></svg>')
+    vertices = parse_polygon(svg, "units.svg")
+    extent = np.ptp(vertices, axis=0)
+    assert extent[0] == pytest.approx(extent[1] * 2, rel=1e-6) or extent[1] == pytest.approx(extent[0] * 2, rel=1e-6)
 
 
 def test_svg_entities_and_doctype_are_refused():

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from sandbox.config import Config
-from sandbox.controller import CONTRACTING, DILATING, HOLDING
-from sandbox.metrics import escaped
-from sandbox.simulation import Simulation
+from sandbox.model.config import Config
+from sandbox.model.controller import CONTRACTING, DILATING, HOLDING
+from sandbox.model.metrics import escaped
+from sandbox.model.simulation import Simulation
 
 
 def test_same_seed_same_run(small_config):

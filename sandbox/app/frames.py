@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 from PIL import Image, ImageDraw
 
-from . import palette as pal
-from .runner import Snapshot
+from sandbox.app import palette as pal
+from sandbox.app.runner import Snapshot
 
 
 def render(snap: Snapshot, size: int = 640, *, show_field: bool = False, robot: int | None = None,

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..robots import charge_colours
+from sandbox.model.robots import charge_colours
 
 # RGB, 0..255.
 BACKGROUND = (24, 26, 32)

@@ -22,16 +22,16 @@ import numpy as np
 import viser
 import viser.uplot
 
-from ..config import STRATEGY_DEFAULTS, Config, params
-from ..metrics import SAMPLE_FIELDS
-from ..robots import PHOTOCELLS
-from ..shapes import ShapeError, builtin_shape_names, load_polygon, polygon_to_text, shape_vertices, validate_polygon
-from ..simulation import Simulation
-from . import learn
-from .runner import FASTEST, Snapshot, update_config_and_report
+from sandbox.model.config import STRATEGY_DEFAULTS, Config, params
+from sandbox.model.metrics import SampleWriter
+from sandbox.model.robots import PHOTOCELLS
+from sandbox.shapes import ShapeError, builtin_shape_names, load_polygon, polygon_to_text, shape_vertices, validate_polygon
+from sandbox.model.simulation import Simulation
+from sandbox.app import learn
+from sandbox.app.runner import FASTEST, Snapshot, update_config_and_report
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .server import App
+    from sandbox.app.server import App
 
 #: Parameters that get their own controls elsewhere (or make no sense live).
 NOT_IN_PARAMETER_FOLDERS = {"shape", "flare", "switch", "no_corners", "steps"}
@@ -353,13 +353,9 @@ class Panel:
     def metrics_csv(self) -> str:
         out = io.StringIO()
         dt = self.runner.latest.world_config.dt
-        fields = ["step", "time", *SAMPLE_FIELDS[1:]]
-        writer = csv.DictWriter(out, fieldnames=fields)
-        writer.writeheader()
+        writer = SampleWriter(out, trailing=("time",))
         for s in self.runner.series():
-            row = s.to_dict()
-            row["time"] = round(s.step * dt, 4)
-            writer.writerow(row)
+            writer.write(s, time=round(s.step * dt, 4))
         return out.getvalue()
 
     def _metrics_text(self, snap: Snapshot) -> str:
@@ -407,7 +403,7 @@ class Panel:
                 self._frame_arena()
 
     def _frame_arena(self) -> None:
-        from .scene import top_down_camera
+        from sandbox.app.scene import top_down_camera
 
         position, look_at, _ = top_down_camera(self.runner.latest.world_config)
         for client in self.app.server.get_clients().values():

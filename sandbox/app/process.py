@@ -32,9 +32,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..config import Config
-from ..metrics import Sample
-from .runner import Command, Runner, Snapshot
+from sandbox.model.config import Config
+from sandbox.model.metrics import Sample
+from sandbox.app.runner import Command, Runner, Snapshot
 
 #: How long the parent waits for a new child's first snapshot (imports, numba cache, world building).
 START_TIMEOUT = 120.0

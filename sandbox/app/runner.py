@@ -20,9 +20,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..config import Config
-from ..metrics import Sample
-from ..simulation import Simulation
+from sandbox.model.config import Config
+from sandbox.model.metrics import Sample
+from sandbox.model.simulation import Simulation
 
 Command = Callable[[Simulation], Any]
 

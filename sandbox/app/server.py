@@ -20,11 +20,12 @@ from typing import Any
 
 import viser
 
-from ..config import Config
-from ..shapes import shape_vertices
-from .process import ProcessRunner
-from .runner import Runner, Snapshot
-from .scene import SceneView, configure_scene
+from sandbox.cli import UserError, add_config_arguments, config_from_args
+from sandbox.model.config import Config
+from sandbox.shapes import shape_vertices
+from sandbox.app.process import ProcessRunner
+from sandbox.app.runner import Runner, Snapshot
+from sandbox.app.scene import SceneView, configure_scene
 
 TITLE = "Phototaxis sandbox"
 
@@ -45,7 +46,7 @@ class App:
         try:
             self._configure_page()
             self.view = SceneView(self.server.scene, self.runner.latest)
-            from .panel import Panel  # imports the Learn illustrations; after the scene exists
+            from sandbox.app.panel import Panel  # imports the Learn illustrations; after the scene exists
 
             self.panel = Panel(self)
         except BaseException:
@@ -111,7 +112,6 @@ def free_port(host: str = "127.0.0.1") -> int:
 
 # ------------------------------------------------------------------- CLI
 def add_parser(sub: Any) -> argparse.ArgumentParser:
-    from ..cli import add_config_arguments
 
     p = sub.add_parser("serve", help="start the browser sandbox (the default command)",
                        description="Start a live simulation in the browser. Open the printed URL. "
@@ -130,7 +130,6 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 
 def serve_command(args: argparse.Namespace) -> int:
-    from ..cli import UserError, config_from_args
 
     config = config_from_args(args)
     if not 0 <= args.port <= 65535:

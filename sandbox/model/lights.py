@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .config import Config
+from sandbox.model.config import Config
 
 
 def light_centres(config: Config) -> np.ndarray:

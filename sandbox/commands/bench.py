@@ -19,12 +19,12 @@ from typing import Any
 
 from tqdm import tqdm
 
-from .config import Config
-from .simulation import Simulation
+from sandbox.cli import UserError, add_config_arguments, config_from_args
+from sandbox.model.config import Config
+from sandbox.model.simulation import Simulation
 
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:
-    from .cli import add_config_arguments
 
     p = sub.add_parser("bench", help="measure steps per second and where the time goes",
                        description="Benchmark the engine on the paper's configuration (circle, 200 robots, "
@@ -81,7 +81,6 @@ def compare_reference(binary: str, rounds: int, config: Config) -> dict[str, Any
     import statistics
     import tempfile
 
-    from .cli import UserError
 
     path = os.path.abspath(os.path.expanduser(binary))
     if not (os.path.isfile(path) and os.access(path, os.X_OK)):
@@ -180,7 +179,6 @@ def measure(config: Config, steps: int, progress: bool = False) -> dict[str, Any
 
 
 def bench_command(args: argparse.Namespace) -> int:
-    from .cli import UserError, config_from_args
 
     if not (args.scale > 0 and math.isfinite(args.scale)):
         raise UserError(f"--scale must be a positive number, got {args.scale}")
@@ -193,7 +191,7 @@ def bench_command(args: argparse.Namespace) -> int:
         if not args.seconds > 0:
             raise UserError(f"--seconds must be positive, got {args.seconds}")
         try:
-            from .app import live_bench
+            from sandbox.app import live_bench
         except ImportError as exc:
             raise UserError(f"--live needs the browser app: {exc}") from None
         if not 1 <= args.steps_per_frame <= 100:

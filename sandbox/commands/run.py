@@ -4,7 +4,6 @@ and an optional CSV trace of both success metrics."""
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import sys
 import time
@@ -13,13 +12,13 @@ from typing import IO, Any
 
 from tqdm import tqdm
 
-from .config import CASES, Config
-from .metrics import SAMPLE_FIELDS, Sample
-from .simulation import Simulation
+from sandbox.cli import UserError, add_config_arguments, config_from_args
+from sandbox.model.config import CASES, Config
+from sandbox.model.metrics import Sample, SampleWriter
+from sandbox.model.simulation import Simulation
 
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:
-    from .cli import add_config_arguments
 
     p = sub.add_parser("run", help="run one headless trial and report both success metrics",
                        description="Run one headless trial. Every model parameter is a flag; "
@@ -46,16 +45,13 @@ def case_name(config: Config, given: str | None) -> str:
 def open_trace(path: str | None) -> tuple[IO[str] | None, Any]:
     if not path:
         return None, None
-    from .cli import UserError
 
     try:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         handle = open(path, "w", newline="", encoding="utf-8")
     except OSError as exc:
         raise UserError(f"cannot write trace file {path}: {exc.strerror or exc}") from None
-    writer = csv.DictWriter(handle, fieldnames=SAMPLE_FIELDS)
-    writer.writeheader()
-    return handle, writer
+    return handle, SampleWriter(handle)
 
 
 def run_trial(config: Config, *, progress: bool = False, on_sample=None) -> tuple[Simulation, Sample, float]:
@@ -89,14 +85,13 @@ def run_trial(config: Config, *, progress: bool = False, on_sample=None) -> tupl
 
 
 def run_command(args: argparse.Namespace) -> int:
-    from .cli import config_from_args
 
     config = config_from_args(args)
     handle, writer = open_trace(args.trace)
     try:
         def write(sample: Sample) -> None:
             if writer:
-                writer.writerow(sample.to_dict())
+                writer.write(sample)
                 handle.flush()
 
         sim, final, wall = run_trial(config, progress=not args.no_progress, on_sample=write)

@@ -28,7 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .config import Config
+from sandbox.model.config import Config
 
 
 class Photocells(NamedTuple):

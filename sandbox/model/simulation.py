@@ -15,13 +15,13 @@ import time
 
 import numpy as np
 
-from . import kernels, metrics, robots
-from .config import Config, param
-from .controller import Controller, Goal, make_goal
-from .lights import LightField
-from .shapes import shape_vertices
+from sandbox.model import kernels, metrics, robots
+from sandbox.model.config import Config, param
+from sandbox.model.controller import Controller, Goal, make_goal
+from sandbox.model.lights import LightField
+from sandbox.shapes import shape_vertices
 
-from .world import World
+from sandbox.model.world import World
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:

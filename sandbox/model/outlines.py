@@ -33,8 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import geometry
-from .config import Config
+from sandbox.model import geometry
+from sandbox.model.config import Config
 
 #: The authors' program grows a polygon to its largest size in steps of this factor.
 PROGRAM_GROWTH_STEP = 1.05

@@ -7,29 +7,21 @@ a sweep that is still running or was interrupted.
 
 from __future__ import annotations
 
+import argparse
 import csv
 import dataclasses
 import datetime as _dt
-import json
 from pathlib import Path
+from typing import Any
 
-from . import figures, reference, stats
-from .config import Config, params
-from .metrics import SAMPLE_FIELDS
-from .sweep import METRICS, ResultStore, SweepError
+from sandbox.cli import UserError
+from sandbox.experiments import figures, reference, stats
+from sandbox.experiments.storage import ResultStore, load_meta
+from sandbox.experiments.trials import METRICS, SweepError
+from sandbox.model.config import Config, params
+from sandbox.model.metrics import SAMPLE_FIELDS, SampleWriter, plain
 
-SWEEP_FILE = "sweep.json"
 FIGURES_DIR = "figures"
-
-
-def load_meta(out: Path) -> dict:
-    path = Path(out) / SWEEP_FILE
-    if not path.is_file():
-        return {}
-    try:
-        return json.loads(path.read_text())
-    except ValueError:
-        raise SweepError(f"{path} is not valid JSON; delete it and re-run the sweep command") from None
 
 
 def group(results: list[dict], meta: dict) -> dict[str, list[dict]]:
@@ -90,13 +82,12 @@ def _write_rows(path: Path, rows: list[dict]) -> None:
 
 def _write_results_csv(by_case: dict[str, list[dict]], path: Path) -> None:
     with path.open("w", newline="") as fh:
-        writer = csv.writer(fh)
-        writer.writerow(["case", "seed", *SAMPLE_FIELDS])
+        writer = SampleWriter(fh, leading=("case", "seed"))
         for case, trials in by_case.items():
             for t in trials:
                 s = t["samples"]
                 for i in range(len(s["step"])):
-                    writer.writerow([case, t["seed"], *(_plain(s[c][i]) for c in SAMPLE_FIELDS)])
+                    writer.write({c: s[c][i] for c in SAMPLE_FIELDS}, case=case, seed=t["seed"])
 
 
 def _write_final_csv(by_case: dict[str, list[dict]], path: Path) -> None:
@@ -108,16 +99,10 @@ def _write_final_csv(by_case: dict[str, list[dict]], path: Path) -> None:
         for case, trials in by_case.items():
             for t in trials:
                 s = t["samples"]
-                writer.writerow([case, t["seed"], int(s["step"][-1]), *(_plain(s[m][-1]) for m in METRICS),
+                writer.writerow([case, t["seed"], int(s["step"][-1]), *(plain(s[m][-1]) for m in METRICS),
                                  int(s["boxes_escaped"][-1]), t.get("seconds", ""), t.get("cpu_seconds", ""),
                                  t.get("host", ""),
                                  *(t["config"].get(n, "") for n in names)])
-
-
-def _plain(value):
-    if hasattr(value, "item"):
-        value = value.item()
-    return repr(value) if isinstance(value, float) else value
 
 
 # ------------------------------------------------------------- markdown
@@ -295,3 +280,27 @@ def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: l
             "metrics and full configuration",
             "- `trials/<case>/seed-<seed>.csv|json` (in the sweep folder): the raw per-trial records", ""]
     return "\n".join(out)
+
+
+# ------------------------------------------------------------------ CLI
+
+
+def report_command(args: argparse.Namespace) -> int:
+    try:
+        report = build_report(args.dir, args.out)
+    except SweepError as exc:
+        raise UserError(str(exc)) from None
+    print(report)
+    return 0
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "report", help="rebuild tables, figures and report.md from a sweep's stored results",
+        description="Read DIR/trials (written by 'phototaxis sweep') and write report.md, summary.csv, "
+        "ks_tests.csv, results.csv, final.csv and figures/ into DIR, or into --out.")
+    p.add_argument("dir", metavar="DIR", help="the folder a sweep wrote (its --out)")
+    p.add_argument("--out", metavar="DEST", default=None,
+                   help="write the report here instead (e.g. static/paper), without the raw trial files")
+    p.set_defaults(func=report_command)
+    return p

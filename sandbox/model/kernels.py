@@ -26,7 +26,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .robots import PHOTOCELLS
+from sandbox.model.robots import PHOTOCELLS
 
 
 class SampleLayout(NamedTuple):

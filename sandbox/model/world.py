@@ -14,8 +14,8 @@ import pymunk
 import pymunk.batch as batch
 from pymunk._chipmunk_cffi import lib as chipmunk
 
-from . import undamped
-from .config import Config
+from sandbox.model import undamped
+from sandbox.model.config import Config
 
 # Collision categories: the construction wall only meets boxes.
 ROBOT, BOX, OUTER_WALL, CONSTRUCTION_WALL = 1, 2, 4, 8

@@ -17,13 +17,13 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
-from .config import Config
+from sandbox.cli import UserError, add_config_arguments, config_from_args
+from sandbox.model.config import Config
 
 FORMATS = (".html", ".viser", ".gif", ".mp4")
 
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:
-    from .cli import add_config_arguments
 
     p = sub.add_parser("record", help="record a run headless as a replayable HTML page, a GIF or an MP4",
                        description="Run the simulation headless and write it to FILE: .html (standalone page "
@@ -40,7 +40,6 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 
 def record_command(args: argparse.Namespace) -> int:
-    from .cli import UserError, config_from_args
 
     config = config_from_args(args)
     out = Path(args.out)
@@ -86,7 +85,7 @@ def _progress_printer(total: int) -> Callable[[int], None]:
 
 def frames(config: Config, every: int, shape: Any = "from-config", progress: Callable[[int], None] | None = None):
     """Snapshots of a headless run: the start, then every ``every`` steps to ``config.steps``."""
-    from .app.runner import Runner
+    from sandbox.app.runner import Runner
 
     runner = Runner(config, shape=shape, playing=False)
     yield runner.latest
@@ -117,7 +116,7 @@ def _record_animation(config: Config, kind: str, every: int, fps: float, size: i
     import imageio.v3 as iio
     import numpy as np
 
-    from .app.frames import render
+    from sandbox.app.frames import render
 
     pictures = [np.asarray(render(snap, size, label=_label(snap, snap.shape_name)))
                 for snap in frames(config, every, shape, progress)]
@@ -150,8 +149,8 @@ def _record_viser(config: Config, kind: str, every: int, fps: float, shape: Any,
                   progress: Callable[[int], None] | None) -> bytes:
     import viser
 
-    from .app.scene import SceneView, configure_scene
-    from .app.server import free_port
+    from sandbox.app.scene import SceneView, configure_scene
+    from sandbox.app.server import free_port
 
     with contextlib.redirect_stdout(io.StringIO()):  # viser prints a banner
         server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)

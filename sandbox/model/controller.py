@@ -42,9 +42,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import geometry, outlines
-from .config import Config
-from .lights import light_centres
+from sandbox.model import geometry, outlines
+from sandbox.model.config import Config
+from sandbox.model.lights import light_centres
 
 CONTRACTING, HOLDING, DILATING = "contracting", "holding", "dilating"
 CIRCLE_DRAW_VERTICES = 96

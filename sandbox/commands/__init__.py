@@ -1,0 +1,67 @@
+"""The ``phototaxis`` command: a dispatcher over the subcommands.
+
+Each subcommand lives in the module that holds its idea and offers
+``add_parser(subparsers)``, which adds its parser and sets ``func``: a
+callable taking the parsed arguments and returning an exit code.
+
+- ``run``, ``bench``: :mod:`.run`, :mod:`.bench` (headless)
+- ``serve``, ``record``: :mod:`sandbox.app.server`, :mod:`sandbox.app.record`
+- ``sweep``, ``report``: :mod:`sandbox.experiments.sweep`, :mod:`sandbox.experiments.report`
+
+Only the chosen subcommand's module is imported (not to avoid a cycle:
+there is none, :mod:`sandbox.cli` imports no command), so that ``phototaxis
+run`` starts without loading the web server or matplotlib.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from typing import Sequence
+
+from sandbox.cli import Parser, UserError
+from sandbox.model.config import ConfigError
+from sandbox.shapes import ShapeError
+
+#: subcommand name -> module offering add_parser
+SUBCOMMANDS = {
+    "run": "sandbox.commands.run",
+    "bench": "sandbox.commands.bench",
+    "serve": "sandbox.app.server",
+    "record": "sandbox.app.record",
+    "sweep": "sandbox.experiments.sweep",
+    "report": "sandbox.experiments.report",
+}
+
+
+def build_parser(only: str | None = None) -> Parser:
+    parser = Parser(
+        prog="phototaxis",
+        description="A light-powered phototaxic robot swarm that pushes boxes into a goal shape. "
+        "With no command, starts the browser sandbox (same as 'phototaxis serve').",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
+    for name, module in SUBCOMMANDS.items():
+        if only is None or name == only:
+            importlib.import_module(module).add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0].startswith("-") and argv[0] not in ("-h", "--help"):
+        argv = ["serve", *argv]
+    only = argv[0] if argv and argv[0] in SUBCOMMANDS else None
+    parser = build_parser(only)
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except (UserError, ConfigError, ShapeError) as exc:
+        print(f"phototaxis {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130

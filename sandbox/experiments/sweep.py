@@ -1,0 +1,206 @@
+"""``phototaxis sweep``: many trials in parallel, locally or on a Dask cluster.
+
+A sweep is the cases of :mod:`.plan` times a number of seeds. Trials run in
+local worker processes or on a Dask cluster (``--scheduler``, see
+:mod:`.executors`), are saved as they finish (:mod:`.storage`), and are
+turned into the paper's tables and figures (:mod:`.report`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import shlex
+import signal
+import sys
+from pathlib import Path
+from typing import Any
+
+from sandbox.cli import UserError, add_config_arguments
+from sandbox.experiments.executors import dask_executor, local_executor, run_trials
+from sandbox.experiments.plan import Case, grid_cases, make_trials, paper_cases
+from sandbox.experiments.report import build_report
+from sandbox.experiments.storage import SWEEP_FILE, ResultStore, load_meta
+from sandbox.experiments.trials import SweepError
+from sandbox.model.config import CASES, Config, params, read_config_values
+
+
+def _typed_flags(args: argparse.Namespace) -> dict[str, Any]:
+    return {p.name: getattr(args, p.name) for p in params() if getattr(args, p.name, None) is not None}
+
+
+def _base(args: argparse.Namespace) -> dict[str, Any]:
+    """The config file's values (checked, not yet applied: see _make_case)."""
+    return read_config_values(args.config) if getattr(args, "config", None) else {}
+
+
+# ---------------------------------------------------------- sweep.json
+
+
+def write_meta(out: Path, cases: list[Case], compare: list, command: str, trials: int, seed_start: int) -> None:
+    """Record the sweep's cases in ``sweep.json``, merged with a previous run's into the same folder."""
+    meta = load_meta(out)
+    known = {c["label"]: c for c in meta.get("cases", [])}
+    for case in cases:
+        old = known.get(case.label)
+        new = {**case.config.to_dict(), "seed": None}
+        if old is not None and old.get("config") != new:
+            diff = sorted(k for k in new if old.get("config", {}).get(k) != new[k])
+            raise SweepError(f"{out} already holds case {case.label!r} with other parameters "
+                             f"({', '.join(diff[:3])} differ); use another --out or delete that folder")
+        known[case.label] = {"label": case.label, "overrides": case.overrides, "config": new}
+    pairs = [list(p) for p in meta.get("compare", [])]
+    pairs += [list(p) for p in compare if list(p) not in pairs]
+    meta.update(command=command, cases=list(known.values()), compare=pairs,
+                trials=max(trials, int(meta.get("trials", 0))), seed_start=seed_start)
+    tmp = out / (SWEEP_FILE + ".tmp")
+    tmp.write_text(json.dumps(meta, indent=1, default=str))
+    os.replace(tmp, out / SWEEP_FILE)
+
+
+def _command_line(args: argparse.Namespace) -> str:
+    """The sweep command for the report, with paths made relative (a report
+    should not carry the folders of the machine it ran on)."""
+    parts = ["phototaxis", "sweep"]
+    parts += ["--grid", _portable(args.grid)] if args.grid else ["--cases", args.cases]
+    parts += ["--trials", str(args.trials)]
+    if args.seeds is not None:
+        parts += ["--seeds", str(args.seeds)]
+    if args.config:
+        parts += ["--config", _portable(args.config)]
+    for name, value in _typed_flags(args).items():
+        parts += ["--" + name.replace("_", "-"), _portable(str(value)) if name == "shape" else str(value)]
+    parts += ["--out", _portable(args.out)]
+    return shlex.join(parts)
+
+
+def _portable(path: str) -> str:
+    """``path`` relative to the working folder if it lies under it, else only its last part."""
+    p = Path(path)
+    if not p.is_absolute():
+        return path
+    try:
+        return p.relative_to(Path.cwd()).as_posix()
+    except ValueError:
+        return p.name
+
+
+# ------------------------------------------------------------------ CLI
+
+
+def _cpu_count() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+@contextlib.contextmanager
+def _term_as_interrupt():
+    """Treat SIGTERM (kill, a batch system's time limit) like Ctrl-C: stop workers, keep finished trials."""
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def sweep_command(args: argparse.Namespace) -> int:
+
+    try:
+        return _sweep(args)
+    except SweepError as exc:
+        raise UserError(str(exc)) from None
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    if args.trials < 1:
+        raise SweepError(f"--trials must be at least 1 (got {args.trials})")
+    if args.workers is not None and args.workers < 1:
+        raise SweepError(f"--workers must be at least 1 (got {args.workers})")
+    if args.seeds is not None and args.seeds < 0:
+        raise SweepError(f"--seeds must be 0 or more (got {args.seeds})")
+    base, typed = _base(args), _typed_flags(args)
+    seed_start = args.seeds if args.seeds is not None else Config().replace(**{**base, **typed}).seed
+    if args.grid:
+        cases, compare = grid_cases(args.grid, base, typed)
+    else:
+        cases, compare = paper_cases(args.cases or "paper", base, typed), []
+    out = Path(args.out)
+    store = ResultStore(out)
+    store.check_writable()
+    write_meta(out, cases, compare, _command_line(args), args.trials, seed_start)
+    trials = make_trials(cases, args.trials, seed_start)
+
+    if args.scheduler:
+        executor = lambda: dask_executor(args.scheduler)  # noqa: E731
+        where = f"the Dask cluster at {args.scheduler}"
+    else:
+        workers = args.workers or _cpu_count()
+        executor = lambda: local_executor(workers)  # noqa: E731
+        where = f"{workers} local worker process(es)"
+    steps = sorted({t.config["steps"] for t in trials})
+    print(f"sweep: {len(cases)} case(s) x {args.trials} trial(s) of {', '.join(map(str, steps))} steps "
+          f"(seeds {seed_start}..{seed_start + args.trials - 1}) on {where}; results in {out}", file=sys.stderr)
+    try:
+        with store.lock(), _term_as_interrupt():
+            outcome = run_trials(trials, store, executor, progress=not args.no_progress)
+    except KeyboardInterrupt:
+        print(f"sweep interrupted: finished trials are saved in {out}; run the same command again to resume",
+              file=sys.stderr)
+        raise
+    # Failures of earlier runs that have since succeeded are forgotten.
+    store.save_failures(outcome.failures)
+    print(f"sweep: {outcome.done} trial(s) run, {outcome.skipped} already done, {len(outcome.failures)} failed "
+          f"({outcome.seconds:.0f} s)", file=sys.stderr)
+    if not args.no_report and outcome.done + outcome.skipped:
+        report = build_report(out)
+        print(f"report: {report}", file=sys.stderr)
+    return 1 if outcome.failures else 0
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+
+    p = subparsers.add_parser(
+        "sweep", help="run many trials in parallel and write the paper's tables and figures",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Run cases x seeds as independent trials, locally or on a Dask cluster. Each trial is\n"
+        "saved under OUT/trials as it finishes; re-running the same command resumes. Then writes\n"
+        "OUT/report.md with summary tables, Kolmogorov-Smirnov tests and figures. Every model\n"
+        "parameter flag below sets the base for all cases (e.g. --steps 100000 --robots 200);\n"
+        "a case's own values (shape, strategies, grid values) win over them.",
+        epilog="grid file example (every combination of the [grid] values is one case):\n"
+        "  [base]\n  steps = 50000\n  [grid]\n  shape = [\"square\", \"star\", \"my/house.txt\"]\n"
+        "  robots = [100, 200]\n  flare = [0.0, 1.75]\n"
+        "optional: [cases.NAME] tables of values, a [grid] key case = [NAME, ...] (also the\n"
+        "paper's case names), and compare = [[CASE, CASE], ...] for extra KS tests.\n\n"
+        "examples:\n"
+        "  phototaxis sweep --cases paper --trials 20 --out runs/paper\n"
+        "  phototaxis sweep --grid grid.toml --trials 10 --scheduler tcp://head:8786 --out runs/grid")
+    what = p.add_mutually_exclusive_group()
+    what.add_argument("--cases", default=None, metavar="paper|NAME,NAME,...",
+                      help=f"'paper' (the seven cases of SPEC §7) or names among: {', '.join(CASES)} "
+                      "[default: paper]")
+    what.add_argument("--grid", metavar="FILE.toml", help="a TOML grid of parameter values (see the docs)")
+    p.add_argument("--trials", type=int, default=10, help="trials (seeds) per case [default: 10]")
+    p.add_argument("--seeds", type=int, default=None, metavar="START",
+                   help="first seed; trial i of every case uses seed START+i [default: the base seed, 0]")
+    p.add_argument("--workers", type=int, default=None, help="local worker processes [default: one per core]")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on the Dask cluster whose scheduler is at ADDRESS, e.g. tcp://10.0.0.1:8786 "
+                   "(needs pip install 'phototaxis-sandbox[cluster]')")
+    p.add_argument("--out", required=True, metavar="DIR", help="folder for results (created; resumed if present)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-report", action="store_true", help="only run the trials; build the report later")
+    add_config_arguments(p, with_case=False)
+    p.set_defaults(func=sweep_command)
+    return p

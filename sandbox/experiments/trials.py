@@ -1,0 +1,76 @@
+"""A trial: one simulation run of one case with one seed.
+
+:func:`run_sweep_trial` is a top-level function of plain data, so it can be
+shipped to local worker processes or to a Dask cluster alike (see
+:mod:`.executors`); :mod:`.storage` keeps what it returns.
+"""
+
+from __future__ import annotations
+
+import re
+import socket
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from sandbox.model.config import Config
+
+METRICS = ("fraction_in_goal", "mean_outside_distance")
+
+
+class SweepError(Exception):
+    """A problem with a sweep a user can fix (shown as one line)."""
+
+
+def run_sweep_trial(config: dict, seed: int, steps: int, shape: list | None) -> dict:
+    """Run one trial and return its samples, configuration and final layout.
+
+    ``config`` is a full configuration as from ``Config.to_dict()``; ``shape``
+    the goal polygon's vertices (None for the circle), resolved by the caller
+    so workers need not see the user's shape files.
+    """
+    from sandbox.model.simulation import Simulation  # only in the worker: the parent need not load numba
+
+    cfg = Config(**config).replace(seed=int(seed), steps=int(steps))
+    start, cpu = time.perf_counter(), time.process_time()
+    sim = Simulation(cfg, shape=None if shape is None else np.asarray(shape, dtype=float))
+    sim.step(cfg.steps)
+    if sim.has_nan():
+        raise RuntimeError(f"the simulation produced NaN (seed {seed})")
+    samples = [s.to_dict() for s in sim.history]
+    if samples[-1]["step"] != sim.steps_done:
+        samples.append(sim.measure().to_dict())
+    return {
+        "config": cfg.to_dict(),
+        "seed": cfg.seed,
+        "steps": cfg.steps,
+        "seconds": round(time.perf_counter() - start, 3),
+        "cpu_seconds": round(time.process_time() - cpu, 3),
+        "host": socket.gethostname(),
+        "samples": samples,
+        "final": {
+            "box_positions": np.round(sim.box_positions, 4).tolist(),
+            "box_angles": np.round(sim.box_angles, 4).tolist(),
+            "box_in_goal": sim.box_in_goal.astype(int).tolist(),
+            "robot_positions": np.round(sim.robot_positions, 4).tolist(),
+            "goal_outline": np.round(sim.goal.outline(), 5).tolist(),
+        },
+    }
+
+
+@dataclass(frozen=True)
+class Trial:
+    case: str
+    seed: int
+    config: dict = field(compare=False, hash=False)  # full config dict, seed and steps included
+    shape: list | None = field(default=None, compare=False, hash=False)
+
+    @property
+    def name(self) -> str:
+        return f"{self.case} seed {self.seed}"
+
+
+def slug(label: str) -> str:
+    """A file-system-safe folder name for a case label."""
+    return re.sub(r"[^A-Za-z0-9._=+-]+", "_", label).strip("_") or "case"
