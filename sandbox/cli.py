@@ -11,10 +11,10 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from sandbox.model.config import CASES, STRATEGY_DEFAULTS, Config, params, read_config_values
+from sandbox.model.config import CASES, STRATEGIES, Config, params, read_config_values
 
 # Flags whose value is optional: given bare, they switch a strategy on at its default amount.
-_STRATEGY_FLAGS = {"flare": "--flare", "switch": "--switch", "no_corners": "--no-corners"}
+_STRATEGY_ON = {s.name: s.on_value for s in STRATEGIES}
 
 
 class Parser(argparse.ArgumentParser):
@@ -48,10 +48,10 @@ def add_config_arguments(parser: argparse.ArgumentParser, *, with_case: bool = T
         unit = f" [{p.unit}]" if p.unit else ""
         rng = f" ({p.low:g}..{p.high:g})" if p.low is not None and p.high is not None else ""
         help_text = f"{p.help}{unit}{rng}; default {p.default!r}".replace("%", "%%")
-        if p.name in _STRATEGY_FLAGS:
-            group.add_argument(_STRATEGY_FLAGS[p.name], dest=p.name, nargs="?", const=STRATEGY_DEFAULTS[p.name],
+        if p.name in _STRATEGY_ON:
+            group.add_argument(flag_name(p.name), dest=p.name, nargs="?", const=_STRATEGY_ON[p.name],
                                default=None, metavar="AMOUNT",
-                               help=f"{help_text}; bare flag = {STRATEGY_DEFAULTS[p.name]}")
+                               help=f"{help_text}; bare flag = {_STRATEGY_ON[p.name]}")
         else:
             kwargs: dict[str, Any] = dict(dest=p.name, default=None, help=help_text)
             if p.choices:

@@ -155,39 +155,39 @@ def app():
 
 def test_upload_validation_leaves_the_simulation_alone(app):
     client = FakeClient()
-    assert not app.panel.use_shape_file("bowtie.txt", b"0 0\n1 1\n1 0\n0 1\n", client)
+    assert not app.panel.shape.use_shape_file("bowtie.txt", b"0 0\n1 1\n1 0\n0 1\n", client)
     assert client.notes[-1][0] == "Shape not used" and "crosses itself" in client.notes[-1][1]
-    assert not app.panel.use_shape_file("two.txt", b"0 0\n1 1\n", client)
+    assert not app.panel.shape.use_shape_file("two.txt", b"0 0\n1 1\n", client)
     assert "at least 3" in client.notes[-1][1]
-    assert not app.panel.use_shape_file("bin.txt", b"\x00\xff", client)
+    assert not app.panel.shape.use_shape_file("bin.txt", b"\x00\xff", client)
     assert app.runner.latest.shape_name == "circle"
     step = app.runner.latest.step
     wait_until(lambda: app.runner.latest.step > step)
-    assert app.panel.use_shape_file("../../tri.geojson",
+    assert app.panel.shape.use_shape_file("../../tri.geojson",
                                     b'{"type": "Polygon", "coordinates": [[[0,0],[2,0],[1,2],[0,0]]]}', client)
     wait_until(lambda: app.runner.latest.shape_name == "tri.geojson")
     assert len(app.runner.latest.goal_vertices) == 3
     svg = b'<svg xmlns="http://www.w3.org/2000/svg"><polygon points="0,0 10,0 10,4 0,4"/></svg>'
-    assert app.panel.use_shape_file("box.svg", svg, client)
-    assert app.panel.use_shape_file("t.wkt", b"POLYGON((0 0, 4 0, 4 3, 0 0))", client)
+    assert app.panel.shape.use_shape_file("box.svg", svg, client)
+    assert app.panel.shape.use_shape_file("t.wkt", b"POLYGON((0 0, 4 0, 4 3, 0 0))", client)
     wait_until(lambda: app.runner.latest.shape_name == "t.wkt")
 
 
 def test_metrics_csv_and_frames(app):
     wait_until(lambda: app.frames_drawn > 5 and len(app.runner.series()) >= 2)
-    lines = app.panel.metrics_csv().splitlines()
+    lines = app.panel.metrics.csv().splitlines()
     assert lines[0] == "step,fraction_in_goal,mean_outside_distance,boxes_escaped,charged_robots,cycle,phase,time"
     assert len(lines) >= 3
     assert not app.runner.errors
 
 
 def test_recording_from_the_panel(app):
-    app.panel.start_recording()
+    app.panel.record.start()
     frames = app.frames_drawn
     wait_until(lambda: app.frames_drawn > frames + 5)
-    html = app.panel.stop_recording()
+    html = app.panel.record.stop()
     assert "__VISER_EMBED_DATA__" in html
-    assert app.panel.recorder is None
+    assert app.panel.record.recorder is None
 
 
 def test_serve_command_line_checks_its_flags(capsys):

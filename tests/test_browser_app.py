@@ -175,21 +175,21 @@ def test_each_strategy_reaches_the_simulation(app, page, label, name):
 def test_drawing_by_clicks_creates_a_valid_goal(app, page):
     open_folder(page, "Draw")
     click_button(page, "Start drawing")
-    wait_until(lambda: app.panel.drawing, what="draw mode")
+    wait_until(lambda: app.panel.shape.drawing, what="draw mode")
     box = scene_canvas(page).bounding_box()
     cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
     for k, (dx, dy) in enumerate(((-120, -80), (120, -80), (150, 90), (0, 160), (-150, 90))):
         page.mouse.click(cx + dx, cy + dy)
-        wait_until(lambda: len(app.panel.draw_points) == k + 1, what=f"drawn point {k + 1}")
+        wait_until(lambda: len(app.panel.shape.draw_points) == k + 1, what=f"drawn point {k + 1}")
         page.wait_for_timeout(400)  # not a double click
-    pts = np.array(app.panel.draw_points)
+    pts = np.array(app.panel.shape.draw_points)
     assert np.all((pts > 0) & (pts < app.runner.latest.world_config.arena_size))  # on the floor
     click_button(page, "Undo last point")
-    wait_until(lambda: len(app.panel.draw_points) == 4, what="undo")
+    wait_until(lambda: len(app.panel.shape.draw_points) == 4, what="undo")
     click_button(page, "Close and use")
     wait_until(lambda: app.runner.latest.shape_name == "drawn", what="the drawn goal")
     assert len(app.runner.latest.goal_vertices) == 4
-    assert not app.panel.drawing
+    assert not app.panel.shape.drawing
 
 
 def test_upload_valid_and_invalid_files(app, page):
@@ -218,7 +218,7 @@ def test_download_shape_and_metrics(app, page, tmp_path):
     with page.expect_download() as info:
         click_button(page, "Download CSV")
     text = Path(info.value.path()).read_text()
-    assert text.splitlines()[0].startswith("step,time,fraction_in_goal")
+    assert text.splitlines()[0].startswith("step,fraction_in_goal")
     assert len(text.splitlines()) >= 2
 
 
@@ -287,7 +287,7 @@ def test_second_browser_and_disconnect(app, browser, page):
 def test_recording_downloads_a_standalone_page(app, browser, page, tmp_path):
     open_folder(page, "Record")
     click_button(page, "Start recording")
-    wait_until(lambda: app.panel.recorder is not None, what="recording")
+    wait_until(lambda: app.panel.record.recorder is not None, what="recording")
     frames = app.frames_drawn
     wait_until(lambda: app.frames_drawn > frames + 10, what="some frames")
     with page.expect_download(timeout=60_000) as info:

@@ -206,6 +206,13 @@ class ProcessRunner:
         self._callbacks[ident] = (on_done, on_error)
         self._commands.put(("command", ident, command))
 
+    def update_config(self, changes: dict[str, Any], *, on_done: Callable[[Any], None] | None = None,
+                      on_error: Callable[[BaseException], None] | None = None) -> None:
+        """As :meth:`Runner.update_config`, run by the child's runner (which keeps the waiting changes)."""
+        ident = next(self._ids)
+        self._callbacks[ident] = (on_done, on_error)
+        self._commands.put(("update_config", ident, dict(changes)))
+
     def call(self, command: Command, timeout: float = 10.0) -> Any:
         done = threading.Event()
         box: dict[str, Any] = {}
@@ -318,6 +325,10 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
             _, ident, command = message
             on_done, on_error = reply(ident)
             runner.post(command, on_done=on_done, on_error=on_error)
+        elif kind == "update_config":
+            _, ident, changes = message
+            on_done, on_error = reply(ident)
+            runner.update_config(changes, on_done=on_done, on_error=on_error)
         elif kind == "control":
             _apply_control(runner, message[1], *message[2:])
     runner.stop()

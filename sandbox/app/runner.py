@@ -32,11 +32,6 @@ FASTEST = 100
 FASTEST_CHUNK = 10
 
 
-def update_config_and_report(sim: Simulation, **changes: Any) -> tuple[list[str], Config]:
-    """A command: change parameters; returns those waiting for a reset and the
-    settings now in force (a module-level function, so it can be sent to
-    another process)."""
-    return sim.update_config(**changes), sim.config
 
 
 @dataclasses.dataclass(frozen=True)
@@ -105,6 +100,9 @@ class Runner:
         #: Whether snapshots should carry the luminosity field (costly: only for the heat map).
         self.want_field = False
         self.shape_name = config.shape
+        #: Changes that need a new world, kept until the next reset (the simulation holds only the
+        #: configuration its world was built with).
+        self.pending: dict[str, Any] = {}
         self._commands: queue.SimpleQueue = queue.SimpleQueue()
         self._listeners: list[Callable[[Snapshot], None]] = []
         self._stop = threading.Event()
@@ -193,11 +191,32 @@ class Runner:
         """Advance ``n`` steps now (used while paused)."""
         self.post(lambda sim: sim.step(n))
 
+    def update_config(self, changes: dict[str, Any], *, on_done: Callable[[Any], None] | None = None,
+                      on_error: Callable[[BaseException], None] | None = None) -> None:
+        """Change parameters: the live ones at once, the others at the next
+        :meth:`reset`. ``on_done`` receives (names waiting for a reset, the
+        settings with them)."""
+
+        def do(sim: Simulation) -> tuple[list[str], Config]:
+            deferred = sim.update_config(**changes)
+            # Checked together with what is already waiting (a profile change resets the values it bundles).
+            settings = sim.config.replace(**{**self.pending, **{k: changes[k] for k in deferred}})
+            self.pending = {k: getattr(settings, k) for k in {*self.pending, *deferred}}
+            return sorted(self.pending), settings
+
+        self.post(do, on_done=on_done, on_error=on_error)
+
+    @property
+    def settings(self) -> Config:
+        """The running configuration with the changes waiting for a reset."""
+        return self.sim.config.replace(**self.pending)
+
     def reset(self, seed: int | None = None) -> None:
-        """Rebuild the world; ``seed`` None keeps the current seed."""
+        """Rebuild the world with the waiting changes; ``seed`` None keeps the current seed."""
 
         def do(sim: Simulation) -> None:
-            sim.reset(seed)
+            sim.reset(seed, config=self.settings)
+            self.pending = {}
             self._world_key += 1
             self._goal_key += 1
             with self._series_lock:
@@ -353,8 +372,8 @@ class Runner:
             cycle=sim.cycle,
             seed=sim.seed,
             shape_name=self.shape_name,
-            world_config=sim.world.config,
-            config=sim.config,
+            world_config=sim.config,
+            config=self.settings,
             robot_positions=sim.robot_positions.copy(),
             robot_headings=sim.robot_headings.copy(),
             robot_charges=sim.robot_charges.copy(),

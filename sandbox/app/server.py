@@ -23,6 +23,7 @@ import viser
 from sandbox.cli import UserError, add_config_arguments, config_from_args
 from sandbox.model.config import Config
 from sandbox.shapes import shape_vertices
+from sandbox.app.panel import Panel
 from sandbox.app.process import ProcessRunner
 from sandbox.app.runner import Runner, Snapshot
 from sandbox.app.scene import SceneView, configure_scene
@@ -46,9 +47,7 @@ class App:
         try:
             self._configure_page()
             self.view = SceneView(self.server.scene, self.runner.latest)
-            from sandbox.app.panel import Panel  # imports the Learn illustrations; after the scene exists
-
-            self.panel = Panel(self)
+            self.panel = Panel(self.server, self.runner, self.view)
         except BaseException:
             self.server.stop()  # do not leave a half-built server listening
             raise

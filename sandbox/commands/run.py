@@ -13,7 +13,7 @@ from typing import IO, Any
 from tqdm import tqdm
 
 from sandbox.cli import UserError, add_config_arguments, config_from_args
-from sandbox.model.config import CASES, Config
+from sandbox.model.config import CASES, STRATEGY_NAMES, Config
 from sandbox.model.metrics import Sample, SampleWriter
 from sandbox.model.simulation import Simulation
 
@@ -33,9 +33,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 def case_name(config: Config, given: str | None) -> str:
     """The case the configuration is, if it matches one exactly, else 'custom'."""
-    strategies = dict(flare=config.flare, switch=config.switch, no_corners=config.no_corners)
+    strategies = {name: getattr(config, name) for name in STRATEGY_NAMES}
     for name, overrides in CASES.items():
-        expected = {"flare": 0.0, "switch": 0.0, "no_corners": 0.0}
+        expected = dict.fromkeys(STRATEGY_NAMES, 0.0)
         expected.update((k, v) for k, v in overrides.items() if k != "shape")
         if overrides["shape"] == config.shape and strategies == expected:
             return name

@@ -59,6 +59,40 @@ def _param(
 
 
 @dataclass(frozen=True)
+class Strategy:
+    """One of the controller's strategies, declared once: the config field,
+    the command-line flag (bare = ``on_value``), the panel's checkbox and
+    slider, the run summary and the controller all come from here."""
+
+    name: str
+    label: str
+    on_value: float  # the amount when switched on without one
+    high: float  # the largest amount allowed (0 is off)
+    step: float  # the panel slider's step, and its smallest amount
+    help: str
+
+
+STRATEGIES = (
+    Strategy("flare", "Flare", 1.75, 10.0, 0.05,
+             "flare amount f (0 = off; 1.75 when switched on): corners pushed out by max(1, 90 f / angle), "
+             "see flare_mode"),
+    Strategy("switch", "Switch to circle", 0.25, 1.0, 0.05,
+             "switch to a circle (0 = off; 0.25 when on): see switch_mode for what the amount means"),
+    Strategy("no_corners", "No corners", 0.5, 0.95, 0.05,
+             "fraction of band lights nearest convex corners that stay off (0 = off; 0.5 when on; at most "
+             "0.95: at 1 the whole band would be dark)"),
+)
+STRATEGY_NAMES = tuple(s.name for s in STRATEGIES)
+#: The value a strategy takes when it is switched on without an amount.
+STRATEGY_DEFAULTS = {s.name: s.on_value for s in STRATEGIES}
+
+
+def _strategy(name: str) -> Any:
+    strategy = next(s for s in STRATEGIES if s.name == name)
+    return _param(0.0, strategy.help, low=0.0, high=strategy.high, group="strategies", rebuild=False)
+
+
+@dataclass(frozen=True)
 class Config:
     """The full, typed configuration of one simulation run.
 
@@ -208,26 +242,20 @@ class Config:
         "polygon_max_area (paper text), or 'grow', the file's outline grown by 1.05 until it covers "
         "polygon_max_area or reaches the arena's edge, keeping that step (the authors' program)",
         group="controller", choices=("grow", "fit"), paper="fit", rebuild=False)
-    flare: float = _param(
-        0.0, "flare amount f (0 = off; 1.75 when switched on): corners pushed out by max(1, 90 f / angle)",
-        low=0.0, high=10.0, group="strategies", rebuild=False)
+    flare: float = _strategy("flare")
     flare_mode: str = _param(
         "scaled-outline", "'on-goal': convex corners of the goal pushed out, sizes from the goal (paper text); "
         "'scaled-outline': every corner pushed out by 90 f / |angle between its edges|, and that outline, "
         "matched to the goal's area, is what is scaled and sized (the authors' program)",
         group="strategies", choices=("scaled-outline", "on-goal"), paper="on-goal", rebuild=False)
-    switch: float = _param(
-        0.0, "switch to a circle (0 = off; 0.25 when on): see switch_mode for what the amount means",
-        low=0.0, high=1.0, group="strategies", rebuild=False)
+    switch: float = _strategy("switch")
     switch_mode: str = _param(
         "inradius", "'fraction': a circle from 'switch' of the way between smallest and largest, both ways "
         "(paper text); 'inradius': only while dilating, once the polygon's inradius passes switch x half the "
         "arena (8 m), light a circle of that radius, grow it to the circle's largest, contract it and restore "
         "the polygon below the same radius (the authors' program)", group="strategies",
         choices=("inradius", "fraction"), paper="fraction", rebuild=False)
-    no_corners: float = _param(
-        0.0, "fraction of band lights nearest convex corners that stay off (0 = off; 0.5 when on)",
-        low=0.0, high=1.0, group="strategies", rebuild=False)
+    no_corners: float = _strategy("no_corners")
     no_corners_count: str = _param(
         "at-least", "how many lights no_corners c turns off of n lit: 'round', round(c n), equally near lights "
         "taken column by column (paper text), or 'at-least', the fewest k with k / n >= c, row by row (the "
@@ -489,10 +517,6 @@ CASES: dict[str, dict[str, Any]] = {
     "star-switch": dict(shape="star", switch=0.25),
     "star-switch-nocorners": dict(shape="star", switch=0.25, no_corners=0.5),
 }
-
-#: The value a strategy takes when it is switched on without an amount.
-STRATEGY_DEFAULTS = {"flare": 1.75, "switch": 0.25, "no_corners": 0.5}
-
 
 def case_config(name: str, base: Config | None = None) -> Config:
     if name not in CASES:

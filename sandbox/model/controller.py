@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sandbox.model import geometry, outlines
-from sandbox.model.config import Config
+from sandbox.model.config import STRATEGY_NAMES, Config
 from sandbox.model.lights import light_centres
 
 CONTRACTING, HOLDING, DILATING = "contracting", "holding", "dilating"
@@ -107,7 +107,7 @@ class Controller:
         self.config = config
         self.goal = goal
         self._centres = light_centres(config).reshape(-1, 2)
-        self.strategies = dict(flare=config.flare, switch=config.switch, no_corners=config.no_corners)
+        self.strategies = {name: getattr(config, name) for name in STRATEGY_NAMES}
         self._pending: dict[str, float] = {}
         self._set_limits()
         self.scale = self.max_scale

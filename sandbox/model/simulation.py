@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from sandbox.model import kernels, metrics, robots
-from sandbox.model.config import Config, param
+from sandbox.model.config import STRATEGY_NAMES, Config, param
 from sandbox.model.controller import Controller, Goal, make_goal
 from sandbox.model.lights import LightField
 from sandbox.shapes import shape_vertices
@@ -36,6 +36,12 @@ class Simulation:
     ``shape`` overrides ``config.shape``: polygon vertices (any position, size
     or orientation) or None for the circle. Without it, ``config.shape`` is
     resolved (a builtin name or a polygon file).
+
+    :attr:`config` is the configuration the running world was built with,
+    with the live changes made since (gains, energy, controller values,
+    strategies, shape). A change that needs a new world (populations, sizes,
+    the seed...) is not kept here: whoever asks for it keeps it and calls
+    :meth:`reset` with ``config=`` (as the app's runner does).
     """
 
     def __init__(self, config: Config | None = None, *, seed: int | None = None,
@@ -49,8 +55,10 @@ class Simulation:
         self.reset(self.config.seed if seed is None else seed)
 
     # ------------------------------------------------------------------ life
-    def reset(self, seed: int | None = None) -> None:
-        """Rebuild the world from the configuration. Same seed, same run."""
+    def reset(self, seed: int | None = None, config: Config | None = None) -> None:
+        """Rebuild the world, from ``config`` if given (else the current one). Same seed, same run."""
+        if config is not None:
+            self.config = config
         if seed is not None:
             self.config = self.config.replace(seed=int(seed))
         cfg = self.config
@@ -91,7 +99,7 @@ class Simulation:
         self._sync()
 
     def _step_once(self) -> None:
-        cfg = self.world.config
+        cfg = self.config
         state = self._sync()
         t0 = time.perf_counter()
         if self.controller.advance():
@@ -132,28 +140,25 @@ class Simulation:
         self.controller.set_strategies(**values)
 
     def update_config(self, **changes) -> list[str]:
-        """Change parameters of the running simulation.
-
-        Strategies apply at the next controller update; gains, energy and
-        other controller values at once. Parameters that shape the world
-        (populations, sizes, arena, seed...) are stored and take effect at the
-        next :meth:`reset`; their names are returned so a caller can say so.
-        """
-        config = self.config.replace(**changes)  # validates everything first
-        if "shape" in changes:
-            self.set_shape(shape_vertices(changes.pop("shape")), name=config.shape)
-        strategies = {k: v for k, v in changes.items() if k in ("flare", "switch", "no_corners")}
-        deferred = [k for k in changes if param(k).rebuild and k not in strategies]
-        live = {k: v for k, v in changes.items() if k not in deferred and k not in strategies}
-        self.config = config
+        """Change parameters of the running simulation: every value is checked;
+        the live ones apply now (strategies at the next controller update; gains,
+        energy and other controller values at once). Returns the names of the
+        others, which need a new world: they are *not* applied or kept here; pass
+        them to :meth:`reset` in ``config=`` when the time comes."""
+        self.config.replace(**changes)  # validates everything first
+        deferred = [k for k in changes if param(k).rebuild]
+        live = {k: v for k, v in changes.items() if k not in deferred}
+        if "shape" in live:
+            name = str(live.pop("shape"))
+            self.set_shape(shape_vertices(name), name=name)
+        strategies = {k: live.pop(k) for k in STRATEGY_NAMES if k in live}
         if live:
-            # The world keeps the values it was built with; the controller
-            # takes the new ones (its cycle position is kept).
-            self.world.config = self.world.config.replace(**live)
-            self._robot_params = kernels.robot_params(self.world.config)
-            self.controller.reconfigure(self.world.config.replace(**{k: getattr(config, k) for k in strategies}))
+            # The controller takes the new values and keeps its place in the cycle.
+            self.config = self.config.replace(**live)
+            self._robot_params = kernels.robot_params(self.config)
+            self.controller.reconfigure(self.config)
         if strategies:
-            self.controller.set_strategies(**strategies)
+            self.set_strategies(**strategies)
         return deferred
 
     def set_shape(self, vertices: np.ndarray | None, name: str | None = None) -> None:
@@ -163,9 +168,8 @@ class Simulation:
         if name is not None:
             self.config = self.config.replace(shape=name)
         self.goal = make_goal(self.config, self.shape_vertices)
-        self.controller = Controller(self.world.config, self.goal)
-        self.controller.set_strategies(flare=self.config.flare, switch=self.config.switch,
-                                       no_corners=self.config.no_corners)
+        self.controller = Controller(self.config, self.goal)
+        self.controller.set_strategies(**{name: getattr(self.config, name) for name in STRATEGY_NAMES})
         self.lights.set_intensities(self.controller.intensities)
 
     # ------------------------------------------------------------- state
@@ -230,7 +234,7 @@ class Simulation:
 
     def sensor_points(self, index: int) -> np.ndarray:
         """Where robot ``index``'s four photocells are now, shape (4, 2)."""
-        cfg = self.world.config
+        cfg = self.config
         return robots.sensor_points(self.robot_positions[index : index + 1], self.robot_headings[index : index + 1],
                                     cfg.sensor_offset, cfg.photocells)[0]
 
@@ -238,7 +242,7 @@ class Simulation:
     def measure(self) -> metrics.Sample:
         boxes = self.box_positions
         in_goal = self.goal.contains(boxes)
-        cfg = self.world.config  # what the world was built with
+        cfg = self.config
         return metrics.Sample(
             step=self.steps_done,
             fraction_in_goal=metrics.fraction_in_goal(in_goal),

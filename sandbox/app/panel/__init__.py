@@ -1,0 +1,80 @@
+"""The control panel: one small class per folder, each with ``build(snap)``
+and ``update(snap)``, in the order the page shows them.
+
+Every callback runs on a viser thread. None of them touches the simulation:
+they go through the runner (commands, controls). The parameter folders are
+generated from the model's declaration.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from sandbox.app import learn
+from sandbox.app.panel.common import PANEL_HZ, floor_point
+from sandbox.app.panel.inspector import InspectorFolder
+from sandbox.app.panel.metrics import MetricsFolder
+from sandbox.app.panel.parameters import ParametersFolder
+from sandbox.app.panel.recording import RecordFolder
+from sandbox.app.panel.run import RunFolder
+from sandbox.app.panel.shape import ShapeFolder
+from sandbox.app.panel.strategies import StrategiesFolder
+from sandbox.app.runner import Snapshot
+
+
+class Panel:
+    """Builds the GUI on ``server`` for ``runner`` and keeps its read-outs current.
+    ``view`` is the scene (it shows drawn points and the heat map)."""
+
+    def __init__(self, server: Any, runner: Any, view: Any):
+        gui = server.gui
+        self.runner = runner
+        self._last_refresh = 0.0
+        self.parameters = ParametersFolder(gui, runner)
+        self.run = RunFolder(gui, runner, show_field=lambda on: view.set_show_field(on, runner.latest),
+                             after_reset=self._after_reset)
+        self.shape = ShapeFolder(gui, runner, show_draw_points=view.set_draw_points)
+        self.strategies = StrategiesFolder(gui, runner)
+        self.metrics = MetricsFolder(gui, runner)
+        self.inspector = InspectorFolder(gui, runner, server)
+        self.record = RecordFolder(gui, server)
+        self.folders = (self.run, self.shape, self.strategies, self.metrics, self.inspector, self.record,
+                        self.parameters)
+        snap = runner.latest
+        for folder in self.folders:
+            folder.build(snap)
+        self._build_learn(gui)
+        server.scene.on_click()(self._on_scene_click)
+
+    def update(self, snap: Snapshot, force: bool = False) -> None:
+        """Refresh the read-outs (throttled to PANEL_HZ)."""
+        now = time.perf_counter()
+        if not force and now - self._last_refresh < 1.0 / PANEL_HZ:
+            return
+        self._last_refresh = now
+        for folder in self.folders:
+            folder.update(snap)
+
+    def on_frame_drawn(self) -> None:
+        self.record.on_frame_drawn()
+
+    def _after_reset(self, client: Any) -> None:
+        self.inspector.stop()
+        self.parameters.reset_done(client)
+
+    def _on_scene_click(self, event: Any) -> None:
+        point = floor_point(event.ray_origin, event.ray_direction)
+        if point is not None and not self.shape.click(point):
+            self.inspector.click(point)
+
+    @staticmethod
+    def _build_learn(gui: Any) -> None:
+        with gui.add_folder("Learn", expand_by_default=False):
+            gui.add_markdown(learn.INTRO)
+            gui.add_image(learn.phototaxis_picture(), format="png")
+            gui.add_markdown(learn.CYCLE)
+            gui.add_image(learn.cycle_picture(), format="png")
+            gui.add_markdown(learn.STRATEGIES)
+            gui.add_image(learn.strategies_picture(), format="png")
+            gui.add_markdown(learn.INSPECT)

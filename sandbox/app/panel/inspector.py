@@ -1,0 +1,108 @@
+"""The Inspector folder: follow one robot (clicked, or at random), read its
+photocells, command and charge, and let the camera follow it."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import viser
+
+from sandbox.app.runner import Snapshot
+from sandbox.app.scene import top_down_camera
+from sandbox.model.robots import PHOTOCELLS
+
+
+class InspectorFolder:
+    def __init__(self, gui: Any, runner: Any, server: Any):
+        self.gui, self.runner, self.server = gui, runner, server
+
+    def build(self, snap: Snapshot) -> None:
+        gui, runner = self.gui, self.runner
+        with gui.add_folder("Inspector"):
+            self.help = gui.add_markdown("Click a robot on the floor to follow it.")
+            self.text = gui.add_markdown("")
+            self.charge_bar = gui.add_progress_bar(0.0, color="green", visible=False)
+            self.camera_follow = gui.add_checkbox("Camera follows", False,
+                                                  hint="Zoom in on the followed robot and keep it centred")
+            self.follow_random = gui.add_button("Follow a random robot", icon=viser.Icon.TARGET)
+            self.stop_follow = gui.add_button("Stop following", icon=viser.Icon.X, disabled=True)
+
+        @self.follow_random.on_click
+        def _(event: viser.GuiEvent) -> None:
+            n = len(runner.latest.robot_positions)
+            if n:
+                self.follow(int(np.random.default_rng().integers(0, n)))
+
+        @self.camera_follow.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if not self.camera_follow.value:
+                self._frame_arena()
+
+        @self.stop_follow.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self.stop()
+
+    def update(self, snap: Snapshot) -> None:
+        if snap.robot is None:
+            return
+        self.text.content = self._text(snap)
+        cap = snap.world_config.capacity
+        self.charge_bar.value = float(100.0 * snap.robot.charge / cap) if cap > 0 else 0.0
+        self.charge_bar.visible = True
+        if self.camera_follow.value:
+            self._follow_with_cameras(snap)
+
+    def click(self, point: tuple[float, float]) -> None:
+        """A click on the floor: follow the nearest robot within a couple of body lengths."""
+        snap = self.runner.latest
+        if len(snap.robot_positions) == 0:
+            return
+        d = np.hypot(*(snap.robot_positions - np.asarray(point)).T)
+        i = int(np.argmin(d))
+        if d[i] <= max(1.5, 6 * snap.world_config.robot_radius):
+            self.follow(i)
+
+    def follow(self, index: int) -> None:
+        self.runner.select(index)
+        self.help.content = f"Following robot **{index}** (click another, or stop)."
+        self.stop_follow.disabled = False
+
+    def stop(self) -> None:
+        self.runner.select(None)
+        self.help.content = "Click a robot on the floor to follow it."
+        self.text.content = ""
+        self.charge_bar.visible = False
+        self.stop_follow.disabled = True
+        if self.camera_follow.value:
+            self.camera_follow.value = False
+            self._frame_arena()
+
+    def _frame_arena(self) -> None:
+        position, look_at, _ = top_down_camera(self.runner.latest.world_config)
+        for client in self.server.get_clients().values():
+            with client.atomic():
+                client.camera.position = tuple(position)
+                client.camera.look_at = tuple(look_at)
+
+    def _follow_with_cameras(self, snap: Snapshot) -> None:
+        x, y = (float(v) for v in snap.robot.position)
+        height = 12.0
+        for client in self.server.get_clients().values():
+            with client.atomic():
+                client.camera.position = (x, y - 1e-3 * height, height)
+                client.camera.look_at = (x, y, 0.0)
+
+    @staticmethod
+    def _text(snap: Snapshot) -> str:
+        r = snap.robot
+        names = PHOTOCELLS[snap.world_config.photocells].names
+        v, w = r.command
+        av, aw = r.applied
+        cap = snap.world_config.capacity
+        state = "moving" if r.charge > 0 else "**out of charge: stopped**"
+        cells = "".join(f"| {name} | {reading:.3f} |\n" for name, reading in zip(names, r.sensors))
+        return ("| photocell | reading |\n|---|---|\n" + cells + "\n"
+                f"**Command** v = {v:+.3f} m/s, w = {w:+.3f} rad/s  \n"
+                f"**Doing** v = {av:+.3f}, w = {aw:+.3f} ({state})  \n"
+                f"**Charge** {r.charge:.2f} / {cap:g} &nbsp; at ({r.position[0]:.1f}, {r.position[1]:.1f}) m")

@@ -1,0 +1,70 @@
+"""The Metrics folder: both success metrics and the charged robots, live and
+as charts over the run, and the series as a CSV download."""
+
+from __future__ import annotations
+
+import io
+from typing import Any
+
+import numpy as np
+import viser
+import viser.uplot
+
+from sandbox.app.runner import Snapshot
+from sandbox.model.metrics import SampleWriter
+
+
+class MetricsFolder:
+    def __init__(self, gui: Any, runner: Any):
+        self.gui, self.runner = gui, runner
+
+    def build(self, snap: Snapshot) -> None:
+        gui = self.gui
+        with gui.add_folder("Metrics"):
+            self.text = gui.add_markdown(self._text(snap))
+            x = np.array([0.0, 0.0])
+            # x is the world step (not a date: "time": False below).
+            common = dict(height=130, padding=(8, 12, 0, 0), legend={"show": False})
+            self.chart_goal = gui.add_uplot(
+                (x, x), ({"label": "step"}, {"label": "in goal", "stroke": "#ff5ca8", "width": 2}),
+                title="Boxes in goal (fraction) vs step", scales={"x": {"time": False}, "y": {"range": [0, 1]}},
+                **common)
+            self.chart_dist = gui.add_uplot(
+                (x, x), ({"label": "step"}, {"label": "stray distance", "stroke": "#40c8ff", "width": 2}),
+                title="Mean distance of stray boxes (m)", scales={"x": {"time": False}}, **common)
+            self.chart_charged = gui.add_uplot(
+                (x, x), ({"label": "step"}, {"label": "charged", "stroke": "#2ecc40", "width": 2}),
+                title="Charged robots", scales={"x": {"time": False}}, **common)
+            self.download_csv = gui.add_button("Download CSV", icon=viser.Icon.FILE_SPREADSHEET,
+                                               hint="The metrics time series of this run")
+
+        @self.download_csv.on_click
+        def _(event: viser.GuiEvent) -> None:
+            event.client.send_file_download("phototaxis-metrics.csv", self.csv().encode("utf-8"),
+                                            save_immediately=True)
+
+    def update(self, snap: Snapshot) -> None:
+        self.text.content = self._text(snap)
+        series = self.runner.series()[-3000:]
+        if len(series) >= 2:
+            steps = np.array([s.step for s in series], float)
+            self.chart_goal.data = (steps, np.array([s.fraction_in_goal for s in series]))
+            self.chart_dist.data = (steps, np.array([s.mean_outside_distance for s in series]))
+            self.chart_charged.data = (steps, np.array([s.charged_robots for s in series], float))
+
+    def csv(self) -> str:
+        """The run's samples as CSV, with the time in seconds as the last column."""
+        out = io.StringIO()
+        dt = self.runner.latest.world_config.dt
+        writer = SampleWriter(out, trailing=("time",))
+        for s in self.runner.series():
+            writer.write(s, time=round(s.step * dt, 4))
+        return out.getvalue()
+
+    @staticmethod
+    def _text(snap: Snapshot) -> str:
+        s = snap.sample
+        n = snap.world_config.robots
+        return (f"**In goal** {100 * s.fraction_in_goal:.1f} % &nbsp; "
+                f"**stray distance** {s.mean_outside_distance:.2f} m  \n"
+                f"**Charged robots** {s.charged_robots} / {n} &nbsp; **escaped boxes** {s.boxes_escaped}")

@@ -1,0 +1,119 @@
+"""The parameter folders, generated from the model's declaration
+(:func:`sandbox.model.config.params`): the Model folder (the profile and
+every value it sets) first, then one folder per group. Values that need a
+new world wait for the next reset and are listed until then."""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import numpy as np
+import viser
+
+from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.runner import Snapshot
+from sandbox.model.config import STRATEGY_NAMES, Config, params
+
+#: Parameters that get their own controls elsewhere (or make no sense live).
+NOT_IN_PARAMETER_FOLDERS = {"shape", "steps", *STRATEGY_NAMES}
+GROUP_TITLES = {"bodies": "Population and bodies", "robot": "Robot: gains and energy", "lights": "Light grid",
+                "controller": "Controller cycle", "arena": "Arena", "run": "Run", "physics": "Physics engine",
+                "model": "Model: the authors' program or the paper's text"}
+GROUP_ORDER = ("model", "bodies", "robot", "lights", "controller", "arena", "run", "physics")
+MODEL_HELP = ("The paper's text and the authors' released program differ in about twenty places; the "
+              "program produced the paper's tables. **profile** sets all of the values below at once "
+              "(on reset); each can then be changed on its own.")
+
+
+class ParametersFolder:
+    def __init__(self, gui: Any, runner: Any):
+        self.gui, self.runner = gui, runner
+        self.controls: dict[str, Any] = {}
+        self.waiting: list[str] = []  # names waiting for a reset, as the runner last said
+
+    def build(self, snap: Snapshot) -> None:
+        gui = self.gui
+        with gui.add_folder("Population and physics", expand_by_default=False):
+            self.pending = gui.add_markdown("")
+            groups: dict[str, list] = {}
+            for p in params():
+                if p.name not in NOT_IN_PARAMETER_FOLDERS:
+                    # Every value a profile sets sits with the profile, so a change of profile shows.
+                    groups.setdefault("model" if p.profiled else p.group, []).append(p)
+            for group in GROUP_ORDER:
+                if group not in groups:
+                    continue
+                with gui.add_folder(GROUP_TITLES[group], expand_by_default=group == "bodies"):
+                    if group == "model":
+                        gui.add_markdown(MODEL_HELP)
+                    for p in groups[group]:
+                        self.controls[p.name] = self._control(p, getattr(snap.config, p.name))
+
+    def update(self, snap: Snapshot) -> None:
+        pass  # the controls are the state; nothing to refresh
+
+    def reset_done(self, client: Any) -> None:
+        if self.waiting:
+            notify(client, "Reset", "Applied: " + ", ".join(self.waiting), "green")
+        self.waiting = []
+        self.pending.content = ""
+
+    def _control(self, p: Any, value: Any) -> Any:
+        gui = self.gui
+        unit = f" ({p.unit})" if p.unit and p.unit != "steps" else ""
+        label = p.name.replace("_", " ") + unit
+        hint = p.help + (" (applies on reset)" if p.rebuild else " (applies at once)")
+        if p.choices:
+            handle = gui.add_dropdown(label, tuple(p.choices), initial_value=value, hint=hint)
+        elif p.type is int:
+            handle = gui.add_number(label, int(value), min=int(p.low) if p.low is not None else None,
+                                    max=int(p.high) if p.high is not None else None, step=1, hint=hint)
+        else:
+            handle = gui.add_number(label, float(value), min=p.low, max=p.high, step=_step_for(float(value)),
+                                    hint=hint)
+
+        @handle.on_update
+        def _(event: viser.GuiEvent) -> None:
+            self._changed(p.name, handle, event.client)
+
+        return handle
+
+    def _changed(self, name: str, handle: Any, client: Any) -> None:
+        value = handle.value
+
+        def done(result: tuple[list[str], Config]) -> None:
+            self.waiting, settings = result
+            if name == "profile":
+                self._show_profile_values(settings)
+            if self.waiting:
+                self.pending.content = ("**Applies on reset:** " + ", ".join(self.waiting) +
+                                        " (press *Reset* in Run)")
+            if name in self.waiting:
+                notify(client, "Applies on reset", f"{name} = {value} takes effect when you press Reset.", "yellow")
+
+        def failed(exc: BaseException) -> None:
+            notify_error(client, f"{name} not changed", str(exc))
+            # Put the control back to the value in force.
+            current = getattr(self.runner.latest.config, name)
+            threading.Thread(target=lambda: setattr(handle, "value", current), daemon=True).start()
+
+        self.runner.update_config({name: value}, on_done=done, on_error=failed)
+
+    def _show_profile_values(self, settings: Config) -> None:
+        """After a change of profile, show the values it set (they apply on reset)."""
+
+        def show() -> None:
+            for p in params():
+                handle = self.controls.get(p.name)
+                if p.profiled and handle is not None and handle.value != getattr(settings, p.name):
+                    handle.value = getattr(settings, p.name)
+
+        threading.Thread(target=show, daemon=True).start()
+
+
+def _step_for(value: float) -> float:
+    if value == 0:
+        return 0.01
+    magnitude = 10 ** np.floor(np.log10(abs(value)))
+    return float(magnitude / 100)

@@ -1,0 +1,80 @@
+"""The Record folder: capture the scene and download it as one HTML file
+that replays without a server."""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import Any
+
+import viser
+
+from sandbox.app.runner import Snapshot
+
+MAX_RECORD_SECONDS = 120.0
+
+
+class RecordFolder:
+    def __init__(self, gui: Any, server: Any):
+        self.gui, self.server = gui, server
+        self.recorder: Any = None
+        self._finished_html: str | None = None
+        self._lock = threading.Lock()
+        self._started = self._last_time = 0.0
+
+    def build(self, snap: Snapshot) -> None:
+        gui = self.gui
+        with gui.add_folder("Record", expand_by_default=False):
+            gui.add_markdown("Capture the run and download it as one HTML file that replays in any browser, "
+                             f"no server needed (at most {MAX_RECORD_SECONDS:.0f} s).")
+            self.button = gui.add_button("Start recording", icon=viser.Icon.PLAYER_RECORD)
+            self.status = gui.add_markdown("")
+
+        @self.button.on_click
+        def _(event: viser.GuiEvent) -> None:
+            if self.recorder is None and self._finished_html is None:
+                self.start()
+                return
+            html = self.stop()
+            event.client.send_file_download("phototaxis-recording.html", html.encode("utf-8"),
+                                            save_immediately=True)
+
+    def update(self, snap: Snapshot) -> None:
+        if self.recorder is not None:
+            self.status.content = f"Recording: {time.perf_counter() - self._started:.0f} s"
+
+    def start(self) -> None:
+        with self._lock:
+            self.recorder = self.server.get_scene_serializer()
+            self._started = self._last_time = time.perf_counter()
+        self.button.label = "Stop and download"
+        self.button.icon = viser.Icon.PLAYER_STOP
+        self.status.content = "Recording..."
+
+    def stop(self) -> str:
+        """Finish the recording; returns it as standalone HTML."""
+        with self._lock:
+            recorder, self.recorder = self.recorder, None
+            html, self._finished_html = self._finished_html, None
+        if recorder is not None:
+            html = recorder.as_html(dark_mode=True)
+        self.button.label = "Start recording"
+        self.button.icon = viser.Icon.PLAYER_RECORD
+        self.status.content = ""
+        return html or ""
+
+    def on_frame_drawn(self) -> None:
+        """Called after each frame is drawn: advance the recording clock."""
+        with self._lock:
+            if self.recorder is None:
+                return
+            now = time.perf_counter()
+            self.recorder.insert_sleep(now - self._last_time)
+            self._last_time = now
+            if now - self._started <= MAX_RECORD_SECONDS:
+                return
+            recorder, self.recorder = self.recorder, None
+        self._finished_html = recorder.as_html(dark_mode=True)
+        self.status.content = f"Stopped at {MAX_RECORD_SECONDS:.0f} s: press the button to download."
+        self.button.label = "Download recording"
+        self.button.icon = viser.Icon.DOWNLOAD

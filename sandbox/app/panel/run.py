@@ -1,0 +1,86 @@
+"""The Run folder: play, step, reset, speed, the heat map switch, and status."""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import numpy as np
+import viser
+
+from sandbox.app.runner import FASTEST, Snapshot
+
+
+class RunFolder:
+    def __init__(self, gui: Any, runner: Any, show_field: Callable[[bool], None],
+                 after_reset: Callable[[Any], None]):
+        self.gui, self.runner = gui, runner
+        self._show_field, self._after_reset = show_field, after_reset
+
+    def build(self, snap: Snapshot) -> None:
+        gui, runner = self.gui, self.runner
+        with gui.add_folder("Run"):
+            self.play = gui.add_button("Pause" if runner.playing else "Play",
+                                       icon=viser.Icon.PLAYER_PAUSE if runner.playing else viser.Icon.PLAYER_PLAY,
+                                       hint="Start or stop the simulation")
+            self.step_button = gui.add_button("Step", icon=viser.Icon.PLAYER_TRACK_NEXT,
+                                              hint="Advance one world step (pauses first)")
+            self.reset_same = gui.add_button("Reset (same seed)", icon=viser.Icon.REFRESH,
+                                             hint="Rebuild the world with the same seed: the same run again")
+            self.reset_new = gui.add_button("Reset (new seed)", icon=viser.Icon.DICE,
+                                            hint="Rebuild the world with a new random seed")
+            self.speed = gui.add_slider("Steps per frame", 1, FASTEST, 1, runner.steps_per_frame,
+                                        hint=f"Speed: world steps simulated between two pictures; {FASTEST}: as "
+                                             "fast as the machine can, the pictures still at the frame rate")
+            self.show_field = gui.add_checkbox("Show sensed light", False,
+                                               hint="Show the luminosity field the robots sense, as a heat map, "
+                                                    "instead of the light grid")
+            self.status = gui.add_markdown(self._status_text(snap))
+
+        @self.play.on_click
+        def _(event: viser.GuiEvent) -> None:
+            runner.set_playing(not runner.playing)
+            self._sync_play_button()
+
+        @self.step_button.on_click
+        def _(event: viser.GuiEvent) -> None:
+            runner.set_playing(False)
+            self._sync_play_button()
+            runner.step_once(1)
+
+        @self.reset_same.on_click
+        def _(event: viser.GuiEvent) -> None:
+            runner.reset(None)
+            self._after_reset(event.client)
+
+        @self.reset_new.on_click
+        def _(event: viser.GuiEvent) -> None:
+            runner.reset(int(np.random.default_rng().integers(0, 2**31 - 1)))
+            self._after_reset(event.client)
+
+        @self.speed.on_update
+        def _(event: viser.GuiEvent) -> None:
+            runner.set_speed(int(self.speed.value))
+
+        @self.show_field.on_update
+        def _(event: viser.GuiEvent) -> None:
+            runner.want_field = bool(self.show_field.value)  # the next snapshots carry the field
+            self._show_field(self.show_field.value)
+
+    def update(self, snap: Snapshot) -> None:
+        self.status.content = self._status_text(snap)
+        if self.play.label != ("Pause" if snap.playing else "Play"):
+            self._sync_play_button()
+
+    def _sync_play_button(self) -> None:
+        playing = self.runner.playing
+        self.play.label = "Pause" if playing else "Play"
+        self.play.icon = viser.Icon.PLAYER_PAUSE if playing else viser.Icon.PLAYER_PLAY
+
+    def _status_text(self, snap: Snapshot) -> str:
+        cfg, runner = snap.world_config, self.runner
+        return (f"**Step** {snap.step:,} &nbsp; **time** {snap.time:,.1f} s  \n"
+                f"**Phase** {snap.phase} &nbsp; **cycle** {snap.cycle}  \n"
+                f"**Seed** {snap.seed} &nbsp; {cfg.robots} robots, {cfg.boxes} boxes, goal *{snap.shape_name}*  \n"
+                + (f"**Speed** {runner.steps_per_second():,.0f} steps/s "
+                   f"({runner.steps_per_second() * cfg.dt:,.1f}x real time), "
+                   f"{runner.frames_per_second():,.0f} frames/s" if snap.playing else "**Paused**"))

@@ -1,0 +1,148 @@
+"""The Goal shape folder: pick a built-in shape, draw one on the floor, upload
+or download a polygon file. Every shape goes through the model's loader and
+validation; a refused one leaves the running simulation alone."""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import viser
+
+from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.runner import Snapshot
+from sandbox.shapes import ShapeError, builtin_shape_names, load_polygon, polygon_to_text, shape_vertices, validate_polygon
+
+CUSTOM_SHAPE = "(drawn or uploaded)"
+
+
+class ShapeFolder:
+    def __init__(self, gui: Any, runner: Any, show_draw_points: Callable[[list], None]):
+        self.gui, self.runner = gui, runner
+        self._show_draw_points = show_draw_points
+        self.draw_points: list[tuple[float, float]] = []
+        self.drawing = False
+        self._picked_at = 0.0
+
+    def build(self, snap: Snapshot) -> None:
+        gui = self.gui
+        # A drawn or uploaded goal shows as CUSTOM_SHAPE, so picking a
+        # built-in shape afterwards is always a change.
+        names = [*builtin_shape_names(), CUSTOM_SHAPE]
+        current = snap.shape_name if snap.shape_name in names else CUSTOM_SHAPE
+        with gui.add_folder("Goal shape"):
+            self.shape = gui.add_dropdown("Shape", tuple(names), initial_value=current,
+                                          hint="circle, or a polygon file from shapes/")
+            with gui.add_folder("Draw", expand_by_default=False):
+                gui.add_markdown("Press **Start drawing**, then click points on the floor; the preview line "
+                                 "follows. The shape is centred and scaled to the boxes' area when used.")
+                self.draw_toggle = gui.add_button("Start drawing", icon=viser.Icon.PENCIL)
+                self.draw_undo = gui.add_button("Undo last point", icon=viser.Icon.ARROW_BACK_UP, disabled=True)
+                self.draw_close = gui.add_button("Close and use", icon=viser.Icon.CHECK, disabled=True)
+                self.draw_clear = gui.add_button("Clear", icon=viser.Icon.TRASH, disabled=True)
+            self.upload = gui.add_upload_button(
+                "Upload polygon file", icon=viser.Icon.UPLOAD,
+                hint="Plain text x y per line, GeoJSON, WKT, JSON [[x, y], ...] or SVG")
+            self.download_shape = gui.add_button("Download shape", icon=viser.Icon.DOWNLOAD,
+                                                 hint="The current goal as a polygon file for --shape")
+
+        @self.shape.on_update
+        def _(event: viser.GuiEvent) -> None:
+            name = self.shape.value
+            self._picked_at = time.perf_counter()
+            if name == self.runner.latest.shape_name or name not in builtin_shape_names():
+                return
+            try:
+                vertices = shape_vertices(name)
+            except ShapeError as exc:
+                notify_error(event.client, "Shape not used", str(exc))
+                return
+            self.runner.set_shape(vertices, name)
+
+        @self.draw_toggle.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self.drawing = not self.drawing
+            self._sync_draw_buttons()
+
+        @self.draw_undo.on_click
+        def _(event: viser.GuiEvent) -> None:
+            if self.draw_points:
+                self.draw_points.pop()
+            self._sync_draw_buttons()
+
+        @self.draw_clear.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self.draw_points.clear()
+            self._sync_draw_buttons()
+
+        @self.draw_close.on_click
+        def _(event: viser.GuiEvent) -> None:
+            try:
+                vertices = validate_polygon(self.draw_points, "drawn shape")
+            except ShapeError as exc:
+                notify_error(event.client, "Shape not used", str(exc))
+                return
+            self.runner.set_shape(vertices, "drawn")
+            self.draw_points.clear()
+            self.drawing = False
+            self._sync_draw_buttons()
+            notify(event.client, "Goal changed", f"Using the drawn shape ({len(vertices)} vertices).", "green")
+
+        @self.upload.on_upload
+        def _(event: viser.GuiEvent) -> None:
+            uploaded = self.upload.value
+            self.use_shape_file(uploaded.name or "upload.txt", uploaded.content, event.client)
+
+        @self.download_shape.on_click
+        def _(event: viser.GuiEvent) -> None:
+            snap = self.runner.latest
+            name = snap.shape_name or "shape"
+            vertices = snap.goal_vertices if snap.goal_vertices is not None else snap.goal_outline
+            comment = (f"phototaxis goal shape '{name}' in arena coordinates (metres)\n"
+                       "use with: phototaxis --shape FILE")
+            if snap.goal_vertices is None:
+                comment += f"\nthe circle, as a {len(vertices)}-gon"
+            text = polygon_to_text(vertices, comment)
+            stem = Path(name).stem.replace(" ", "-") or "shape"
+            event.client.send_file_download(f"{stem}.txt", text.encode("utf-8"), save_immediately=True)
+
+    def update(self, snap: Snapshot) -> None:
+        shown = snap.shape_name if snap.shape_name in self.shape.options else CUSTOM_SHAPE
+        if self.shape.value != shown and time.perf_counter() - self._picked_at > 2.0:  # not while a pick travels
+            self.shape.value = shown
+
+    def use_shape_file(self, filename: str, content: bytes, client: Any) -> bool:
+        """Validate an uploaded polygon file with the model's loader; use it or say why not."""
+        safe = Path(filename).name or "upload.txt"
+        try:
+            with tempfile.TemporaryDirectory() as tmp:
+                path = Path(tmp) / safe
+                path.write_bytes(content)
+                vertices = load_polygon(path)
+        except ShapeError as exc:
+            notify_error(client, "Shape not used", str(exc))
+            return False
+        except OSError as exc:
+            notify_error(client, "Shape not used", f"{safe}: cannot read the upload ({exc})")
+            return False
+        self.runner.set_shape(vertices, safe)
+        notify(client, "Goal changed", f"Using {safe} ({len(vertices)} vertices).", "green")
+        return True
+
+    def click(self, point: tuple[float, float]) -> bool:
+        """A click on the floor: a new point while drawing (returns whether it was taken)."""
+        if not self.drawing:
+            return False
+        self.draw_points.append(point)
+        self._sync_draw_buttons()
+        return True
+
+    def _sync_draw_buttons(self) -> None:
+        n = len(self.draw_points)
+        self.draw_toggle.label = "Stop drawing" if self.drawing else "Start drawing"
+        self.draw_undo.disabled = n == 0
+        self.draw_clear.disabled = n == 0
+        self.draw_close.disabled = n < 3
+        self._show_draw_points(self.draw_points)
