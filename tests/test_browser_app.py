@@ -17,7 +17,8 @@ import pytest
 from sandbox.app.live_bench import CHROMIUM_ARGS, chromium_path
 
 CHROMIUM = chromium_path()
-pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (apt-get install chromium)")
+pytestmark = [pytest.mark.browser,
+              pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (apt-get install chromium)")]
 playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwright (pip install -e '.[test]')")
 
 SQUARE = b"0 0\n4 0\n4 4\n0 4\n"

@@ -96,3 +96,13 @@ def test_help_lists_commands():
     assert out.returncode == 0
     for command in ("run", "bench", "serve", "sweep", "report", "record"):
         assert command in out.stdout
+
+
+@pytest.mark.parametrize("name, text", [("deep.json", "[" * 100_000 + "]" * 100_000),
+                                        ("huge.txt", "0 0\n1e308 0\n0 1e308\n")])
+def test_pathological_shape_files_are_one_line_errors(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_text(text)
+    out = phototaxis("run", "--shape", str(path), *SMALL)
+    assert out.returncode == 2, out.stderr
+    assert out.stderr.count("\n") == 1 and name in out.stderr and "Traceback" not in out.stderr

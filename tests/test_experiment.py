@@ -108,6 +108,7 @@ def test_largest_dip_of_the_mean_series():
     assert _largest_dip(trials) == pytest.approx(0.075)
 
 
+@pytest.mark.slow
 def test_local_sweep_outputs_and_resume(tmp_path, capsys):
     out = tmp_path / "run"
     assert sweep(out) == 0
@@ -140,6 +141,7 @@ def test_local_sweep_outputs_and_resume(tmp_path, capsys):
     assert "| `square` | 3 |" in (dest / "report.md").read_text()
 
 
+@pytest.mark.slow
 def test_dask_local_cluster(tmp_path):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
@@ -283,6 +285,7 @@ def test_describe_by_hand():
     assert one.mean == 0.5 and math.isnan(one.std)
 
 
+@pytest.mark.slow
 def test_sigterm_keeps_finished_trials_and_resume_runs_the_rest(tmp_path, capsys):
     import signal
     import subprocess

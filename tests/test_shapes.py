@@ -319,3 +319,20 @@ def test_repeated_vertex_names_both_occurrences():
     rejects("0 0\n1 0\n0 0\n0 1\n", "line 3", "repeats line 1", source="spike.txt")
     rejects("[[0,0],[2,0],[1,1],[2,2],[0,2],[1,1]]", "vertex 6", "repeats vertex 3",
             source="eight.json")
+
+
+def test_json_nested_too_deep_is_a_one_line_error(tmp_path):
+    """The JSON decoder gives up with RecursionError; the user gets a sentence."""
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(ShapeError) as info:
+        load_polygon(deep)
+    assert str(info.value).startswith("deep.json") and "\n" not in str(info.value)
+
+
+def test_coordinates_too_large_are_refused(tmp_path):
+    huge = tmp_path / "huge.txt"
+    huge.write_text("0 0\n1e308 0\n0 1e308\n")
+    with pytest.raises(ShapeError, match=r"huge.txt, line 2: .* too large"):
+        load_polygon(huge)
+    rejects("[[0, 0], [1e13, 0], [0, 1]]", "vertex 2", "too large", source="big.json")

@@ -99,16 +99,50 @@ def test_live_changes(small_config):
     sim.step(10)
     deferred = sim.update_config(k_drive=2.0, robots=99, flare=1.75)
     assert deferred == ["robots"]
-    assert sim.world.config.k_drive == 2.0 and sim.world.n_robots == 30
+    assert sim.config.k_drive == 2.0 and sim.world.n_robots == 30 and sim.config.robots == 30
     sim.step(200)
     assert sim.controller.strategies["flare"] == 1.75
     sim.update_config(shape="star")
     assert sim.config.shape == "star" and len(sim.goal.vertices) == 10
-    sim.reset()
-    assert sim.world.n_robots == 99
+    sim.reset(config=sim.config.replace(robots=99))
+    assert sim.world.n_robots == 99 and sim.config.k_drive == 2.0
 
 
 def test_read_only_state(small_config):
     sim = Simulation(small_config)
     with pytest.raises(ValueError):
         sim.robot_positions[0, 0] = 1.0
+
+
+# --- one configuration: the simulation holds what its world was built with ----
+
+def test_a_shape_change_sizes_the_goal_from_the_boxes_in_the_world(small_config):
+    sim = Simulation(small_config, seed=0)  # 60 boxes
+    assert sim.update_config(boxes=400) == ["boxes"]  # waits for a reset, kept by the caller
+    sim.set_shape(np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float), name="square")
+    assert sim.goal.area == pytest.approx(60 * sim.config.box_area)
+    assert sim.config.boxes == 60
+
+
+def test_measuring_uses_the_arena_the_world_was_built_in(small_config):
+    sim = Simulation(small_config, seed=0)
+    sim.update_config(arena_size=32.0, construction_size=8.0, robot_spawn_size=16.0)
+    sim.step(50)
+    assert sim.measure().boxes_escaped == 0
+
+
+def test_time_and_photocells_use_the_built_values(small_config):
+    sim = Simulation(small_config, seed=0)
+    sim.update_config(dt=0.5, sensor_offset=2.0)
+    sim.step(30)
+    assert sim.time == pytest.approx(30 / 30)
+    cells = sim.sensor_points(0)
+    assert np.hypot(*(cells - sim.robot_positions[0]).T) == pytest.approx([0.1 * np.sqrt(2)] * 4)
+
+
+def test_a_reset_takes_the_waiting_changes_when_given_them(small_config):
+    sim = Simulation(small_config, seed=0)
+    waiting = sim.update_config(boxes=40, k_turn=7.0)
+    assert waiting == ["boxes"] and sim.config.k_turn == 7.0
+    sim.reset(config=sim.config.replace(boxes=40))
+    assert len(sim.box_positions) == 40 and sim.config.k_turn == 7.0

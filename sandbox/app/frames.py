@@ -10,7 +10,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from sandbox.app import palette as pal
-from sandbox.app.runner import Snapshot
+from sandbox.app.snapshot import Snapshot
 
 
 def render(snap: Snapshot, size: int = 640, *, show_field: bool = False, robot: int | None = None,

@@ -34,7 +34,8 @@ import numpy as np
 
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
-from sandbox.app.runner import Command, Runner, Snapshot
+from sandbox.app.runner import Command, Runner
+from sandbox.app.snapshot import Snapshot
 
 #: How long the parent waits for a new child's first snapshot (imports, numba cache, world building).
 START_TIMEOUT = 120.0

@@ -17,6 +17,8 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
+from tqdm import tqdm
+
 from sandbox.cli import UserError, add_config_arguments, config_from_args
 from sandbox.model.config import Config
 
@@ -33,7 +35,7 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                    help="world steps between two recorded frames (default 50)")
     p.add_argument("--fps", type=float, default=15.0, help="playback frames per second (default 15)")
     p.add_argument("--size", type=int, default=512, metavar="PX", help="GIF / MP4 frame size in pixels (default 512)")
-    p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     add_config_arguments(p)
     p.set_defaults(func=record_command)
     return p
@@ -61,26 +63,18 @@ def record_command(args: argparse.Namespace) -> int:
         out.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise UserError(f"cannot create {out.parent}: {exc.strerror or exc}") from None
-    progress = None if args.no_progress else _progress_printer(config.steps)
     started = time.perf_counter()
-    data = record(config, suffix, every=args.every, fps=args.fps, size=args.size, progress=progress)
+    with tqdm(total=config.steps, unit="step", desc="recording", file=sys.stderr, disable=args.no_progress,
+              dynamic_ncols=True) as bar:
+        data = record(config, suffix, every=args.every, fps=args.fps, size=args.size,
+                      progress=lambda step: bar.update(step - bar.n))
     try:
         out.write_bytes(data)
     except OSError as exc:
         raise UserError(f"cannot write {out}: {exc.strerror or exc}") from None
-    if progress:
-        sys.stderr.write("\n")
     print(f"wrote {out} ({len(data) / 1e6:.1f} MB, {config.steps} steps, "
           f"{time.perf_counter() - started:.0f} s)")
     return 0
-
-
-def _progress_printer(total: int) -> Callable[[int], None]:
-    def show(step: int) -> None:
-        sys.stderr.write(f"\rrecording: step {step:,} / {total:,}")
-        sys.stderr.flush()
-
-    return show
 
 
 def frames(config: Config, every: int, shape: Any = "from-config", progress: Callable[[int], None] | None = None):

@@ -11,7 +11,6 @@ the frame rate, dropping stale ones, so a slow browser never slows physics.
 
 from __future__ import annotations
 
-import dataclasses
 import queue
 import threading
 import time
@@ -22,6 +21,7 @@ import numpy as np
 
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
+from sandbox.app.snapshot import RobotView, Snapshot
 from sandbox.model.simulation import Simulation
 
 Command = Callable[[Simulation], Any]
@@ -32,54 +32,6 @@ FASTEST = 100
 FASTEST_CHUNK = 10
 
 
-
-
-@dataclasses.dataclass(frozen=True)
-class RobotView:
-    """What the inspector shows about one robot."""
-
-    index: int
-    position: np.ndarray
-    heading: float
-    sensors: np.ndarray  # the four photocells (robots.PHOTOCELLS order) at the last refresh
-    sensor_points: np.ndarray  # (4, 2)
-    command: np.ndarray  # held (v, w)
-    applied: np.ndarray  # (v, w) actually applied (0 when out of charge)
-    charge: float
-
-
-@dataclasses.dataclass(frozen=True)
-class Snapshot:
-    """A consistent copy of everything the page draws, taken between steps."""
-
-    frame: int
-    step: int
-    time: float
-    phase: str
-    cycle: int
-    seed: int
-    shape_name: str
-    world_config: Config  # what the running world was built with
-    config: Config  # the current settings (may hold values pending a reset)
-    robot_positions: np.ndarray
-    robot_headings: np.ndarray
-    robot_charges: np.ndarray
-    box_positions: np.ndarray
-    box_angles: np.ndarray
-    box_in_goal: np.ndarray
-    lights_key: tuple  # changes whenever the light pattern (or the world) changes
-    intensities: np.ndarray
-    field: np.ndarray | None  # sensed luminosity on a display grid, float32 [ix, iy]; only when asked for
-    outline: np.ndarray
-    goal_key: int  # changes whenever the goal changes
-    goal_outline: np.ndarray
-    goal_vertices: np.ndarray | None  # the fitted polygon (None for the circle)
-    sample: Sample
-    strategies: dict  # flare, switch, no_corners as the controller applies them now
-    playing: bool
-    steps_per_frame: int
-    steps_per_second: float
-    robot: RobotView | None
 
 
 class Runner:

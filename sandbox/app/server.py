@@ -25,7 +25,8 @@ from sandbox.model.config import Config
 from sandbox.shapes import shape_vertices
 from sandbox.app.panel import Panel
 from sandbox.app.process import ProcessRunner
-from sandbox.app.runner import Runner, Snapshot
+from sandbox.app.runner import Runner
+from sandbox.app.snapshot import Snapshot
 from sandbox.app.scene import SceneView, configure_scene
 
 TITLE = "Phototaxis sandbox"

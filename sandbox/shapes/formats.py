@@ -178,15 +178,15 @@ def parse_polygon(text: str, source: str = "<input>", fmt: str | None = None) ->
         raise fail(source, f"unknown format {fmt!r}; use one of {', '.join(FORMATS)}")
     try:
         points, line_numbers = _PARSERS[fmt](text, source)
+        if not points:
+            raise fail(source, "contains no vertices")
+        return validate_polygon(points, source, line_numbers=line_numbers)
     except ShapeError:
         raise
-    except (RecursionError, MemoryError, OverflowError, ValueError, TypeError) as error:
-        # Whatever a parser gives up with (JSON nested 100,000 deep, ...) is the file's fault.
+    except (RecursionError, MemoryError, ArithmeticError, ValueError, TypeError) as error:
+        # Whatever a parser or a check gives up with (JSON nested 100,000 deep, ...) is the file's fault.
         raise fail(source, f"could not be read as {fmt.upper()} ({type(error).__name__}: "
                    f"{str(error)[:60] or 'no details'})") from None
-    if not points:
-        raise fail(source, "contains no vertices")
-    return validate_polygon(points, source, line_numbers=line_numbers)
 
 
 def load_polygon(path) -> np.ndarray:

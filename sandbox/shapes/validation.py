@@ -13,6 +13,9 @@ from sandbox.shapes.errors import fail
 
 MAX_VERTICES = 10_000
 MIN_RELATIVE_AREA = 1e-9       # area / (bounding-box size)^2 below this is "zero"
+#: Coordinates beyond this are refused: only the shape matters, and squares of
+#: larger numbers overflow double precision.
+MAX_COORDINATE = 1e12
 
 
 def validate_polygon(vertices, source: str, line_numbers=None) -> np.ndarray:
@@ -36,6 +39,11 @@ def validate_polygon(vertices, source: str, line_numbers=None) -> np.ndarray:
     if bad.size:
         raise fail(source, f"{array[bad[0]].tolist()} is not a pair of finite numbers",
                     f"{kind} {labels[bad[0]]}")
+    huge = np.flatnonzero((np.abs(array) > MAX_COORDINATE).any(axis=1))
+    if huge.size:
+        raise fail(source, f"{array[huge[0]].tolist()} is too large: coordinates must be within "
+                   f"+-{MAX_COORDINATE:g} (only the outline's shape matters; scale it down)",
+                   f"{kind} {labels[huge[0]]}")
     keep = np.ones(len(array), dtype=bool)
     keep[1:] = np.any(array[1:] != array[:-1], axis=1)
     last = np.flatnonzero(keep)[-1] if len(array) else 0

@@ -20,7 +20,7 @@ from sandbox.app.panel.recording import RecordFolder
 from sandbox.app.panel.run import RunFolder
 from sandbox.app.panel.shape import ShapeFolder
 from sandbox.app.panel.strategies import StrategiesFolder
-from sandbox.app.runner import Snapshot
+from sandbox.app.snapshot import Snapshot
 
 
 class Panel:

@@ -10,7 +10,7 @@ import numpy as np
 import viser
 import viser.uplot
 
-from sandbox.app.runner import Snapshot
+from sandbox.app.snapshot import Snapshot
 from sandbox.model.metrics import SampleWriter
 
 

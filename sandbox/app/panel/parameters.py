@@ -12,7 +12,7 @@ import numpy as np
 import viser
 
 from sandbox.app.panel.common import notify, notify_error
-from sandbox.app.runner import Snapshot
+from sandbox.app.snapshot import Snapshot
 from sandbox.model.config import STRATEGY_NAMES, Config, params
 
 #: Parameters that get their own controls elsewhere (or make no sense live).

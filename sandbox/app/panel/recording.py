@@ -9,7 +9,7 @@ from typing import Any
 
 import viser
 
-from sandbox.app.runner import Snapshot
+from sandbox.app.snapshot import Snapshot
 
 MAX_RECORD_SECONDS = 120.0
 

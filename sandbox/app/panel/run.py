@@ -7,7 +7,8 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
-from sandbox.app.runner import FASTEST, Snapshot
+from sandbox.app.runner import FASTEST
+from sandbox.app.snapshot import Snapshot
 
 
 class RunFolder:

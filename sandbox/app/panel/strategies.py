@@ -7,7 +7,7 @@ import functools
 from typing import Any
 
 from sandbox.app.panel.common import notify_error
-from sandbox.app.runner import Snapshot
+from sandbox.app.snapshot import Snapshot
 from sandbox.model.config import STRATEGIES
 from sandbox.model.simulation import Simulation
 
