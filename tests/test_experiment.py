@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 
 from sandbox import commands
-from sandbox.model.config import Config
+from sandbox.experiments.executors import run_trials
 from sandbox.experiments.plan import grid_cases, paper_cases
 from sandbox.experiments.stats import PAPER_PAIRS, default_pairs, describe
-from sandbox.experiments.executors import run_trials
 from sandbox.experiments.storage import ResultStore
 from sandbox.experiments.trials import Trial
+from sandbox.model.config import Config
 
 SMALL = ["--robots", "40", "--boxes", "80", "--steps", "2500"]
 CASES = "square,square-flare"  # a pair the paper compares

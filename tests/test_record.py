@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from sandbox.app.record import frames, record
 from sandbox.commands import main
 from sandbox.model.config import Config
-from sandbox.app.record import frames, record
 
 TINY = Config(robots=6, boxes=10, steps=60)
 

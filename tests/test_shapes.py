@@ -7,11 +7,16 @@ import pytest
 from shapely.geometry import Polygon
 
 import sandbox.shapes as shapes
-from sandbox.shapes.builtin import SHAPES_DIR
 from sandbox.shapes import (
-    ShapeError, builtin_shape_names, load_polygon, parse_polygon, polygon_to_text,
-    shape_vertices, validate_polygon,
+    ShapeError,
+    builtin_shape_names,
+    load_polygon,
+    parse_polygon,
+    polygon_to_text,
+    shape_vertices,
+    validate_polygon,
 )
+from sandbox.shapes.builtin import SHAPES_DIR
 
 DATA = Path(__file__).parent / "data"
 SQUARE = np.array([[-5, -5], [5, -5], [5, 5], [-5, 5]], dtype=float)

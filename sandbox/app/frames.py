@@ -33,7 +33,6 @@ def render(snap: Snapshot, size: int = 640, *, show_field: bool = False, robot: 
     img = floor.convert("RGB")
     draw = ImageDraw.Draw(img)
     line = max(1, round(size / 400))
-    c = s / 2.0
     draw.polygon(xy(pal.square(cfg.centre, cfg.construction_size / 2.0)), outline=pal.BOX_WALL, width=line)
     # Boxes: hexagons.
     r = cfg.box_circumradius

@@ -9,12 +9,12 @@ from __future__ import annotations
 import numpy as np
 from PIL import Image, ImageDraw
 
+from sandbox.app import palette as pal
 from sandbox.model.config import Config
 from sandbox.model.controller import Controller, make_goal
 from sandbox.model.lights import LightField
 from sandbox.model.robots import PHOTOCELLS
 from sandbox.shapes import shape_vertices
-from sandbox.app import palette as pal
 
 INTRO = """\
 **Phototaxis.** Each robot has four photocells at the corners of its body

@@ -14,6 +14,7 @@ import shutil
 import time
 from typing import Any
 
+from sandbox.app.server import App, free_port
 from sandbox.cli import UserError
 from sandbox.model.config import Config
 
@@ -32,8 +33,6 @@ def chromium_path() -> str | None:
 def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 20, fps: float = 30.0,
         warmup: float = 5.0) -> dict[str, Any]:
     """Measure the live app for ``seconds`` (after ``warmup``) with one headless browser."""
-    from sandbox.app.server import App, free_port
-
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:

@@ -32,10 +32,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from sandbox.model.config import Config
-from sandbox.model.metrics import Sample
 from sandbox.app.runner import Command, Runner
 from sandbox.app.snapshot import Snapshot
+from sandbox.model.config import Config
+from sandbox.model.metrics import Sample
 
 #: How long the parent waits for a new child's first snapshot (imports, numba cache, world building).
 START_TIMEOUT = 120.0

@@ -19,6 +19,10 @@ from typing import Any, Callable
 
 from tqdm import tqdm
 
+from sandbox.app.frames import render
+from sandbox.app.runner import Runner
+from sandbox.app.scene import SceneView, configure_scene
+from sandbox.app.server import free_port
 from sandbox.cli import UserError, add_config_arguments, config_from_args
 from sandbox.model.config import Config
 
@@ -79,8 +83,6 @@ def record_command(args: argparse.Namespace) -> int:
 
 def frames(config: Config, every: int, shape: Any = "from-config", progress: Callable[[int], None] | None = None):
     """Snapshots of a headless run: the start, then every ``every`` steps to ``config.steps``."""
-    from sandbox.app.runner import Runner
-
     runner = Runner(config, shape=shape, playing=False)
     yield runner.latest
     while runner.sim.steps_done < config.steps:
@@ -109,8 +111,6 @@ def _record_animation(config: Config, kind: str, every: int, fps: float, size: i
                       progress: Callable[[int], None] | None) -> bytes:
     import imageio.v3 as iio
     import numpy as np
-
-    from sandbox.app.frames import render
 
     pictures = [np.asarray(render(snap, size, label=_label(snap, snap.shape_name)))
                 for snap in frames(config, every, shape, progress)]
@@ -142,9 +142,6 @@ def _mp4(pictures: list, fps: float) -> bytes:
 def _record_viser(config: Config, kind: str, every: int, fps: float, shape: Any,
                   progress: Callable[[int], None] | None) -> bytes:
     import viser
-
-    from sandbox.app.scene import SceneView, configure_scene
-    from sandbox.app.server import free_port
 
     with contextlib.redirect_stdout(io.StringIO()):  # viser prints a banner
         server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)

@@ -19,9 +19,9 @@ from typing import Any, Callable
 
 import numpy as np
 
+from sandbox.app.snapshot import RobotView, Snapshot
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
-from sandbox.app.snapshot import RobotView, Snapshot
 from sandbox.model.simulation import Simulation
 
 Command = Callable[[Simulation], Any]

@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from sandbox.model.config import Config
 from sandbox.app import palette as pal
 from sandbox.app.snapshot import Snapshot
+from sandbox.model.config import Config
 
 Z_FIELD, Z_LIGHTS, Z_BOXES, Z_ROBOTS, Z_MARKS, Z_LINES, Z_TOP = -0.01, 0.0, 0.02, 0.04, 0.05, 0.08, 0.12
 

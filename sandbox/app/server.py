@@ -20,14 +20,14 @@ from typing import Any
 
 import viser
 
-from sandbox.cli import UserError, add_config_arguments, config_from_args
-from sandbox.model.config import Config
-from sandbox.shapes import shape_vertices
 from sandbox.app.panel import Panel
 from sandbox.app.process import ProcessRunner
 from sandbox.app.runner import Runner
-from sandbox.app.snapshot import Snapshot
 from sandbox.app.scene import SceneView, configure_scene
+from sandbox.app.snapshot import Snapshot
+from sandbox.cli import UserError, add_config_arguments, config_from_args
+from sandbox.model.config import Config
+from sandbox.shapes import shape_vertices
 
 TITLE = "Phototaxis sandbox"
 

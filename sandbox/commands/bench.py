@@ -19,6 +19,7 @@ from typing import Any
 
 from tqdm import tqdm
 
+from sandbox.app import live_bench
 from sandbox.cli import UserError, add_config_arguments, config_from_args
 from sandbox.model.config import Config
 from sandbox.model.simulation import Simulation
@@ -190,10 +191,6 @@ def bench_command(args: argparse.Namespace) -> int:
     elif args.live:
         if not args.seconds > 0:
             raise UserError(f"--seconds must be positive, got {args.seconds}")
-        try:
-            from sandbox.app import live_bench
-        except ImportError as exc:
-            raise UserError(f"--live needs the browser app: {exc}") from None
         if not 1 <= args.steps_per_frame <= 100:
             raise UserError(f"--steps-per-frame must be between 1 and 100, got {args.steps_per_frame}")
         result = live_bench.run(config, args.seconds, steps_per_frame=args.steps_per_frame)

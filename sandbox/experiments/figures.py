@@ -18,6 +18,7 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
 from sandbox.experiments import stats
+from sandbox.model.config import config_from_record
 
 IN_GOAL, OUTSIDE, ROBOT, GOAL = "#2e7d32", "#e65100", "#607d8b", "#000000"
 
@@ -85,8 +86,6 @@ def _hexagons(centres: np.ndarray, angles: np.ndarray, circumradius: float) -> n
 
 def draw_layout(ax, trial: dict, *, margin: float = 1.0) -> None:
     """One trial's final layout around the construction area: goal outline, boxes, robots."""
-    from sandbox.model.config import config_from_record
-
     cfg = config_from_record(trial["config"])
     final = trial["final"]
     centre = cfg.centre

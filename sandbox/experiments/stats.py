@@ -13,7 +13,6 @@ from itertools import combinations
 
 import numpy as np
 
-
 #: The case pairs the paper compares with two-sample KS tests (its Tables IV and V).
 PAPER_PAIRS = [
     ("square", "square-flare"),

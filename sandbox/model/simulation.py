@@ -19,9 +19,8 @@ from sandbox.model import kernels, metrics, robots
 from sandbox.model.config import STRATEGY_NAMES, Config, param
 from sandbox.model.controller import Controller, Goal, make_goal
 from sandbox.model.lights import LightField
-from sandbox.shapes import shape_vertices
-
 from sandbox.model.world import World
+from sandbox.shapes import shape_vertices
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:

@@ -8,8 +8,8 @@ from typing import Any
 import numpy as np
 import viser
 
-from sandbox.app.snapshot import Snapshot
 from sandbox.app.scene import top_down_camera
+from sandbox.app.snapshot import Snapshot
 from sandbox.model.robots import PHOTOCELLS
 
 

@@ -13,7 +13,14 @@ import viser
 
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.snapshot import Snapshot
-from sandbox.shapes import ShapeError, builtin_shape_names, load_polygon, polygon_to_text, shape_vertices, validate_polygon
+from sandbox.shapes import (
+    ShapeError,
+    builtin_shape_names,
+    load_polygon,
+    polygon_to_text,
+    shape_vertices,
+    validate_polygon,
+)
 
 CUSTOM_SHAPE = "(drawn or uploaded)"
 
