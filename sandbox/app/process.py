@@ -32,7 +32,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from sandbox.app.runner import Command, Runner
+from sandbox.app.runner import Command, Runner, wait_for
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
@@ -215,15 +215,7 @@ class ProcessRunner:
         self._commands.put(("update_config", ident, dict(changes)))
 
     def call(self, command: Command, timeout: float = 10.0) -> Any:
-        done = threading.Event()
-        box: dict[str, Any] = {}
-        self.post(command, on_done=lambda r: (box.__setitem__("r", r), done.set()),
-                  on_error=lambda e: (box.__setitem__("e", e), done.set()))
-        if not done.wait(timeout):
-            raise TimeoutError("the simulation did not answer in time")
-        if "e" in box:
-            raise box["e"]
-        return box.get("r")
+        return wait_for(self.post, command, timeout)
 
     def subscribe(self, listener: Callable[[Snapshot], None]) -> None:
         self._listeners.append(listener)

@@ -34,6 +34,19 @@ FASTEST_CHUNK = 10
 
 
 
+def wait_for(post: Callable, command: Command, timeout: float) -> Any:
+    """``post`` the command, wait for its result and return it (or raise its exception)."""
+    done = threading.Event()
+    box: dict[str, Any] = {}
+    post(command, on_done=lambda r: (box.__setitem__("r", r), done.set()),
+         on_error=lambda e: (box.__setitem__("e", e), done.set()))
+    if not done.wait(timeout):
+        raise TimeoutError("the simulation did not answer in time")
+    if "e" in box:
+        raise box["e"]
+    return box.get("r")
+
+
 class Runner:
     """Owns the simulation and runs it in its own thread.
 
@@ -106,15 +119,7 @@ class Runner:
             result = command(self.sim)
             self._snapshot()
             return result
-        done = threading.Event()
-        box: dict[str, Any] = {}
-        self.post(command, on_done=lambda r: (box.__setitem__("r", r), done.set()),
-                  on_error=lambda e: (box.__setitem__("e", e), done.set()))
-        if not done.wait(timeout):
-            raise TimeoutError("the simulation did not answer in time")
-        if "e" in box:
-            raise box["e"]
-        return box.get("r")
+        return wait_for(self.post, command, timeout)
 
     def advance(self, n: int) -> Snapshot:
         """Headless use (no threads): step ``n`` steps and take a snapshot."""

@@ -70,8 +70,6 @@ class World:
         self.n_robots, self.n_boxes = config.robots, config.boxes
         self.space = self._make_space()
         self._add_walls()
-        self.robot_bodies: list[pymunk.Body] = []
-        self.box_bodies: list[pymunk.Body] = []
         self._add_robots(rng)
         self._add_boxes(rng)
         # Damping is applied by the space to every body. With the 'continuous'
@@ -147,17 +145,9 @@ class World:
         positions = sample_separated(rng, self.n_robots, low, high, 2 * r, reject=inside_construction)
         headings = rng.uniform(-math.pi, math.pi, self.n_robots)
         robot_filter = pymunk.ShapeFilter(categories=ROBOT, mask=pymunk.ShapeFilter.ALL_MASKS() ^ CONSTRUCTION_WALL)
-        for p, a in zip(positions, headings):
-            body = pymunk.Body()
-            body.position = tuple(p)
-            body.angle = float(a)
-            shape = pymunk.Circle(body, r)
-            shape.density = cfg.robot_density
-            shape.friction = cfg.robot_friction
-            shape.elasticity = cfg.robot_elasticity
-            shape.filter = robot_filter
-            self.space.add(body, shape)
-            self.robot_bodies.append(body)
+        self.robot_bodies = self._add_bodies(positions, headings, lambda body: pymunk.Circle(body, r),
+                                             cfg.robot_density, cfg.robot_friction, cfg.robot_elasticity,
+                                             robot_filter)
 
     def _add_boxes(self, rng: np.random.Generator) -> None:
         cfg = self.config
@@ -166,18 +156,26 @@ class World:
         positions = sample_separated(rng, self.n_boxes, c - half + margin, c + half - margin, 2 * cfg.box_apothem)
         angles = rng.uniform(0.0, math.pi / 3, self.n_boxes)
         vertices = hexagon(cfg.box_circumradius)
-        box_filter = pymunk.ShapeFilter(categories=BOX)
+        self.box_bodies = self._add_bodies(positions, angles,
+                                           lambda body: pymunk.Poly(body, vertices, radius=cfg.box_skin),
+                                           cfg.box_density, cfg.box_friction, cfg.box_elasticity,
+                                           pymunk.ShapeFilter(categories=BOX))
+
+    def _add_bodies(self, positions: np.ndarray, angles: np.ndarray, make_shape, density: float, friction: float,
+                    elasticity: float, shape_filter: pymunk.ShapeFilter) -> list[pymunk.Body]:
+        bodies = []
         for p, a in zip(positions, angles):
             body = pymunk.Body()
             body.position = tuple(p)
             body.angle = float(a)
-            shape = pymunk.Poly(body, vertices, radius=cfg.box_skin)
-            shape.density = cfg.box_density
-            shape.friction = cfg.box_friction
-            shape.elasticity = cfg.box_elasticity
-            shape.filter = box_filter
+            shape = make_shape(body)
+            shape.density = density
+            shape.friction = friction
+            shape.elasticity = elasticity
+            shape.filter = shape_filter
             self.space.add(body, shape)
-            self.box_bodies.append(body)
+            bodies.append(body)
+        return bodies
 
     # -- bulk state -------------------------------------------------------
     def read(self) -> np.ndarray:
