@@ -30,7 +30,7 @@ def chromium_path() -> str | None:
     return None
 
 
-def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 20, fps: float = 30.0,
+def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 25, fps: float = 30.0,
         warmup: float = 5.0) -> dict[str, Any]:
     """Measure the live app for ``seconds`` (after ``warmup``) with one headless browser."""
     try:

@@ -36,7 +36,7 @@ class App:
     """A live simulation served to browsers. ``start()`` it, ``stop()`` it."""
 
     def __init__(self, config: Config, *, host: str = "127.0.0.1", port: int = 8080, shape: Any = "from-config",
-                 fps: float = 30.0, steps_per_frame: int = 20, playing: bool = True, verbose: bool = False,
+                 fps: float = 30.0, steps_per_frame: int = 25, playing: bool = True, verbose: bool = False,
                  process: bool = True):
         if isinstance(shape, str) and shape == "from-config":
             shape = shape_vertices(config.shape)  # raises ShapeError before any server starts
@@ -121,8 +121,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                         "0.0.0.0 shares it on the network)")
     p.add_argument("--port", type=int, default=8080, help="port to listen on (default 8080; the next free one if taken)")
     p.add_argument("--paused", action="store_true", help="start paused")
-    p.add_argument("--steps-per-frame", type=int, default=20, metavar="N",
-                   help="speed: world steps between two frames (default 20: 600 steps/s, 20x real time)")
+    p.add_argument("--steps-per-frame", type=int, default=25, metavar="N",
+                   help="speed: world steps between two frames (default 25: 750 steps/s, 25x real time; "
+                        "100: as fast as the machine can)")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate the page is updated at (default 30)")
     add_config_arguments(p)
     p.set_defaults(func=serve_command)
