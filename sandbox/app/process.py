@@ -60,6 +60,7 @@ class ProcessRunner:
         self.restarts = 0
         self._listeners: list[Callable[[Snapshot], None]] = []
         self._crash_listeners: list[Callable[[str], None]] = []
+        self._progress_listeners: list[Callable[[float | None], None]] = []
         self._callbacks: dict[int, tuple[Callable | None, Callable | None]] = {}
         self._ids = itertools.count()
         self._series: list[Sample] = []
@@ -125,6 +126,9 @@ class ProcessRunner:
             on_done, _ = self._callbacks.pop(ident, (None, None))
             if on_done:
                 on_done(result)
+        elif kind == "progress":
+            for listener in list(self._progress_listeners):
+                listener(message[1])
         elif kind == "error":
             _, ident, exc = message
             _, on_error = self._callbacks.pop(ident, (None, None))
@@ -210,9 +214,7 @@ class ProcessRunner:
     def update_config(self, changes: dict[str, Any], *, on_done: Callable[[Any], None] | None = None,
                       on_error: Callable[[BaseException], None] | None = None) -> None:
         """As :meth:`Runner.update_config`, run by the child's runner (which keeps the waiting changes)."""
-        ident = next(self._ids)
-        self._callbacks[ident] = (on_done, on_error)
-        self._commands.put(("update_config", ident, dict(changes)))
+        self._runner_call("update_config", on_done, on_error, dict(changes))
 
     def call(self, command: Command, timeout: float = 10.0) -> Any:
         return wait_for(self.post, command, timeout)
@@ -244,12 +246,32 @@ class ProcessRunner:
     def step_once(self, n: int = 1) -> None:
         self._control("step", int(n))
 
-    def reset(self, seed: int | None = None) -> None:
-        self._control("reset", seed)
+    def reset(self, seed: int | None = None, *, on_done: Callable[[Any], None] | None = None,
+              on_error: Callable[[BaseException], None] | None = None) -> None:
+        self._runner_call("reset", on_done, on_error, seed)
 
-    def set_shape(self, vertices: np.ndarray | None, name: str) -> None:
-        self._shape = None if vertices is None else np.asarray(vertices, dtype=float)
-        self._control("shape", self._shape, name)
+    def cancel_build(self) -> None:
+        self._control("cancel")
+
+    def on_progress(self, listener: Callable[[float | None], None]) -> None:
+        self._progress_listeners.append(listener)
+
+    def set_shape(self, vertices: np.ndarray | None, name: str, *, on_done: Callable[[Any], None] | None = None,
+                  on_error: Callable[[BaseException], None] | None = None) -> None:
+        shape = None if vertices is None else np.asarray(vertices, dtype=float)
+
+        def used(notes: Any) -> None:
+            self._shape = shape  # what a restarted child gets back
+            if on_done:
+                on_done(notes)
+
+        self._runner_call("set_shape", used, on_error, shape, name)
+
+    def _runner_call(self, method: str, on_done: Callable | None, on_error: Callable | None, *args: Any) -> None:
+        """Call one of the child's Runner methods that report back (reset, set_shape, update_config)."""
+        ident = next(self._ids)
+        self._callbacks[ident] = (on_done, on_error)
+        self._commands.put(("runner_call", ident, method, args))
 
     # -------------------------------------------------------------- state
     @property
@@ -303,6 +325,7 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
 
     on_frame(runner.latest)
     runner.subscribe(on_frame)
+    runner.on_progress(lambda fraction: send_message(("progress", fraction)))
     parent = os.getppid()
     while True:
         try:
@@ -318,10 +341,10 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
             _, ident, command = message
             on_done, on_error = reply(ident)
             runner.post(command, on_done=on_done, on_error=on_error)
-        elif kind == "update_config":
-            _, ident, changes = message
+        elif kind == "runner_call":
+            _, ident, method, args = message
             on_done, on_error = reply(ident)
-            runner.update_config(changes, on_done=on_done, on_error=on_error)
+            getattr(runner, method)(*args, on_done=on_done, on_error=on_error)
         elif kind == "control":
             _apply_control(runner, message[1], *message[2:])
     runner.stop()
@@ -342,10 +365,8 @@ def _apply_control(runner: Runner, name: str, *args: Any) -> None:
         runner._wake.set()
     elif name == "step":
         runner.step_once(args[0])
-    elif name == "reset":
-        runner.reset(args[0])
-    elif name == "shape":
-        runner.set_shape(args[0], args[1])
+    elif name == "cancel":
+        runner.cancel_build()
 
 
 def _picklable(value: Any) -> Any:

@@ -47,6 +47,10 @@ def wait_for(post: Callable, command: Command, timeout: float) -> Any:
     return box.get("r")
 
 
+class BuildCancelled(Exception):
+    """Building a new world was stopped by the user."""
+
+
 class Runner:
     """Owns the simulation and runs it in its own thread.
 
@@ -85,6 +89,8 @@ class Runner:
         self.publish_times: deque = deque(maxlen=120)
         self._threads: list[threading.Thread] = []
         self.errors: list[BaseException] = []
+        self._cancel = threading.Event()
+        self._progress_listeners: list[Callable[[float | None], None]] = []
         self._record_series(force=True)
         self._snapshot()
 
@@ -168,27 +174,59 @@ class Runner:
         """The running configuration with the changes waiting for a reset."""
         return self.sim.config.replace(**self.pending)
 
-    def reset(self, seed: int | None = None) -> None:
-        """Rebuild the world with the waiting changes; ``seed`` None keeps the current seed."""
+    def reset(self, seed: int | None = None, *, on_done: Callable[[Any], None] | None = None,
+              on_error: Callable[[BaseException], None] | None = None) -> None:
+        """Rebuild the world with the waiting changes; ``seed`` None keeps the
+        current seed. Building reports to the :meth:`on_progress` listeners and
+        stops at :meth:`cancel_build` (BuildCancelled; the old world goes on)."""
 
         def do(sim: Simulation) -> None:
-            sim.reset(seed, config=self.settings)
+            self._cancel.clear()
+            try:
+                sim.reset(seed, config=self.settings, progress=self._building)
+            finally:
+                self._report_progress(None)
             self.pending = {}
             self._world_key += 1
             self._goal_key += 1
+            self._step_times.clear()  # speeds are measured within one world
             with self._series_lock:
                 self._series = []
             self._record_series(force=True)
 
-        self.post(do)
+        self.post(do, on_done=on_done, on_error=on_error)
 
-    def set_shape(self, vertices: np.ndarray | None, name: str) -> None:
-        def do(sim: Simulation) -> None:
-            sim.set_shape(vertices, name=name)
+    def cancel_build(self) -> None:
+        """Stop a world being built by :meth:`reset` (safe from any thread)."""
+        self._cancel.set()
+
+    def on_progress(self, listener: Callable[[float | None], None]) -> None:
+        """``listener(fraction)`` hears how far building a world has got; None when it is over."""
+        self._progress_listeners.append(listener)
+
+    def _building(self, fraction: float) -> None:
+        if self._cancel.is_set():
+            raise BuildCancelled("building the world was cancelled; the previous world goes on")
+        self._report_progress(fraction)
+
+    def _report_progress(self, fraction: float | None) -> None:
+        for listener in list(self._progress_listeners):
+            try:
+                listener(fraction)
+            except Exception as exc:  # a broken listener must not stop the build
+                self.errors.append(exc)
+
+    def set_shape(self, vertices: np.ndarray | None, name: str, *, on_done: Callable[[Any], None] | None = None,
+                  on_error: Callable[[BaseException], None] | None = None) -> None:
+        """Change the goal; ``on_done`` gets the notes about its fit, ``on_error`` a refusal."""
+
+        def do(sim: Simulation) -> list[str]:
+            notes = sim.set_shape(vertices, name=name)
             self.shape_name = name
             self._goal_key += 1
+            return notes
 
-        self.post(do)
+        self.post(do, on_done=on_done, on_error=on_error)
 
     @property
     def latest(self) -> Snapshot:

@@ -296,8 +296,36 @@ class Config:
         if abs(cells - round(cells)) > 1e-6:
             raise ConfigError(
                 f"arena_size ({self.arena_size}) must be a whole number of light_pitch ({self.light_pitch})")
+        self._check_populations()
+
+    def _check_populations(self) -> None:
+        """Refuse populations that cannot be placed: robots in the spawn square
+        outside the construction area, boxes inside it (about a robot's square,
+        or a box's hexagon with room to spare, each)."""
+        if self.robot_spawn_size <= self.construction_size + 2 * self.robot_radius and self.robots:
+            raise ConfigError(f"robots: the spawn square ({self.robot_spawn_size:g} m) leaves no room outside "
+                              f"the construction area ({self.construction_size:g} m)")
+        if self.robots > self.max_robots:
+            raise ConfigError(f"robots: {self.robots:,} robots of radius {self.robot_radius:g} m do not fit in the "
+                              f"{self.robot_spawn_size:g} m spawn square outside the {self.construction_size:g} m "
+                              f"construction area; at most {self.max_robots:,} do")
+        if self.boxes > self.max_boxes:
+            raise ConfigError(f"boxes: {self.boxes:,} boxes of {self.box_size_is} {self.box_size:g} m do not fit in the "
+                              f"{self.construction_size:g} m construction area; at most {self.max_boxes:,} do")
 
     # Derived quantities -------------------------------------------------
+    @property
+    def max_robots(self) -> int:
+        """Robots that fit where they start: one robot-wide square each in the spawn square outside the
+        construction area (and its border of one radius)."""
+        free = self.robot_spawn_size**2 - (self.construction_size + 2 * self.robot_radius) ** 2
+        return max(0, int(free / (2 * self.robot_radius) ** 2))
+
+    @property
+    def max_boxes(self) -> int:
+        """Boxes that fit in the construction area, each with half again its own area (packing room)."""
+        inner = max(0.0, self.construction_size - 2 * self.box_circumradius) ** 2
+        return int(inner / (1.5 * self.box_area))
     @property
     def lights_per_side(self) -> int:
         return int(round(self.arena_size / self.light_pitch))

@@ -45,6 +45,7 @@ import numpy as np
 from sandbox.model import geometry, outlines
 from sandbox.model.config import STRATEGY_NAMES, Config
 from sandbox.model.lights import light_centres
+from sandbox.shapes.errors import ShapeError
 
 CONTRACTING, HOLDING, DILATING = "contracting", "holding", "dilating"
 CIRCLE_DRAW_VERTICES = 96
@@ -91,13 +92,38 @@ class Goal:
 
 
 def make_goal(config: Config, vertices: np.ndarray | None) -> Goal:
-    """Fit the user's polygon (or a circle) to the assembly centre and the boxes' total area."""
+    """Fit the user's polygon (or a circle) to the assembly centre and the boxes' total area.
+
+    The fitted outline is simplified to a twentieth of a light pitch: far
+    finer than a light can show, and a 10,000-vertex file then costs what a
+    hand-drawn one does (every light and every box is measured against it)."""
     centre = np.full(2, config.centre)
     area = max(config.boxes, 1) * config.box_area
     if vertices is None:
         return Goal(centre, area, None)
     vertices = np.asarray(vertices, dtype=float)
-    return Goal(centre, area, geometry.fit_to_area(vertices, area, centre), abs(geometry.signed_area(vertices)))
+    fitted = geometry.fit_to_area(vertices, area, centre)
+    simpler = geometry.simplify(fitted, config.light_pitch / 20.0)
+    if len(simpler) < len(fitted):
+        fitted = geometry.fit_to_area(simpler, area, centre)  # simplifying nudges the area: refit
+    return Goal(centre, area, fitted, abs(geometry.signed_area(vertices)))
+
+
+def goal_fit_notes(controller: "Controller") -> list[str]:
+    """Refuse a goal whose smallest outline does not fit the arena (ShapeError);
+    return a note when only its largest does not."""
+    small = controller.outline_at(controller.min_scale)
+    box = outlines.overreach(controller.config, small)
+    if box is not None:
+        raise ShapeError(f"the goal does not fit the arena: its smallest outline spans {outlines.describe_box(box)} "
+                         f"in a {controller.config.arena_size:g} m arena (use a rounder shape, fewer boxes or a "
+                         "bigger arena)")
+    big = controller.outline_at(controller.max_scale)
+    box = outlines.overreach(controller.config, big)
+    if box is None:
+        return []
+    return [f"the goal's largest outline spans {outlines.describe_box(box)}, past the "
+            f"{controller.config.arena_size:g} m arena's walls: the lights there do not exist"]
 
 
 class Controller:
@@ -121,6 +147,9 @@ class Controller:
         self.outline = np.empty((0, 2))
         self.corners = np.empty((0, 2))
         self.intensities = np.zeros((config.lights_per_side,) * 2)
+        #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
+        #: outline does not fit is refused here with a ShapeError.
+        self.notes = goal_fit_notes(self)
         if self._program:
             self._program_update()
         else:
@@ -144,6 +173,13 @@ class Controller:
             self.min_scale = outlines.min_polygon_scale(cfg, self.shape, goal.radius)
             largest = outlines.max_polygon_scale(cfg, self.shape, goal.area)
         self.max_scale = max(largest, self.min_scale)
+
+    def outline_at(self, scale: float) -> np.ndarray:
+        """The polygon outline (or the circle, as a polygon) at ``scale``."""
+        goal = self.goal
+        if self.shape is None:
+            return geometry.regular_polygon(goal.radius * scale, CIRCLE_DRAW_VERTICES, goal.centre)
+        return goal.centre + scale * self.shape.vertices
 
     @property
     def min_radius(self) -> float:

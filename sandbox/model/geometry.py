@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from shapely.geometry import Polygon
 
 
 def signed_area(vertices: np.ndarray) -> float:
@@ -108,3 +109,17 @@ def points_in_polygon(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         cross_x = ax + (y - ay) * (bx - ax) / (by - ay)
     return ((straddles & (x < cross_x)).sum(axis=1) % 2) == 1
+
+
+def simplify(vertices: np.ndarray, tolerance: float) -> np.ndarray:
+    """The outline with vertices dropped wherever that moves it by less than
+    ``tolerance`` (Douglas-Peucker, keeping it a simple polygon), in the
+    original orientation."""
+    vertices = np.asarray(vertices, dtype=float)
+    simpler = Polygon(vertices).simplify(tolerance, preserve_topology=True)
+    if simpler.is_empty or simpler.geom_type != "Polygon":
+        return vertices
+    coords = np.asarray(simpler.exterior.coords)[:-1]
+    if (signed_area(coords) > 0) != (signed_area(vertices) > 0):
+        coords = coords[::-1]
+    return coords

@@ -126,3 +126,17 @@ def max_polygon_scale(config: Config, shape: OutlineShape, goal_area: float) -> 
 
 def max_circle_scale(config: Config, goal_radius: float) -> float:
     return config.circle_max * config.arena_size / 2.0 / goal_radius
+
+
+def overreach(config: Config, outline: np.ndarray) -> tuple[float, float, float, float] | None:
+    """The outline's bounding box (x0, x1, y0, y1) if it reaches past the arena walls, else None."""
+    (x0, y0), (x1, y1) = outline.min(axis=0), outline.max(axis=0)
+    edge = 1e-9
+    if x0 < -edge or y0 < -edge or x1 > config.arena_size + edge or y1 > config.arena_size + edge:
+        return float(x0), float(x1), float(y0), float(y1)
+    return None
+
+
+def describe_box(box: tuple[float, float, float, float]) -> str:
+    x0, x1, y0, y1 = box
+    return f"x = {x0:.0f} .. {x1:.0f} m, y = {y0:.0f} .. {y1:.0f} m"

@@ -12,6 +12,7 @@ imports a GUI library. Not thread-safe: drive it from one thread.
 from __future__ import annotations
 
 import time
+from typing import Callable
 
 import numpy as np
 
@@ -54,18 +55,20 @@ class Simulation:
         self.reset(self.config.seed if seed is None else seed)
 
     # ------------------------------------------------------------------ life
-    def reset(self, seed: int | None = None, config: Config | None = None) -> None:
-        """Rebuild the world, from ``config`` if given (else the current one). Same seed, same run."""
-        if config is not None:
-            self.config = config
+    def reset(self, seed: int | None = None, config: Config | None = None,
+              progress: Callable[[float], None] | None = None) -> None:
+        """Rebuild the world, from ``config`` if given (else the current one). Same seed, same run.
+        ``progress(fraction)`` hears how the building goes; if it raises, the
+        exception propagates and the simulation is left as it was."""
+        cfg = config or self.config
         if seed is not None:
-            self.config = self.config.replace(seed=int(seed))
-        cfg = self.config
-        self.seed = cfg.seed
+            cfg = cfg.replace(seed=int(seed))
         rng = np.random.default_rng(cfg.seed)
-        self.world = World(cfg, rng)
-        self.goal: Goal = make_goal(cfg, self.shape_vertices)
-        self.controller = Controller(cfg, self.goal)
+        goal = make_goal(cfg, self.shape_vertices)
+        controller = Controller(cfg, goal)  # first: a goal that cannot fit stops here
+        world = World(cfg, rng, progress)
+        # Built: from here on nothing can fail halfway.
+        self.config, self.seed, self.world, self.goal, self.controller = cfg, cfg.seed, world, goal, controller
         self.lights = LightField(cfg)
         self.lights.set_intensities(self.controller.intensities)
         self._layout = kernels.sample_layout(self.lights)
@@ -160,16 +163,19 @@ class Simulation:
             self.set_strategies(**strategies)
         return deferred
 
-    def set_shape(self, vertices: np.ndarray | None, name: str | None = None) -> None:
+    def set_shape(self, vertices: np.ndarray | None, name: str | None = None) -> list[str]:
         """Change the goal (None = circle) without touching robots or boxes.
-        The new outline starts contracting from its largest size."""
-        self.shape_vertices = None if vertices is None else np.asarray(vertices, dtype=float)
-        if name is not None:
-            self.config = self.config.replace(shape=name)
-        self.goal = make_goal(self.config, self.shape_vertices)
-        self.controller = Controller(self.config, self.goal)
-        self.controller.set_strategies(**{name: getattr(self.config, name) for name in STRATEGY_NAMES})
+        The new outline starts contracting from its largest size. A goal that
+        does not fit the arena is refused (ShapeError) and nothing changes;
+        returns what there is to say about the fit (see Controller.notes)."""
+        shape = None if vertices is None else np.asarray(vertices, dtype=float)
+        config = self.config if name is None else self.config.replace(shape=name)
+        goal = make_goal(config, shape)
+        controller = Controller(config, goal)
+        controller.set_strategies(**{name_: getattr(config, name_) for name_ in STRATEGY_NAMES})
+        self.shape_vertices, self.config, self.goal, self.controller = shape, config, goal, controller
         self.lights.set_intensities(self.controller.intensities)
+        return controller.notes
 
     # ------------------------------------------------------------- state
     @property

@@ -8,6 +8,7 @@ boxes, and ``pymunk.batch`` reports them in that order.
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import numpy as np
 import pymunk
@@ -41,33 +42,46 @@ def square_corners(centre: float, half: float) -> list[tuple[float, float]]:
 
 
 def sample_separated(rng: np.random.Generator, n: int, low: float, high: float, min_gap: float,
-                     reject=None, max_tries: int = 200) -> np.ndarray:
-    """Uniform random points in the square [low, high]^2, at least ``min_gap`` apart
-    where possible (a point that finds no free spot after ``max_tries`` is placed
-    anyway; the physics pushes it clear). ``reject(points)`` masks forbidden points."""
+                     reject=None, max_tries: int = 200, progress=None) -> np.ndarray:
+    """Uniform random points in the square [low, high]^2, never where
+    ``reject(points)`` says no, and at least ``min_gap`` apart where possible:
+    a point that finds no free spot in ``max_tries`` tries is placed at the
+    last allowed spot tried (the physics pushes it clear). ``progress(k)`` is
+    told how many points are placed, now and then (it may raise to stop)."""
     cell = max(min_gap, 1e-9)
     grid: dict[tuple[int, int], list[np.ndarray]] = {}
     out = np.empty((n, 2))
     for k in range(n):
-        for attempt in range(max_tries):
+        if progress is not None and k % 64 == 0:
+            progress(k)
+        allowed = None
+        for _ in range(max_tries):
             p = rng.uniform(low, high, size=2)
             if reject is not None and reject(p[None, :])[0]:
                 continue
+            allowed = p
             gx, gy = int(p[0] // cell), int(p[1] // cell)
             near = [q for dx in (-1, 0, 1) for dy in (-1, 0, 1) for q in grid.get((gx + dx, gy + dy), ())]
-            if all((q[0] - p[0]) ** 2 + (q[1] - p[1]) ** 2 >= min_gap**2 for q in near) or attempt == max_tries - 1:
+            if all((q[0] - p[0]) ** 2 + (q[1] - p[1]) ** 2 >= min_gap**2 for q in near):
                 break
-        out[k] = p
-        grid.setdefault((gx, gy), []).append(p)
+        while allowed is None:  # every try was in a forbidden place: keep drawing until one is not
+            p = rng.uniform(low, high, size=2)
+            if not reject(p[None, :])[0]:
+                allowed = p
+        out[k] = allowed
+        grid.setdefault((int(allowed[0] // cell), int(allowed[1] // cell)), []).append(allowed)
     return out
 
 
 class World:
     """The physics world and bulk access to its bodies' state."""
 
-    def __init__(self, config: Config, rng: np.random.Generator):
+    def __init__(self, config: Config, rng: np.random.Generator, progress: Callable[[float], None] | None = None):
+        """``progress(fraction)`` hears how far the placement of bodies has got (it may raise to stop)."""
         self.config = config
         self.n_robots, self.n_boxes = config.robots, config.boxes
+        total = max(1, self.n_robots + self.n_boxes)
+        self._progress = (lambda placed: progress(placed / total)) if progress else None
         self.space = self._make_space()
         self._add_walls()
         self._add_robots(rng)
@@ -142,7 +156,8 @@ class World:
         def inside_construction(p: np.ndarray) -> np.ndarray:
             return np.all(np.abs(p - c) < keep_out, axis=1)
 
-        positions = sample_separated(rng, self.n_robots, low, high, 2 * r, reject=inside_construction)
+        positions = sample_separated(rng, self.n_robots, low, high, 2 * r, reject=inside_construction,
+                                     progress=self._progress)
         headings = rng.uniform(-math.pi, math.pi, self.n_robots)
         robot_filter = pymunk.ShapeFilter(categories=ROBOT, mask=pymunk.ShapeFilter.ALL_MASKS() ^ CONSTRUCTION_WALL)
         self.robot_bodies = self._add_bodies(positions, headings, lambda body: pymunk.Circle(body, r),
@@ -153,7 +168,9 @@ class World:
         cfg = self.config
         c, half = cfg.centre, cfg.construction_size / 2.0
         margin = cfg.box_circumradius + 0.01  # clear of the wall's inner face
-        positions = sample_separated(rng, self.n_boxes, c - half + margin, c + half - margin, 2 * cfg.box_apothem)
+        placed = (lambda k: self._progress(self.n_robots + k)) if self._progress else None
+        positions = sample_separated(rng, self.n_boxes, c - half + margin, c + half - margin, 2 * cfg.box_apothem,
+                                     progress=placed)
         angles = rng.uniform(0.0, math.pi / 3, self.n_boxes)
         vertices = hexagon(cfg.box_circumradius)
         self.box_bodies = self._add_bodies(positions, angles,

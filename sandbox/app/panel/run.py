@@ -7,6 +7,7 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
+from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.runner import FASTEST
 from sandbox.app.snapshot import Snapshot
 
@@ -36,6 +37,13 @@ class RunFolder:
                                                hint="Show the luminosity field the robots sense, as a heat map, "
                                                     "instead of the light grid")
             self.status = gui.add_markdown(self._status_text(snap))
+            self.cancel = gui.add_button("Cancel building", icon=viser.Icon.X, visible=False,
+                                         hint="Stop building the new world; the current one goes on")
+        runner.on_progress(self._building)
+
+        @self.cancel.on_click
+        def _(event: viser.GuiEvent) -> None:
+            runner.cancel_build()
 
         @self.play.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -50,13 +58,11 @@ class RunFolder:
 
         @self.reset_same.on_click
         def _(event: viser.GuiEvent) -> None:
-            runner.reset(None)
-            self._after_reset(event.client)
+            self._reset(None, event.client)
 
         @self.reset_new.on_click
         def _(event: viser.GuiEvent) -> None:
-            runner.reset(int(np.random.default_rng().integers(0, 2**31 - 1)))
-            self._after_reset(event.client)
+            self._reset(int(np.random.default_rng().integers(0, 2**31 - 1)), event.client)
 
         @self.speed.on_update
         def _(event: viser.GuiEvent) -> None:
@@ -67,7 +73,24 @@ class RunFolder:
             runner.want_field = bool(self.show_field.value)  # the next snapshots carry the field
             self._show_field(self.show_field.value)
 
+    def _reset(self, seed: int | None, client: Any) -> None:
+        def failed(exc: BaseException) -> None:
+            cancelled = type(exc).__name__ == "BuildCancelled"
+            (notify if cancelled else notify_error)(client, "Reset cancelled" if cancelled else "Reset refused",
+                                                    str(exc))
+
+        self.runner.reset(seed, on_done=lambda _: self._after_reset(client), on_error=failed)
+
+    def _building(self, fraction: float | None) -> None:
+        """Progress of a world being built (None: done)."""
+        self._build_fraction = fraction
+        self.cancel.visible = fraction is not None
+        if fraction is not None:
+            self.status.content = f"**Building the world:** {100 * fraction:.0f} % of the bodies placed"
+
     def update(self, snap: Snapshot) -> None:
+        if getattr(self, "_build_fraction", None) is not None:
+            return  # the status line shows the build
         self.status.content = self._status_text(snap)
         if self.play.label != ("Pause" if snap.playing else "Play"):
             self._sync_play_button()

@@ -66,7 +66,7 @@ class ShapeFolder:
             except ShapeError as exc:
                 notify_error(event.client, "Shape not used", str(exc))
                 return
-            self.runner.set_shape(vertices, name)
+            self.use(vertices, name, event.client, announce=False)
 
         @self.draw_toggle.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -91,11 +91,10 @@ class ShapeFolder:
             except ShapeError as exc:
                 notify_error(event.client, "Shape not used", str(exc))
                 return
-            self.runner.set_shape(vertices, "drawn")
+            self.use(vertices, "drawn", event.client)
             self.draw_points.clear()
             self.drawing = False
             self._sync_draw_buttons()
-            notify(event.client, "Goal changed", f"Using the drawn shape ({len(vertices)} vertices).", "green")
 
         @self.upload.on_upload
         def _(event: viser.GuiEvent) -> None:
@@ -134,9 +133,22 @@ class ShapeFolder:
         except OSError as exc:
             notify_error(client, "Shape not used", f"{safe}: cannot read the upload ({exc})")
             return False
-        self.runner.set_shape(vertices, safe)
-        notify(client, "Goal changed", f"Using {safe} ({len(vertices)} vertices).", "green")
+        self.use(vertices, safe, client)
         return True
+
+    def use(self, vertices, name: str, client: Any, announce: bool = True) -> None:
+        """Hand the goal to the simulation; it may still refuse one that does not fit the arena."""
+
+        def used(notes: list[str]) -> None:
+            if announce:
+                notify(client, "Goal changed", f"Using {name} ({len(vertices)} vertices).", "green")
+            for note in notes:
+                notify(client, "About this goal", note[0].upper() + note[1:] + ".", "blue")
+
+        def refused(exc: BaseException) -> None:
+            notify_error(client, "Shape not used", f"{name}: {exc}")
+
+        self.runner.set_shape(vertices, name, on_done=used, on_error=refused)
 
     def click(self, point: tuple[float, float]) -> bool:
         """A click on the floor: a new point while drawing (returns whether it was taken)."""
