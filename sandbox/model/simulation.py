@@ -21,7 +21,15 @@ from sandbox.model.config import STRATEGY_NAMES, Config, param
 from sandbox.model.controller import Controller, Goal, make_goal
 from sandbox.model.lights import LightField
 from sandbox.model.world import World
-from sandbox.shapes import shape_vertices
+from sandbox.shapes import ShapeError, shape_vertices
+
+
+def _controller(config: Config, goal: Goal) -> Controller:
+    """The controller for a goal, or a ShapeError naming the goal if it cannot fit the arena."""
+    try:
+        return Controller(config, goal)
+    except ShapeError as exc:
+        raise ShapeError(f"{config.shape}: {exc}") from None
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
@@ -65,7 +73,7 @@ class Simulation:
             cfg = cfg.replace(seed=int(seed))
         rng = np.random.default_rng(cfg.seed)
         goal = make_goal(cfg, self.shape_vertices)
-        controller = Controller(cfg, goal)  # first: a goal that cannot fit stops here
+        controller = _controller(cfg, goal)  # first: a goal that cannot fit stops here
         world = World(cfg, rng, progress)
         # Built: from here on nothing can fail halfway.
         self.config, self.seed, self.world, self.goal, self.controller = cfg, cfg.seed, world, goal, controller
@@ -171,7 +179,7 @@ class Simulation:
         shape = None if vertices is None else np.asarray(vertices, dtype=float)
         config = self.config if name is None else self.config.replace(shape=name)
         goal = make_goal(config, shape)
-        controller = Controller(config, goal)
+        controller = _controller(config, goal)
         controller.set_strategies(**{name_: getattr(config, name_) for name_ in STRATEGY_NAMES})
         self.shape_vertices, self.config, self.goal, self.controller = shape, config, goal, controller
         self.lights.set_intensities(self.controller.intensities)

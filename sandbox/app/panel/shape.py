@@ -146,7 +146,7 @@ class ShapeFolder:
                 notify(client, "About this goal", note[0].upper() + note[1:] + ".", "blue")
 
         def refused(exc: BaseException) -> None:
-            notify_error(client, "Shape not used", f"{name}: {exc}")
+            notify_error(client, "Shape not used", str(exc))
 
         self.runner.set_shape(vertices, name, on_done=used, on_error=refused)
 
