@@ -138,6 +138,13 @@ def test_floor_point():
 class FakeClient:
     def __init__(self):
         self.notes = []
+        self.camera = type("Camera", (), {"update_timestamp": 1.0, "aspect": 1.0, "position": None,
+                                          "look_at": None, "fov": None})()
+
+    def atomic(self):
+        import contextlib
+
+        return contextlib.nullcontext()
 
     def add_notification(self, title, body, **kwargs):
         self.notes.append((title, body, kwargs.get("color")))
@@ -273,3 +280,19 @@ def test_a_crashed_simulation_process_is_reported_and_restarted(process_runner):
     wait_until(lambda: r.latest.step > step + 10 or r.latest.step < step, timeout=30)  # running again
     assert r.latest.seed == 9 and r.restarts == 1
     wait_until(lambda: r.latest.robot is not None and r.latest.robot.index == 2)  # its selection came back
+
+
+def test_with_no_viewer_for_a_while_the_app_pauses_and_a_viewer_resumes_it():
+    from sandbox.app.server import App, free_port
+
+    a = App(SMALL, port=free_port(), fps=60, steps_per_frame=2, idle_pause_seconds=1.0)
+    a.start()
+    try:
+        wait_until(lambda: a.auto_paused and not a.runner.playing, timeout=15)
+        step = a.runner.latest.step
+        time.sleep(0.5)
+        assert a.runner.latest.step == step
+        a._on_connect(FakeClient())  # as viser calls it when a browser connects
+        wait_until(lambda: a.runner.playing and a.runner.latest.step > step)
+    finally:
+        a.stop()

@@ -131,7 +131,8 @@ def test_run_controls(app, page):
     time.sleep(0.3)
     assert runner.latest.step == before
     click_button(page, "Step")
-    wait_until(lambda: runner.latest.step == before + 1, what="one step")
+    update = runner.latest.world_config.update_every
+    wait_until(lambda: runner.latest.step == before + update, what="one controller update")
     click_button(page, "Reset (same seed)")
     seed = runner.latest.seed
     wait_until(lambda: runner.latest.step == 0, what="reset")
@@ -239,7 +240,7 @@ def test_parameters_and_inspector(app, page):
     click_button(page, "Follow a random robot")
     wait_until(lambda: app.runner.latest.robot is not None, what="a followed robot")
     page.get_by_text("front-left", exact=True).wait_for(timeout=10_000)
-    page.get_by_label("Camera follows", exact=True).check()
+    click_button(page, "Camera follows (this viewer)")
     client = next(iter(app.server.get_clients().values()))
 
     def camera_on_robot():
@@ -249,6 +250,7 @@ def test_parameters_and_inspector(app, page):
     wait_until(camera_on_robot, what="the camera to follow the robot")
     click_button(page, "Stop following")
     wait_until(lambda: app.runner.selected is None, what="stop following")
+    wait_until(lambda: np.hypot(*(client.camera.look_at[:2] - 32.0)) < 1.0, what="the whole arena again")
 
 
 def test_profile_switch_shows_its_values_and_applies_on_reset(app, page):
@@ -274,10 +276,21 @@ def test_profile_switch_shows_its_values_and_applies_on_reset(app, page):
 
 
 def test_second_browser_and_disconnect(app, browser, page):
-    other = browser.new_page()
+    other = browser.new_page(viewport={"width": 800, "height": 760})  # a narrower window than the first
     other.goto(f"http://127.0.0.1:{app.port}/")
     other.get_by_text("Goal shape", exact=True).wait_for(timeout=30_000)
     wait_until(lambda: len(app.server.get_clients()) == 2, what="two clients")
+    first, second = (app.server.get_clients()[i] for i in sorted(app.server.get_clients()))
+    # Each viewer's camera frames the arena for its own window: the narrow one from higher up.
+    wait_until(lambda: second.camera.position[2] > first.camera.position[2] * 1.2, what="the narrow view to back off")
+    # Following a robot with the camera is one viewer's choice, not everybody's.
+    click_button(other, "Follow a random robot")
+    wait_until(lambda: app.runner.latest.robot is not None, what="a followed robot")
+    click_button(other, "Camera follows (this viewer)")
+    wait_until(lambda: second.camera.position[2] < 20, what="the second viewer's camera to follow")
+    time.sleep(1.0)
+    assert first.camera.position[2] > 40  # the first viewer still sees the whole arena
+    click_button(other, "Stop following")
     other.close()
     wait_until(lambda: len(app.server.get_clients()) == 1, what="one client again")
     steps = app.runner.latest.step

@@ -29,12 +29,24 @@ Z_FIELD, Z_LIGHTS, Z_BOXES, Z_ROBOTS, Z_MARKS, Z_LINES, Z_TOP = -0.01, 0.0, 0.02
 
 def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0) -> tuple[np.ndarray, np.ndarray, float]:
     """Camera position, look-at point and vertical field of view (radians) that
-    frame the whole arena from straight above (tilted a hair so orbiting works)."""
+    frame the whole arena from straight above (tilted a hair so orbiting works),
+    in a view ``aspect`` (width / height) wide: high enough for the arena's
+    height and, in a narrow view, for its width."""
     c = config.arena_size / 2.0
     fov = np.radians(fov_deg)
     half = config.arena_size * 0.56  # arena plus a margin
-    height = half / np.tan(fov / 2.0)
+    height = half / np.tan(fov / 2.0) / min(1.0, max(aspect, 0.1))
     return np.array([c, c - 1e-3 * height, height]), np.array([c, c, 0.0]), float(fov)
+
+
+def frame_arena(client: Any, config: Config) -> None:
+    """Point one viewer's camera at the whole arena, for its own window's shape."""
+    aspect = float(getattr(client.camera, "aspect", 0.0) or 1.4)
+    position, look_at, fov = top_down_camera(config, aspect)
+    with client.atomic():
+        client.camera.fov = fov
+        client.camera.position = tuple(position)
+        client.camera.look_at = tuple(look_at)
 
 
 def _geometry_key(cfg: Config, n: int, m: int) -> tuple:

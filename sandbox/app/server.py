@@ -23,13 +23,15 @@ import viser
 from sandbox.app.panel import Panel
 from sandbox.app.process import ProcessRunner
 from sandbox.app.runner import Runner
-from sandbox.app.scene import SceneView, configure_scene
+from sandbox.app.scene import SceneView, configure_scene, frame_arena
 from sandbox.app.snapshot import Snapshot
 from sandbox.cli import UserError, add_config_arguments, config_from_args
 from sandbox.model.config import Config
 from sandbox.shapes import shape_vertices
 
 TITLE = "Phototaxis sandbox"
+#: With no browser connected for this long, the app stops stepping (unless --keep-running).
+IDLE_PAUSE_SECONDS = 60.0
 
 
 class App:
@@ -37,7 +39,7 @@ class App:
 
     def __init__(self, config: Config, *, host: str = "127.0.0.1", port: int = 8080, shape: Any = "from-config",
                  fps: float = 30.0, steps_per_frame: int = 25, playing: bool = True, verbose: bool = False,
-                 process: bool = True):
+                 process: bool = True, keep_running: bool = False, idle_pause_seconds: float = IDLE_PAUSE_SECONDS):
         if isinstance(shape, str) and shape == "from-config":
             shape = shape_vertices(config.shape)  # raises ShapeError before any server starts
         self.config = config
@@ -57,6 +59,13 @@ class App:
         self.runner.subscribe(self._on_frame)
         if process:
             self.runner.on_crash(self._on_crash)
+        # With no viewer for a while, stop stepping (a forgotten demo should not heat the room).
+        self.keep_running, self.idle_pause_seconds = keep_running, idle_pause_seconds
+        self.auto_paused = False
+        self._last_viewer = time.monotonic()
+        self._stopping = threading.Event()
+        self.server.on_client_connect(self._on_connect)
+        self.server.on_client_disconnect(lambda client: setattr(self, "_last_viewer", time.monotonic()))
 
     # ------------------------------------------------------------ set-up
     def _configure_page(self) -> None:
@@ -75,6 +84,33 @@ class App:
             self.panel.update(snap)
             self.panel.on_frame_drawn()
             self.frames_drawn += 1
+
+    def _on_connect(self, client: Any) -> None:
+        self._last_viewer = time.monotonic()
+        if self.auto_paused:
+            self.auto_paused = False
+            self.runner.set_playing(True)
+        # Fit the arena to this viewer's window once it has told its shape (its first
+        # camera reports come while the page lays itself out).
+        def fit() -> None:
+            fitted, deadline = None, time.monotonic() + 4.0
+            while time.monotonic() < deadline:
+                aspect = client.camera.aspect
+                if aspect and aspect != fitted:
+                    frame_arena(client, self.runner.latest.world_config)
+                    fitted = aspect
+                time.sleep(0.25)
+
+        threading.Thread(target=fit, daemon=True).start()
+
+    def _watch_viewers(self) -> None:
+        while not self._stopping.wait(1.0):
+            if self.server.get_clients():
+                self._last_viewer = time.monotonic()
+            elif (not self.keep_running and self.runner.playing
+                  and time.monotonic() - self._last_viewer >= self.idle_pause_seconds):
+                self.auto_paused = True
+                self.runner.set_playing(False)
 
     def _on_crash(self, why: str) -> None:
         for client in self.server.get_clients().values():
@@ -96,9 +132,11 @@ class App:
 
     def start(self) -> "App":
         self.runner.start()
+        threading.Thread(target=self._watch_viewers, name="phototaxis-viewers", daemon=True).start()
         return self
 
     def stop(self) -> None:
+        self._stopping.set()
         self.runner.stop()
         with contextlib.redirect_stdout(io.StringIO()):  # viser says goodbye on stdout
             self.server.stop()
@@ -125,6 +163,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                    help="speed: world steps between two frames (default 25: 750 steps/s, 25x real time; "
                         "100: as fast as the machine can)")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate the page is updated at (default 30)")
+    p.add_argument("--keep-running", action="store_true",
+                   help=f"keep simulating with no browser connected (by default it pauses after "
+                        f"{IDLE_PAUSE_SECONDS:.0f} s without one and goes on when one connects)")
     add_config_arguments(p)
     p.set_defaults(func=serve_command)
     return p
@@ -141,7 +182,7 @@ def serve_command(args: argparse.Namespace) -> int:
         raise UserError("--fps must be between 1 and 240")
     try:
         app = App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
-                  playing=not args.paused)
+                  playing=not args.paused, keep_running=args.keep_running)
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
     app.start()

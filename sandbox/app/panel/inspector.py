@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import viser
 
-from sandbox.app.scene import top_down_camera
+from sandbox.app.scene import frame_arena
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.robots import PHOTOCELLS
 
@@ -16,6 +16,8 @@ from sandbox.model.robots import PHOTOCELLS
 class InspectorFolder:
     def __init__(self, gui: Any, runner: Any, server: Any):
         self.gui, self.runner, self.server = gui, runner, server
+        #: Viewers whose camera follows the robot: each viewer decides for itself.
+        self.followers: set[int] = set()
 
     def build(self, snap: Snapshot) -> None:
         gui, runner = self.gui, self.runner
@@ -23,8 +25,9 @@ class InspectorFolder:
             self.help = gui.add_markdown("Click a robot on the floor to follow it.")
             self.text = gui.add_markdown("")
             self.charge_bar = gui.add_progress_bar(0.0, color="green", visible=False)
-            self.camera_follow = gui.add_checkbox("Camera follows", False,
-                                                  hint="Zoom in on the followed robot and keep it centred")
+            self.camera_follow = gui.add_button("Camera follows (this viewer)", icon=viser.Icon.VIDEO,
+                                                hint="Zoom your own view in on the followed robot and keep it "
+                                                     "centred; press again to see the whole arena")
             self.follow_random = gui.add_button("Follow a random robot", icon=viser.Icon.TARGET)
             self.stop_follow = gui.add_button("Stop following", icon=viser.Icon.X, disabled=True)
 
@@ -34,10 +37,15 @@ class InspectorFolder:
             if n:
                 self.follow(int(np.random.default_rng().integers(0, n)))
 
-        @self.camera_follow.on_update
+        @self.camera_follow.on_click
         def _(event: viser.GuiEvent) -> None:
-            if not self.camera_follow.value:
-                self._frame_arena()
+            if event.client is None:
+                return
+            if event.client_id in self.followers:
+                self.followers.discard(event.client_id)
+                frame_arena(event.client, runner.latest.world_config)
+            else:
+                self.followers.add(event.client_id)
 
         @self.stop_follow.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -50,7 +58,7 @@ class InspectorFolder:
         cap = snap.world_config.capacity
         self.charge_bar.value = float(100.0 * snap.robot.charge / cap) if cap > 0 else 0.0
         self.charge_bar.visible = True
-        if self.camera_follow.value:
+        if self.followers:
             self._follow_with_cameras(snap)
 
     def click(self, point: tuple[float, float]) -> None:
@@ -74,21 +82,21 @@ class InspectorFolder:
         self.text.content = ""
         self.charge_bar.visible = False
         self.stop_follow.disabled = True
-        if self.camera_follow.value:
-            self.camera_follow.value = False
-            self._frame_arena()
-
-    def _frame_arena(self) -> None:
-        position, look_at, _ = top_down_camera(self.runner.latest.world_config)
-        for client in self.server.get_clients().values():
-            with client.atomic():
-                client.camera.position = tuple(position)
-                client.camera.look_at = tuple(look_at)
+        clients = self.server.get_clients()
+        for client_id in list(self.followers):
+            if client_id in clients:
+                frame_arena(clients[client_id], self.runner.latest.world_config)
+        self.followers.clear()
 
     def _follow_with_cameras(self, snap: Snapshot) -> None:
         x, y = (float(v) for v in snap.robot.position)
         height = 12.0
-        for client in self.server.get_clients().values():
+        clients = self.server.get_clients()
+        for client_id in list(self.followers):
+            client = clients.get(client_id)
+            if client is None:  # left
+                self.followers.discard(client_id)
+                continue
             with client.atomic():
                 client.camera.position = (x, y - 1e-3 * height, height)
                 client.camera.look_at = (x, y, 0.0)

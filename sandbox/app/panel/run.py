@@ -25,7 +25,8 @@ class RunFolder:
                                        icon=viser.Icon.PLAYER_PAUSE if runner.playing else viser.Icon.PLAYER_PLAY,
                                        hint="Start or stop the simulation")
             self.step_button = gui.add_button("Step", icon=viser.Icon.PLAYER_TRACK_NEXT,
-                                              hint="Advance one world step (pauses first)")
+                                              hint="Advance one controller update (100 world steps, 3.3 s of "
+                                                   "simulated time by default; pauses first)")
             self.reset_same = gui.add_button("Reset (same seed)", icon=viser.Icon.REFRESH,
                                              hint="Rebuild the world with the same seed: the same run again")
             self.reset_new = gui.add_button("Reset (new seed)", icon=viser.Icon.DICE,
@@ -54,7 +55,7 @@ class RunFolder:
         def _(event: viser.GuiEvent) -> None:
             runner.set_playing(False)
             self._sync_play_button()
-            runner.step_once(1)
+            runner.step_once(runner.latest.world_config.update_every)
 
         @self.reset_same.on_click
         def _(event: viser.GuiEvent) -> None:
