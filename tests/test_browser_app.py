@@ -123,6 +123,55 @@ def test_page_loads_and_draws_the_arena(app, page):
     assert page.get_by_text("Phase", exact=False).count() > 0
 
 
+def test_legend_is_shown_on_first_load(app, page):
+    legend = page.get_by_text("Legend", exact=True).first
+    assert legend.is_visible()
+    pictures = [img for img in page.locator("img").all() if img.is_visible()]
+    widths = [img.bounding_box()["width"] for img in pictures]
+    assert len(pictures) >= 2 and min(widths) > 150  # the legend and the heat map's colour bar, unopened
+
+
+def test_paper_case_in_one_action(app, page):
+    from sandbox.model.config import CASES
+
+    runner = app.runner
+    choose(page, "Paper case", "star-switch")  # the one action
+    case = CASES["star-switch"]
+    wait_until(lambda: runner.latest.shape_name == "star", what="the star goal")
+    wait_until(lambda: runner.latest.strategies["switch"] == case["switch"], what="switch on")
+    assert runner.latest.strategies["flare"] == 0 and runner.latest.strategies["no_corners"] == 0
+    assert page.get_by_label("Switch to circle", exact=True).is_checked()
+    assert not page.get_by_label("Flare", exact=True).is_checked()
+    marks = app.panel.metrics.marks
+    assert any(what == "case star-switch" for _, what in marks)
+    # The change shows as a dot on the goal chart once a sample follows it.
+    wait_until(lambda: np.isfinite(np.asarray(app.panel.metrics.chart_goal.data[2], float)).any(),
+               what="a change marker on the chart")
+    choose(page, "Paper case", "circle")
+    wait_until(lambda: runner.latest.shape_name == "circle" and runner.latest.strategies["switch"] == 0,
+               what="back to the circle without strategies")
+
+
+def test_refused_population_is_never_stored(app, page):
+    runner = app.runner
+    stored = runner.latest.config.robots
+    open_folder(page, "Population and physics")
+    robots = page.get_by_label("robots", exact=True)
+    for typed, message in (("1000000", "1000000 is outside the allowed range [0, 100000]"),
+                           ("100000", "at most 3,007 do")):  # allowed by the range, but cannot be placed
+        robots.fill(typed)
+        robots.press("Tab")
+        notification(page, message)
+        wait_until(lambda: robots.input_value() == str(stored), what="the field to show the stored value")
+        assert runner.latest.config.robots == stored
+    page.reload()
+    page.get_by_text("Goal shape", exact=True).wait_for(timeout=30_000)
+    open_folder(page, "Population and physics")
+    field = page.get_by_label("robots", exact=True)
+    assert int(float(field.input_value())) == stored
+    open_folder(page, "Population and physics")  # closed again, as the other tests expect
+
+
 def test_run_controls(app, page):
     runner = app.runner
     click_button(page, "Pause")

@@ -11,7 +11,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from sandbox.app import learn
+from sandbox.app import learn, legend
 from sandbox.app.panel.common import PANEL_HZ, floor_point
 from sandbox.app.panel.inspector import InspectorFolder
 from sandbox.app.panel.metrics import MetricsFolder
@@ -32,16 +32,17 @@ class Panel:
         self.runner = runner
         self._last_refresh = 0.0
         self.parameters = ParametersFolder(gui, runner)
+        self.metrics = MetricsFolder(gui, runner)
         self.run = RunFolder(gui, runner, show_field=lambda on: view.set_show_field(on, runner.latest),
                              after_reset=self._after_reset)
-        self.shape = ShapeFolder(gui, runner, show_draw_points=view.set_draw_points)
-        self.strategies = StrategiesFolder(gui, runner)
-        self.metrics = MetricsFolder(gui, runner)
+        self.shape = ShapeFolder(gui, runner, show_draw_points=view.set_draw_points, on_change=self.metrics.mark)
+        self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark)
         self.inspector = InspectorFolder(gui, runner, server)
         self.record = RecordFolder(gui, server)
         self.folders = (self.run, self.shape, self.strategies, self.metrics, self.inspector, self.record,
                         self.parameters)
         snap = runner.latest
+        self._build_legend(gui)
         for folder in self.folders:
             folder.build(snap)
         self._build_learn(gui)
@@ -62,6 +63,14 @@ class Panel:
     def _after_reset(self, client: Any) -> None:
         self.inspector.stop()
         self.parameters.reset_done(client)
+        self.metrics.mark("reset")
+
+    @staticmethod
+    def _build_legend(gui: Any) -> None:
+        with gui.add_folder("Legend"):
+            gui.add_image(legend.legend_picture(), format="png")
+            gui.add_markdown("*Show sensed light* (in Run) paints the light the robots sense instead:")
+            gui.add_image(legend.colour_bar_picture(), format="png")
 
     def _on_scene_click(self, event: Any) -> None:
         point = floor_point(event.ray_origin, event.ray_direction)

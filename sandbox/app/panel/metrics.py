@@ -17,6 +17,16 @@ from sandbox.model.metrics import SampleWriter
 class MetricsFolder:
     def __init__(self, gui: Any, runner: Any):
         self.gui, self.runner = gui, runner
+        #: (step, what) of every change made from the page: shape, strategy, case, reset.
+        self.marks: list[tuple[int, str]] = []
+
+    def mark(self, what: str) -> None:
+        """Remember a change, to show on the charts where it happened."""
+        if what == "reset":
+            self.marks = []
+            self.marks.append((0, what))
+        else:
+            self.marks.append((self.runner.latest.step, what))
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -25,9 +35,14 @@ class MetricsFolder:
             x = np.array([0.0, 0.0])
             # x is the world step (not a date: "time": False below).
             common = dict(height=130, padding=(8, 12, 0, 0), legend={"show": False})
+            # Changes made from the page show as white dots along the top of the first chart.
+            marks = {"label": "change", "stroke": "#ffffff", "width": 0, "points": {"show": True, "size": 9,
+                                                                                      "fill": "#ffffff"}}
             self.chart_goal = gui.add_uplot(
-                (x, x), ({"label": "step"}, {"label": "in goal", "stroke": "#ff5ca8", "width": 2}),
-                title="Boxes in goal (fraction) vs step", scales={"x": {"time": False}, "y": {"range": [0, 1]}},
+                (x, x, np.full(2, np.nan)),
+                ({"label": "step"}, {"label": "in goal", "stroke": "#ff5ca8", "width": 2}, marks),
+                title="Boxes in goal (fraction) vs step; dots: changes", scales={"x": {"time": False},
+                                                                                  "y": {"range": [0, 1]}},
                 **common)
             self.chart_dist = gui.add_uplot(
                 (x, x), ({"label": "step"}, {"label": "stray distance", "stroke": "#40c8ff", "width": 2}),
@@ -48,9 +63,19 @@ class MetricsFolder:
         series = self.runner.series()[-3000:]
         if len(series) >= 2:
             steps = np.array([s.step for s in series], float)
-            self.chart_goal.data = (steps, np.array([s.fraction_in_goal for s in series]))
+            self.chart_goal.data = (steps, np.array([s.fraction_in_goal for s in series]),
+                                    self.mark_series(steps))
             self.chart_dist.data = (steps, np.array([s.mean_outside_distance for s in series]))
             self.chart_charged.data = (steps, np.array([s.charged_robots for s in series], float))
+
+    def mark_series(self, steps: np.ndarray) -> np.ndarray:
+        """1.0 at the first sample at or after each change, NaN elsewhere."""
+        out = np.full(len(steps), np.nan)
+        for step, _ in self.marks:
+            i = int(np.searchsorted(steps, step))
+            if i < len(steps):
+                out[i] = 1.0
+        return out
 
     def csv(self) -> str:
         """The run's samples as CSV, with the time in seconds as the last column."""

@@ -5,7 +5,6 @@ validation; a refused one leaves the running simulation alone."""
 from __future__ import annotations
 
 import tempfile
-import time
 from pathlib import Path
 from typing import Any, Callable
 
@@ -26,12 +25,14 @@ CUSTOM_SHAPE = "(drawn or uploaded)"
 
 
 class ShapeFolder:
-    def __init__(self, gui: Any, runner: Any, show_draw_points: Callable[[list], None]):
+    def __init__(self, gui: Any, runner: Any, show_draw_points: Callable[[list], None],
+                 on_change: Callable[[str], None] = lambda what: None):
         self.gui, self.runner = gui, runner
-        self._show_draw_points = show_draw_points
+        self._show_draw_points, self._on_change = show_draw_points, on_change
         self.draw_points: list[tuple[float, float]] = []
         self.drawing = False
-        self._picked_at = 0.0
+        #: What this panel last put in the dropdown: if it shows something else, a viewer picked it.
+        self._shown: str | None = None
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -39,6 +40,7 @@ class ShapeFolder:
         # built-in shape afterwards is always a change.
         names = [*builtin_shape_names(), CUSTOM_SHAPE]
         current = snap.shape_name if snap.shape_name in names else CUSTOM_SHAPE
+        self._shown = current
         with gui.add_folder("Goal shape"):
             self.shape = gui.add_dropdown("Shape", tuple(names), initial_value=current,
                                           hint="circle, or a polygon file from shapes/")
@@ -58,7 +60,8 @@ class ShapeFolder:
         @self.shape.on_update
         def _(event: viser.GuiEvent) -> None:
             name = self.shape.value
-            self._picked_at = time.perf_counter()
+            if event.client is None:
+                return  # this panel showing the running shape, not a pick
             if name == self.runner.latest.shape_name or name not in builtin_shape_names():
                 return
             try:
@@ -115,8 +118,12 @@ class ShapeFolder:
             event.client.send_file_download(f"{stem}.txt", text.encode("utf-8"), save_immediately=True)
 
     def update(self, snap: Snapshot) -> None:
+        """Show the running shape, but never over a viewer's pick on its way to the simulation."""
         shown = snap.shape_name if snap.shape_name in self.shape.options else CUSTOM_SHAPE
-        if self.shape.value != shown and time.perf_counter() - self._picked_at > 2.0:  # not while a pick travels
+        if self.shape.value == shown:
+            self._shown = shown
+        elif self.shape.value == self._shown:  # still what we showed: the goal changed elsewhere
+            self._shown = shown
             self.shape.value = shown
 
     def use_shape_file(self, filename: str, content: bytes, client: Any) -> bool:
@@ -140,13 +147,18 @@ class ShapeFolder:
         """Hand the goal to the simulation; it may still refuse one that does not fit the arena."""
 
         def used(notes: list[str]) -> None:
+            self._on_change(f"shape {name}")
             if announce:
-                notify(client, "Goal changed", f"Using {name} ({len(vertices)} vertices).", "green")
+                size = "" if vertices is None else f" ({len(vertices)} vertices)"
+                notify(client, "Goal changed", f"Using {name}{size}.", "green")
             for note in notes:
                 notify(client, "About this goal", note[0].upper() + note[1:] + ".", "blue")
 
         def refused(exc: BaseException) -> None:
             notify_error(client, "Shape not used", str(exc))
+            running = self.runner.latest.shape_name
+            self._shown = running if running in self.shape.options else CUSTOM_SHAPE
+            self.shape.value = self._shown  # the dropdown goes back to what runs
 
         self.runner.set_shape(vertices, name, on_done=used, on_error=refused)
 

@@ -1,25 +1,35 @@
-"""The Strategies folder: a checkbox and an amount per strategy, generated
-from their declaration (:data:`sandbox.model.config.STRATEGIES`)."""
+"""The Strategies folder: the paper's seven cases in one control, then a
+checkbox and an amount per strategy, generated from their declaration
+(:data:`sandbox.model.config.STRATEGIES`)."""
 
 from __future__ import annotations
 
 import functools
-from typing import Any
+from typing import Any, Callable
+
+import viser
 
 from sandbox.app.panel.common import notify_error
 from sandbox.app.snapshot import Snapshot
-from sandbox.model.config import STRATEGIES
+from sandbox.model.config import CASES, STRATEGIES
 from sandbox.model.simulation import Simulation
+from sandbox.shapes import shape_vertices
+
+CHOOSE = "(pick one)"
 
 
 class StrategiesFolder:
-    def __init__(self, gui: Any, runner: Any):
+    def __init__(self, gui: Any, runner: Any, use_shape: Callable[[Any, str, Any], None],
+                 on_change: Callable[[str], None]):
         self.gui, self.runner = gui, runner
+        self._use_shape, self._on_change = use_shape, on_change
         self.controls: dict[str, tuple[Any, Any]] = {}
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
         with gui.add_folder("Strategies"):
+            self.case = gui.add_dropdown("Paper case", (CHOOSE, *CASES), initial_value=CHOOSE,
+                                         hint="One of the paper's seven cases: its goal shape and strategies at once")
             gui.add_markdown("Changes reach the running simulation at the next controller update; no reset.")
             for s in STRATEGIES:
                 value = getattr(snap.config, s.name)
@@ -30,10 +40,33 @@ class StrategiesFolder:
                 on.on_update(lambda event, n=s.name: self._changed(n, event.client))
                 amount.on_update(lambda event, n=s.name: self._changed(n, event.client))
 
+        @self.case.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if self.case.value in CASES:
+                self.use_case(self.case.value, event.client)
+
     def update(self, snap: Snapshot) -> None:
         pass  # the controls are the state; nothing to refresh
 
+    def use_case(self, name: str, client: Any) -> None:
+        """The case's goal and strategies (the others off), in one go."""
+        case = CASES[name]
+        strategies = {s.name: float(case.get(s.name, 0.0)) for s in STRATEGIES}
+        self._use_shape(shape_vertices(case["shape"]), case["shape"], client)
+        self.runner.post(functools.partial(Simulation.set_strategies, **strategies),
+                         on_error=lambda exc: notify_error(client, "Case not used", str(exc)))
+        for s in STRATEGIES:  # show them
+            on, amount = self.controls[s.name]
+            self._quiet = True
+            on.value = strategies[s.name] > 0
+            if strategies[s.name] > 0:
+                amount.value = strategies[s.name]
+            self._quiet = False
+        self._on_change(f"case {name}")
+
     def _changed(self, name: str, client: Any) -> None:
+        if getattr(self, "_quiet", False):
+            return
         on, amount = self.controls[name]
         value = float(amount.value) if on.value else 0.0
 
@@ -41,3 +74,4 @@ class StrategiesFolder:
             notify_error(client, "Strategy not changed", str(exc))
 
         self.runner.post(functools.partial(Simulation.set_strategies, **{name: value}), on_error=failed)
+        self._on_change(f"{name} {value:g}")

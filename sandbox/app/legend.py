@@ -1,0 +1,70 @@
+"""The legend of the scene, and the colour bar of the sensed-light heat map,
+drawn with Pillow in the palette's own colours (so they cannot drift apart)."""
+
+from __future__ import annotations
+
+import numpy as np
+from PIL import Image, ImageDraw, ImageFont
+
+from sandbox.app import palette as pal
+
+WIDTH = 380
+ROW = 30
+FONT_SIZE = 16
+
+
+def _font(size: int = FONT_SIZE) -> ImageFont.ImageFont:
+    return ImageFont.load_default(size=size)
+
+
+def legend_picture() -> np.ndarray:
+    """Swatches for everything on the floor: lights, robots by charge, boxes,
+    the outlines and the walls."""
+    rows = [
+        ("cell", pal.LIGHT_ON, "light on"),
+        ("cell", pal.LIGHT_OFF, "light off"),
+        ("robots", None, "robot: green charged ... red empty"),
+        ("disc", pal.SELECTED, "robot you follow (ring)"),
+        ("hexagon", pal.BOX_IN, "box in the goal"),
+        ("hexagon", pal.BOX_OUT, "box outside the goal"),
+        ("line", pal.GOAL_LINE, "goal outline"),
+        ("line", pal.LIGHT_LINE, "outline the lights follow"),
+        ("line", pal.BOX_WALL, "wall that stops boxes, not robots"),
+        ("line", pal.ARENA_WALL, "arena wall"),
+    ]
+    img = Image.new("RGB", (WIDTH, ROW * len(rows) + 8), pal.BACKGROUND)
+    draw = ImageDraw.Draw(img)
+    font = _font()
+    for i, (kind, colour, text) in enumerate(rows):
+        y = 4 + i * ROW + ROW // 2
+        _swatch(draw, kind, colour, 22, y)
+        draw.text((58, y), text, fill=(235, 235, 240), font=font, anchor="lm")
+    return np.asarray(img)
+
+
+def _swatch(draw: ImageDraw.ImageDraw, kind: str, colour, x: int, y: int) -> None:
+    if kind == "cell":
+        draw.rectangle([x - 10, y - 10, x + 10, y + 10], fill=colour, outline=pal.CELL_EDGE)
+    elif kind == "robots":
+        for k, charge in enumerate((20.0, 10.0, 0.0)):
+            c = tuple(int(v) for v in pal.robot_colours(np.array([charge]), 20.0)[0])
+            draw.ellipse([x - 16 + 11 * k, y - 6, x - 4 + 11 * k, y + 6], fill=c)
+    elif kind == "disc":
+        draw.ellipse([x - 9, y - 9, x + 9, y + 9], outline=colour, width=3)
+    elif kind == "hexagon":
+        angles = np.arange(6) * np.pi / 3
+        draw.polygon([(x + 10 * np.cos(a), y + 10 * np.sin(a)) for a in angles], fill=colour)
+    else:
+        draw.line([x - 14, y, x + 14, y], fill=colour, width=4)
+
+
+def colour_bar_picture(width: int = WIDTH, height: int = 64) -> np.ndarray:
+    """The heat map's colours from no light to the brightest on the floor now."""
+    img = Image.new("RGB", (width, height), pal.BACKGROUND)
+    ramp = np.linspace(0.0, 1.0, width - 24)[None, :].repeat(18, axis=0)
+    img.paste(Image.fromarray(pal.field_image(ramp.T, scale=1.0, top_first=False)), (12, 8))
+    draw = ImageDraw.Draw(img)
+    font = _font(14)
+    draw.text((12, 34), "no light", fill=(235, 235, 240), font=font)
+    draw.text((width - 12, 34), "brightest now", fill=(235, 235, 240), font=font, anchor="ra")
+    return np.asarray(img)
