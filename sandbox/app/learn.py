@@ -7,11 +7,11 @@ grid), so they always match what the simulation does.
 from __future__ import annotations
 
 import numpy as np
-from PIL import Image, ImageDraw
+from PIL import Image, ImageDraw, ImageFont
 
 from sandbox.app import palette as pal
 from sandbox.model.config import Config
-from sandbox.model.controller import Controller, make_goal
+from sandbox.model.controller import DILATING, Controller, make_goal
 from sandbox.model.lights import LightField
 from sandbox.model.robots import PHOTOCELLS
 from sandbox.shapes import shape_vertices
@@ -53,6 +53,8 @@ STRATEGIES = """\
   spreads robots evenly instead of letting them bunch at far vertices.
 - **No corners** leaves the band lights nearest the corners dark, so robots
   do not pile up in sharp points (and light is saved).
+
+Below, each strategy (right) beside the same moment without it (left).
 """
 
 INSPECT = """\
@@ -71,6 +73,16 @@ def _pattern(config: Config, shape: str, steps: int = 0, **strategies: float) ->
     return ctrl.intensities.copy(), ctrl.outline.copy(), goal.outline().copy()
 
 
+#: Caption size in picture pixels: the panel shows a two-tile row at about
+#: 0.9x, so 17 px reads as about 15 px on screen (the old default font was 7).
+CAPTION = 17
+TEXT = (235, 235, 240)
+
+
+def _font(size: int = CAPTION) -> ImageFont.ImageFont:
+    return ImageFont.load_default(size=size)
+
+
 def _tile(config: Config, intensities: np.ndarray, outline: np.ndarray, goal: np.ndarray, label: str,
           cell: int = 3) -> Image.Image:
     img = Image.fromarray(pal.light_grid_image(intensities, cell_pixels=cell)).convert("RGB")
@@ -81,22 +93,22 @@ def _tile(config: Config, intensities: np.ndarray, outline: np.ndarray, goal: np
     def xy(p: np.ndarray) -> list[tuple[float, float]]:
         return [(float(x * k), float(size - y * k)) for x, y in np.asarray(p)]
 
-    draw.polygon(xy(outline), outline=pal.LIGHT_LINE, width=1)
+    draw.polygon(xy(outline), outline=pal.LIGHT_LINE, width=2)
     draw.polygon(xy(goal), outline=pal.GOAL_LINE, width=2)
-    out = Image.new("RGB", (size, size + 18), pal.BACKGROUND)
-    out.paste(img, (0, 18))
-    ImageDraw.Draw(out).text((4, 3), label, fill=(235, 235, 240))
+    top = CAPTION + 8
+    out = Image.new("RGB", (size, size + top), pal.BACKGROUND)
+    out.paste(img, (0, top))
+    ImageDraw.Draw(out).text((3, 3), label, fill=TEXT, font=_font())
     return out
 
 
-def _row(tiles: list[Image.Image], gap: int = 6) -> np.ndarray:
-    w = sum(t.size[0] for t in tiles) + gap * (len(tiles) - 1)
-    h = max(t.size[1] for t in tiles)
-    out = Image.new("RGB", (w, h), pal.BACKGROUND)
-    x = 0
-    for t in tiles:
-        out.paste(t, (x, 0))
-        x += t.size[0] + gap
+def _grid(tiles: list[Image.Image], columns: int = 2, gap: int = 8) -> np.ndarray:
+    """Tiles in rows of ``columns`` (two keep captions readable in the panel)."""
+    w, h = tiles[0].size
+    rows = -(-len(tiles) // columns)
+    out = Image.new("RGB", (columns * w + (columns - 1) * gap, rows * h + (rows - 1) * gap), pal.BACKGROUND)
+    for i, t in enumerate(tiles):
+        out.paste(t, ((i % columns) * (w + gap), (i // columns) * (h + gap)))
     return np.asarray(out)
 
 
@@ -120,36 +132,65 @@ def phototaxis_picture(config: Config | None = None, size: int = 300) -> np.ndar
     r = 0.45 * k
     draw.ellipse([rx - r, ry - r, rx + r, ry + r], fill=(170, 200, 60), outline=(20, 20, 20))
     cells = PHOTOCELLS[cfg.photocells]
+    small, big = _font(15), _font(CAPTION)
     short = ["".join(word[0].upper() for word in name.split("-")) for name in cells.names]
     for name, a in zip(short, cells.angles):
         sx, sy = rx + 0.7 * r * np.cos(heading + a), ry - 0.7 * r * np.sin(heading + a)
         draw.ellipse([sx - 4, sy - 4, sx + 4, sy + 4], fill=(255, 255, 255), outline=(0, 0, 0))
         draw.text((rx + 1.45 * r * np.cos(heading + a) - 5, ry - 1.45 * r * np.sin(heading + a) - 5), name,
-                  fill=(255, 255, 255))
+                  fill=(255, 255, 255), font=small)
     ax, ay = rx + 3.2 * r * np.cos(heading), ry - 3.2 * r * np.sin(heading)
     draw.line([rx + 1.8 * r * np.cos(heading), ry - 1.8 * r * np.sin(heading), ax, ay], fill=(255, 255, 255), width=3)
-    draw.text((6, 6), "lit band: brightest here", fill=(255, 255, 255))
-    draw.text((6, size - 18), "robot turns and drives up the gradient", fill=(255, 255, 255))
+    draw.text((6, 6), "lit band: brightest here", fill=(255, 255, 255), font=big)
+    draw.text((6, size - 24), "robot turns and drives up the gradient", fill=(255, 255, 255), font=small)
     return np.asarray(img)
 
 
 def cycle_picture(config: Config | None = None) -> np.ndarray:
+    """The circle goal's cycle: largest, contracting, holding, dilating."""
     cfg = config or Config()
     goal = make_goal(cfg, None)
     ctrl = Controller(cfg, goal)
-    tiles = [_tile(cfg, ctrl.intensities, ctrl.outline, goal.outline(), "start: largest")]
-    for label, phase in (("contracting", None), ("holding: smallest", "holding")):
+    tiles = [_tile(cfg, ctrl.intensities, ctrl.outline, goal.outline(), "1 start: largest")]
+    for label, phase in (("2 contracting", None), ("3 holding: smallest", "holding"), ("4 dilating", DILATING)):
         for _ in range(3000 if phase is None else 10**6):
             ctrl.advance()
             if ctrl.phase == phase:
                 break
+        if phase == DILATING:
+            for _ in range(3000):
+                ctrl.advance()
         tiles.append(_tile(cfg, ctrl.intensities, ctrl.outline, goal.outline(), label))
-    return _row(tiles)
+    return _grid(tiles)
+
+
+def _switch_step(config: Config, shape: str, switch: float) -> int:
+    """Steps until a little after switch puts a circle in the polygon's place
+    (while dilating): the moment that shows what switch does."""
+    cfg = config.replace(switch=switch)
+    ctrl = Controller(cfg, make_goal(cfg, shape_vertices(shape)))
+    steps = 0
+    while not (ctrl.phase == DILATING and ctrl.circle_radius is not None) and steps < 200_000:
+        ctrl.advance()
+        steps += 1
+    return steps + 3 * cfg.update_every
 
 
 def strategies_picture(config: Config | None = None) -> np.ndarray:
+    """Each strategy beside the same moment without it."""
+    from sandbox.model.config import CASES
+
     cfg = config or Config()
-    cases = (("square", "square", {}), ("+ flare", "square", dict(flare=1.75)),
-             ("star + no corners", "star", dict(no_corners=0.5)))
-    tiles = [_tile(cfg, *_pattern(cfg, shape, 2500, **s), label) for label, shape, s in cases]
-    return _row(tiles)
+    switch = CASES["star-switch"]["switch"]
+    flare = CASES["square-flare"]["flare"]
+    no_corners = CASES["star-switch-nocorners"]["no_corners"]
+    switched = _switch_step(cfg, "star", switch)
+    tiles = [
+        _tile(cfg, *_pattern(cfg, "square", 2500), "square"),
+        _tile(cfg, *_pattern(cfg, "square", 2500, flare=flare), "+ flare"),
+        _tile(cfg, *_pattern(cfg, "star", switched), "star, dilating"),
+        _tile(cfg, *_pattern(cfg, "star", switched, switch=switch), "+ switch: a circle"),
+        _tile(cfg, *_pattern(cfg, "star", 2500), "star"),
+        _tile(cfg, *_pattern(cfg, "star", 2500, no_corners=no_corners), "+ no corners"),
+    ]
+    return _grid(tiles)
