@@ -105,9 +105,6 @@ def test_light_grid_orientation_and_colours():
     assert tuple(img[254, 254]) == palette.LIGHT_OFF
     bottom_first = palette.light_grid_image(inten, cell_pixels=4, top_first=False)
     assert tuple(bottom_first[254, 2]) == palette.LIGHT_ON
-    colours = palette.light_colours(inten)
-    assert tuple(colours[0 * 64 + 63]) == palette.LIGHT_ON  # [ix, iy] row-major like the batched cells
-    assert tuple(colours[1]) == palette.LIGHT_OFF
 
 
 def test_charge_and_box_colours():
@@ -115,7 +112,6 @@ def test_charge_and_box_colours():
     assert c[0, 0] > c[0, 1] and c[1, 1] > c[1, 0]  # red empty, green full
     b = palette.box_colours(np.array([True, False]))
     assert tuple(b[0]) == palette.BOX_IN and tuple(b[1]) == palette.BOX_OUT
-    assert palette.linear((0, 255, 128)).tolist() == [0, 255, 55]
 
 
 def test_closed_segments_join_the_last_vertex_to_the_first():
@@ -296,3 +292,35 @@ def test_with_no_viewer_for_a_while_the_app_pauses_and_a_viewer_resumes_it():
         wait_until(lambda: a.runner.playing and a.runner.latest.step > step)
     finally:
         a.stop()
+
+
+def test_charts_are_sent_only_when_new_and_thinned():
+    from types import SimpleNamespace
+
+    from sandbox.app.panel.metrics import CHART_POINTS, MetricsFolder, chart_indices
+
+    assert chart_indices(5, 300).tolist() == [0, 1, 2, 3, 4]
+    thinned = chart_indices(10_000, 300)
+    assert len(thinned) == 300 and thinned[0] == 0 and thinned[-1] == 9_999
+
+    class Chart:
+        sends = 0
+
+        def __setattr__(self, name, value):
+            Chart.sends += 1
+            object.__setattr__(self, name, value)
+
+    series = [SimpleNamespace(step=100 * k, fraction_in_goal=0.5, mean_outside_distance=1.0, charged_robots=3)
+              for k in range(5000)]
+    runner = SimpleNamespace(series=lambda: series)
+    folder = MetricsFolder(None, runner)
+    folder.text, folder.chart_goal, folder.chart_dist, folder.chart_charged = Chart(), Chart(), Chart(), Chart()
+    snap = SimpleNamespace(sample=SimpleNamespace(fraction_in_goal=0.5, mean_outside_distance=1.0, charged_robots=3,
+                                                  boxes_escaped=0), world_config=SimpleNamespace(robots=10))
+    folder.update(snap)
+    sent = Chart.sends
+    assert len(folder.chart_goal.data[0]) == CHART_POINTS and folder.chart_goal.data[0][-1] == 499_900
+    folder._charted_at = 0.0  # as if a period had passed: the same series is not sent again
+    folder.update(snap)
+    assert Chart.sends == sent + 1  # only the text
+

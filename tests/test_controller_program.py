@@ -12,7 +12,7 @@ import pytest
 
 from sandbox.model import geometry
 from sandbox.model.config import Config
-from sandbox.model.controller import CONTRACTING, DILATING, HOLDING, Controller, make_goal
+from sandbox.model.controller import CONTRACTING, DILATING, HOLDING, Controller, first_cycle_steps, make_goal
 from sandbox.shapes import shape_vertices
 
 GOAL_AREA = 500 * 1.5 * math.sqrt(3) * 0.25**2
@@ -193,3 +193,20 @@ def test_no_corners_count_is_at_least_the_fraction():
     assert no_corners_count(0.5, 160, "at-least") == 80
     assert no_corners_count(0.25, 10, "at-least") == 3
     assert no_corners_count(1.0, 10, "at-least") == 10
+
+
+def test_first_cycle_length_of_the_circle():
+    """58 updates down from 24 m by x0.975 to the first radius below the smallest
+    (goal radius + 0.5 m); 56 lit radii on the way back up (+0.6 m, then x1.025,
+    while at most 24 m); the 115th update finds the radius above 24 m and starts
+    cycle 1. 115 updates of 100 steps."""
+    cfg = Config()
+    c = program()
+    radius, down = 24.0, 0
+    while radius >= c.min_radius:
+        radius, down = radius * 0.975, down + 1
+    radius, up = radius + 0.6, 0
+    while radius <= 24.0:
+        radius, up = radius * 1.025, up + 1
+    assert (down, up) == (58, 56)
+    assert first_cycle_steps(cfg, shape_vertices("circle")) == (down + up + 1) * 100 == 11_500

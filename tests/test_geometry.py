@@ -64,3 +64,15 @@ def test_distance_and_inside():
     pts = np.array([[0.5, 0.5], [1.5, 1.5], [3.0, 0.0], [1.0, -1.0]])
     assert geometry.points_in_polygon(pts, L_SHAPE).tolist() == [True, False, False, False]
     assert geometry.distance_to_outline(pts, L_SHAPE) == pytest.approx([0.5, 0.5, 1.0, 1.0])
+
+
+def test_compiled_outline_distance_is_the_numpy_formula_to_the_bit():
+    rng = np.random.default_rng(3)
+    for n in (3, 10, 49, 96):
+        vertices = rng.normal(size=(n, 2)) * 10
+        points = rng.uniform(-30, 30, size=(500, 2))
+        reference = geometry.distances_to_edges(points, vertices).min(axis=1)
+        assert np.array_equal(geometry.distance_to_outline(points, vertices), reference)
+    # By hand: the unit square's edges are 0.5 from its centre and 1 from (2, 0.5).
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float)
+    np.testing.assert_allclose(geometry.distance_to_outline(np.array([[0.5, 0.5], [2, 0.5]]), square), [0.5, 1.0])

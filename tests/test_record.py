@@ -63,3 +63,19 @@ def test_mp4_for_slides(tmp_path):
         assert reader.count_frames() == 4 and reader.get_meta_data()["size"] == (128, 128)
     finally:
         reader.close()
+
+
+def test_command_line_default_covers_the_first_cycle(tmp_path):
+    import math
+
+    import imageio.v3 as iio
+
+    from sandbox.model.controller import first_cycle_steps
+    from sandbox.shapes import shape_vertices
+
+    out = tmp_path / "cycle.gif"
+    args = ["--robots", "5", "--boxes", "8", "--update-every", "2"]
+    assert main(["record", *args, "--every", "100", "--size", "64", "--no-progress", "--out", str(out)]) == 0
+    cycle = first_cycle_steps(Config(robots=5, boxes=8, update_every=2), shape_vertices("circle"))
+    assert 100 < cycle < 1000
+    assert iio.imread(out, index=None).shape[0] == math.ceil(cycle / 100) + 1

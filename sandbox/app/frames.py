@@ -7,7 +7,7 @@ of the Learn panel. No browser, no GPU.
 from __future__ import annotations
 
 import numpy as np
-from PIL import Image, ImageDraw
+from PIL import Image, ImageDraw, ImageFont
 
 from sandbox.app import palette as pal
 from sandbox.app.snapshot import Snapshot
@@ -57,7 +57,11 @@ def render(snap: Snapshot, size: int = 640, *, show_field: bool = False, robot: 
         (px, py), = xy(snap.robot_positions[robot:robot + 1])
         rad = 2.2 * rr + 3
         draw.ellipse([px - rad, py - rad, px + rad, py + rad], outline=pal.SELECTED, width=line + 1)
-    if label:
-        draw.rectangle([0, 0, size, 22], fill=pal.BACKGROUND)
-        draw.text((6, 5), label, fill=(235, 235, 240))
+    if label:  # readable on a slide: about 1/32 of the frame, at least 11 px
+        font = ImageFont.load_default(size=max(11, size // 34))
+        while font.getlength(label) > size - 12 and font.size > 8:
+            font = ImageFont.load_default(size=font.size - 1)
+        band = font.size + 10
+        draw.rectangle([0, 0, size, band], fill=pal.BACKGROUND)
+        draw.text((6, band // 2), label, fill=(235, 235, 240), font=font, anchor="lm")
     return img

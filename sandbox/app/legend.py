@@ -25,8 +25,8 @@ def legend_picture() -> np.ndarray:
         ("cell", pal.LIGHT_OFF, "light off"),
         ("robots", None, "robot: green charged ... red empty"),
         ("disc", pal.SELECTED, "robot you follow (ring)"),
-        ("hexagon", pal.BOX_IN, "box in the goal"),
-        ("hexagon", pal.BOX_OUT, "box outside the goal"),
+        ("box", pal.BOX_IN, "box in the goal"),
+        ("box", pal.BOX_OUT, "box outside the goal"),
         ("line", pal.GOAL_LINE, "goal outline"),
         ("line", pal.LIGHT_LINE, "outline the lights follow"),
         ("line", pal.BOX_WALL, "wall that stops boxes, not robots"),
@@ -51,9 +51,8 @@ def _swatch(draw: ImageDraw.ImageDraw, kind: str, colour, x: int, y: int) -> Non
             draw.ellipse([x - 16 + 11 * k, y - 6, x - 4 + 11 * k, y + 6], fill=c)
     elif kind == "disc":
         draw.ellipse([x - 9, y - 9, x + 9, y + 9], outline=colour, width=3)
-    elif kind == "hexagon":
-        angles = np.arange(6) * np.pi / 3
-        draw.polygon([(x + 10 * np.cos(a), y + 10 * np.sin(a)) for a in angles], fill=colour)
+    elif kind == "box":  # the live scene draws a hexagonal box as a disc of the same area
+        draw.ellipse([x - 9, y - 9, x + 9, y + 9], fill=colour)
     else:
         draw.line([x - 14, y, x + 14, y], fill=colour, width=4)
 

@@ -4,13 +4,20 @@ browser connected.
 Starts the app on a free port, opens it in headless Chromium (Playwright),
 lets it run, and measures steps per second in the simulation thread and
 frames per second actually drawn by the browser (counted in the page with
-``requestAnimationFrame`` while scene updates arrive) and sent by the server.
+``requestAnimationFrame`` while scene updates arrive) and sent by the server,
+and the bytes each viewer receives per second.
+
+``viewers`` adds plain websocket viewers beside the browser: they receive
+exactly what a browser does (the server cannot tell them apart) but draw
+nothing, so a classroom's worth can be simulated on one machine without
+thirty Chromiums competing with the server for the CPU.
 """
 
 from __future__ import annotations
 
 import os
 import shutil
+import threading
 import time
 from typing import Any
 
@@ -30,9 +37,37 @@ def chromium_path() -> str | None:
     return None
 
 
+class WebsocketViewer:
+    """A viewer that receives the scene like a browser and counts the bytes."""
+
+    def __init__(self, port: int):
+        import viser
+
+        self.url, self.protocol = f"ws://127.0.0.1:{port}", f"viser-v{viser.__version__}"
+        self.received = 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._receive, name="websocket-viewer", daemon=True)
+        self._thread.start()
+
+    def _receive(self) -> None:
+        from websockets.sync.client import connect
+
+        with connect(self.url, subprotocols=[self.protocol], max_size=None, open_timeout=30) as ws:
+            while not self._stop.is_set():
+                try:
+                    self.received += len(ws.recv(timeout=0.5))
+                except TimeoutError:
+                    continue
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5)
+
+
 def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 25, fps: float = 30.0,
-        warmup: float = 5.0) -> dict[str, Any]:
-    """Measure the live app for ``seconds`` (after ``warmup``) with one headless browser."""
+        warmup: float = 5.0, viewers: int = 1) -> dict[str, Any]:
+    """Measure the live app for ``seconds`` (after ``warmup``) with one
+    headless browser and ``viewers`` websocket viewers connected."""
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:
@@ -52,14 +87,19 @@ def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 25, fps
                 deadline = time.time() + 30
                 while not app.server.get_clients() and time.time() < deadline:
                     time.sleep(0.1)
+                others = [WebsocketViewer(app.port) for _ in range(viewers)]
                 time.sleep(warmup)
                 page.evaluate("""() => { window.__frames = 0; const tick = () => { window.__frames++;
                                  requestAnimationFrame(tick); }; requestAnimationFrame(tick); }""")
                 steps0, frames0, t0 = app.runner.latest.step, app.frames_drawn, time.perf_counter()
+                bytes0 = [v.received for v in others]
                 time.sleep(seconds)
                 steps1, frames1, t1 = app.runner.latest.step, app.frames_drawn, time.perf_counter()
+                bytes1 = [v.received for v in others]
                 browser_frames = page.evaluate("() => window.__frames")
                 clients = len(app.server.get_clients())
+                for viewer in others:
+                    viewer.close()
             finally:
                 browser.close()
     finally:
@@ -72,6 +112,10 @@ def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 25, fps
         "frames_per_second": round((frames1 - frames0) / wall, 1),
         "browser_frames_per_second": round(browser_frames / wall, 1),
         "clients": clients,
+        "viewers": 1 + viewers,
+        # The browser's websocket lives in a web worker, out of Playwright's sight: the websocket viewers count.
+        "kb_per_second_per_viewer": (round(max(b1 - b0 for b0, b1 in zip(bytes0, bytes1)) / wall / 1000, 1)
+                                     if viewers else None),
         "seconds": round(wall, 1),
         "robots": config.robots,
         "boxes": config.boxes,

@@ -31,16 +31,6 @@ SENSOR_COLOURS = np.array([[255, 255, 255], [90, 90, 90], [64, 200, 255], [255, 
 CELL_PIXELS = 8
 
 
-_LINEAR_LUT = np.round(255.0 * np.where(np.arange(256) / 255.0 <= 0.04045, np.arange(256) / 255.0 / 12.92,
-                                        ((np.arange(256) / 255.0 + 0.055) / 1.055) ** 2.4)).astype(np.uint8)
-
-
-def linear(colours: np.ndarray | tuple) -> np.ndarray:
-    """sRGB uint8 colours converted for viser's per-instance colours, which the
-    browser treats as linear: after this they show as the sRGB colour asked for."""
-    return _LINEAR_LUT[np.asarray(colours, dtype=np.uint8)]
-
-
 def robot_colours(charges: np.ndarray, capacity: float) -> np.ndarray:
     """(n, 3) uint8: green when full, red when empty, blended between (the engine's colours)."""
     return np.round(charge_colours(np.asarray(charges, dtype=float), capacity) * 255).astype(np.uint8)
@@ -96,20 +86,6 @@ def field_image(field: np.ndarray, scale: float | None = None, top_first: bool =
     return _heat_lut()[idx.T[::-1] if top_first else idx.T]
 
 
-def light_colours(intensities: np.ndarray, peak: float = 1.0) -> np.ndarray:
-    """(n*n, 3) uint8 colour of each light, in [ix, iy] row-major order:
-    grey when off through yellow when fully on."""
-    level = np.clip(np.asarray(intensities, dtype=float).reshape(-1) / (peak if peak > 0 else 1.0), 0.0, 1.0)
-    off, on = np.array(LIGHT_OFF, float), np.array(LIGHT_ON, float)
-    return np.round(off + level[:, None] * (on - off)).astype(np.uint8)
-
-
-def square_mesh(half: float, z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """A flat axis-aligned square facing +z."""
-    v = np.array([[-half, -half, z], [half, -half, z], [half, half, z], [-half, half, z]], dtype=np.float32)
-    return v, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32)
-
-
 def closed_segments(vertices: np.ndarray, z: float = 0.0) -> np.ndarray:
     """(k, 2, 3) line segments around a closed polygon at height z."""
     v = np.asarray(vertices, dtype=np.float32).reshape(-1, 2)
@@ -136,33 +112,3 @@ def open_segments(vertices: np.ndarray, z: float = 0.0) -> np.ndarray:
 def square(centre: float, half: float) -> np.ndarray:
     return np.array([[centre - half, centre - half], [centre + half, centre - half],
                      [centre + half, centre + half], [centre - half, centre + half]])
-
-
-def heading_quaternions(angles: np.ndarray) -> np.ndarray:
-    """(n, 4) wxyz quaternions of rotations by ``angles`` about +z."""
-    half = np.asarray(angles, dtype=np.float64) * 0.5
-    q = np.zeros((len(half), 4), dtype=np.float32)
-    q[:, 0] = np.cos(half)
-    q[:, 3] = np.sin(half)
-    return q
-
-
-def disc_mesh(radius: float, segments: int = 20, z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """A flat disc facing +z: (vertices, faces)."""
-    a = np.linspace(0, 2 * np.pi, segments, endpoint=False)
-    ring = np.stack([radius * np.cos(a), radius * np.sin(a), np.full(segments, z)], axis=1)
-    vertices = np.vstack([[0.0, 0.0, z], ring]).astype(np.float32)
-    faces = np.array([[0, 1 + i, 1 + (i + 1) % segments] for i in range(segments)], dtype=np.uint32)
-    return vertices, faces
-
-
-def hexagon_mesh(circumradius: float, z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """A flat regular hexagon facing +z, corners at angles k*60 degrees (like the engine's boxes)."""
-    return disc_mesh(circumradius, 6, z)
-
-
-def heading_mark_mesh(radius: float, z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """A slim triangle pointing along +x from the centre to the rim: the robot's heading."""
-    vertices = np.array([[0.92 * radius, 0.0, z], [0.05 * radius, 0.32 * radius, z],
-                         [0.05 * radius, -0.32 * radius, z]], dtype=np.float32)
-    return vertices, np.array([[0, 1, 2]], dtype=np.uint32)

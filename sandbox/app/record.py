@@ -23,8 +23,11 @@ from sandbox.app.frames import render
 from sandbox.app.runner import Runner
 from sandbox.app.scene import SceneView, configure_scene
 from sandbox.app.server import free_port
+from sandbox.app.snapshot import caption
 from sandbox.cli import UserError, add_config_arguments, config_from_args
 from sandbox.model.config import Config
+from sandbox.model.controller import first_cycle_steps
+from sandbox.shapes import shape_vertices
 
 FORMATS = (".html", ".viser", ".gif", ".mp4")
 
@@ -42,12 +45,15 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     add_config_arguments(p)
     p.set_defaults(func=record_command)
+    p.epilog = "Without --steps, the recording covers the first full contract-hold-dilate cycle."
     return p
 
 
 def record_command(args: argparse.Namespace) -> int:
 
     config = config_from_args(args)
+    if args.steps is None:  # one full cycle: what a viewer needs to see the method work
+        config = config.replace(steps=first_cycle_steps(config, shape_vertices(config.shape)))
     out = Path(args.out)
     suffix = out.suffix.lower()
     if suffix not in FORMATS:
@@ -101,18 +107,12 @@ def record(config: Config, kind: str = ".html", *, every: int = 50, fps: float =
     return _record_animation(config, kind, every, fps, size, shape, progress)
 
 
-def _label(snap: Any, case: str) -> str:
-    s = snap.sample
-    return (f"{case}  step {snap.step:>6,}  {snap.phase:<11} cycle {snap.cycle}  "
-            f"in goal {100 * s.fraction_in_goal:5.1f} %")
-
-
 def _record_animation(config: Config, kind: str, every: int, fps: float, size: int, shape: Any,
                       progress: Callable[[int], None] | None) -> bytes:
     import imageio.v3 as iio
     import numpy as np
 
-    pictures = [np.asarray(render(snap, size, label=_label(snap, snap.shape_name)))
+    pictures = [np.asarray(render(snap, size, label=caption(snap)))
                 for snap in frames(config, every, shape, progress)]
     if kind == ".gif":
         buffer = io.BytesIO()
@@ -151,7 +151,7 @@ def _record_viser(config: Config, kind: str, every: int, fps: float, shape: Any,
         view = None
         for snap in frames(config, every, shape, progress):
             if view is None:
-                view = SceneView(server.scene, snap)
+                view = SceneView(server.scene, snap)  # draws the caption too
             else:
                 view.update(snap)
             serializer.insert_sleep(1.0 / fps)

@@ -2,12 +2,18 @@
 
 Layout (z up, arena on z = 0, camera above looking down):
 
-- ``/arena/lights``   the 64 x 64 light grid as one crisp texture
+- ``/arena/lights``   the 64 x 64 light grid as one PNG texture (a few KB)
 - ``/arena/field``    the sensed luminosity as a heat map (toggle)
 - ``/arena/walls``, ``/arena/box_wall``   outer wall and the box-only wall
 - ``/goal``, ``/light_outline``   goal outline and current light outline
-- ``/swarm/robots``, ``/swarm/headings``, ``/swarm/boxes``   batched meshes
+- ``/swarm/robots``, ``/swarm/headings``, ``/swarm/boxes``   point clouds
 - ``/inspect/*``, ``/draw/*``   the followed robot and the shape being drawn
+- ``/caption``   what is running: case, strategies, step (also in recordings)
+
+Every viewer receives every update, so the moving parts are sent compactly
+(see :class:`CompactSender`): half-precision points relative to the arena's
+centre (1.6 cm steps at the walls, under a pixel when the whole arena is in
+view), and only what changed since the last frame.
 
 Works on any viser scene API (the live server, or a headless server that is
 only being recorded).
@@ -21,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from sandbox.app import palette as pal
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.snapshot import Snapshot, caption
 from sandbox.model.config import Config
 
 Z_FIELD, Z_LIGHTS, Z_BOXES, Z_ROBOTS, Z_MARKS, Z_LINES, Z_TOP = -0.01, 0.0, 0.02, 0.04, 0.05, 0.08, 0.12
@@ -70,6 +76,41 @@ def configure_scene(server: Any, config: Config) -> None:
     server.initial_camera.far = float(position[2] * 4)
 
 
+#: A circle of this many circumradii has a regular hexagon's area (3 sqrt(3) / 2 pi) ** 0.5.
+HEXAGON_AREA_RADIUS = float(np.sqrt(3 * np.sqrt(3) / (2 * np.pi)))
+#: Texture size of the light grid (pixels per side, about): crisp cells with seams at any usual zoom.
+LIGHT_TEXTURE_PIXELS = 512
+#: Moving points are sent on a grid this fine (m): exact in half precision up to 32 m from the
+#: centre, a fifth of a pixel with the whole arena in view, and coarse enough that sub-centimetre
+#: jitter of resting boxes sends nothing.
+POINT_GRID = 1.0 / 64.0
+#: Robot colours are sent in this many charge steps: a change of colour
+#: nobody can see is not worth a message to every viewer.
+CHARGE_STEPS = 32
+
+
+def _charge_steps(charges: np.ndarray, capacity: float) -> np.ndarray:
+    step = capacity / CHARGE_STEPS if capacity > 0 else 1.0
+    return np.round(np.asarray(charges, dtype=float) / step) * step
+
+
+class CompactSender:
+    """Assigns a handle's property only when its value changed since it was
+    last sent: each assignment is a message to every viewer."""
+
+    def __init__(self) -> None:
+        self._last: dict[tuple[int, str], Any] = {}
+
+    def send(self, handle: Any, prop: str, value: Any) -> bool:
+        key = (id(handle), prop)
+        fingerprint = value.tobytes() if isinstance(value, np.ndarray) else value
+        if self._last.get(key) == fingerprint:
+            return False
+        setattr(handle, prop, value)
+        self._last[key] = fingerprint
+        return True
+
+
 class SceneView:
     """Draws snapshots into a viser scene."""
 
@@ -100,20 +141,10 @@ class SceneView:
                 pass
         self.handles = {}
         placeholder = np.zeros((8, 8, 3), np.uint8)
-        # The light grid: one flat square per light, crisp by construction, on a
-        # dark floor that shows as thin seams between cells.
-        self.handles["floor"] = sc.add_mesh_simple(
-            "/arena/floor", *pal.square_mesh(c), color=pal.CELL_EDGE, position=(c, c, Z_LIGHTS - 0.005),
-            cast_shadow=False, receive_shadow=False)
-        n_side, pitch = cfg.lights_per_side, cfg.light_pitch
-        centres = (np.arange(n_side) + 0.5) * pitch
-        gx, gy = np.meshgrid(centres, centres, indexing="ij")  # row-major [ix, iy] like the intensities
-        cells = np.stack([gx.ravel(), gy.ravel(), np.full(gx.size, Z_LIGHTS)], axis=1).astype(np.float32)
-        self.handles["lights"] = sc.add_batched_meshes_simple(
-            "/arena/lights", *pal.square_mesh(0.44 * pitch),
-            np.tile(np.array([1.0, 0.0, 0.0, 0.0], np.float32), (len(cells), 1)), cells,
-            batched_colors=pal.linear(pal.light_colours(np.zeros(len(cells)))), lod="off", cast_shadow=False,
-            receive_shadow=False)
+        # The light grid as one PNG texture: a few KB per change, where one colour per light was 12 KB.
+        self.handles["lights"] = sc.add_image(
+            "/arena/lights", self._light_picture(snap), s, s, format="png", position=(c, c, Z_LIGHTS),
+            cast_shadow=False, receive_shadow=False, visible=not self.show_field)
         self.handles["field"] = sc.add_image(
             "/arena/field", placeholder, s, s, format="png", position=(c, c, Z_FIELD),
             cast_shadow=False, receive_shadow=False, visible=self.show_field)
@@ -123,22 +154,21 @@ class SceneView:
             "/arena/box_wall", pal.closed_segments(pal.square(cfg.centre, cfg.construction_size / 2.0), Z_LINES),
             pal.BOX_WALL, thickness=0.1)
         n, m = len(snap.robot_positions), len(snap.box_positions)
-        identity = np.tile(np.array([1.0, 0.0, 0.0, 0.0], np.float32), (max(n, 1), 1))
-        pos = np.zeros((max(n, 1), 3), np.float32)
-        dv, df = pal.disc_mesh(cfg.robot_radius, 20)
-        self.handles["robots"] = sc.add_batched_meshes_simple(
-            "/swarm/robots", dv, df, identity, pos, batched_colors=np.zeros((max(n, 1), 3), np.uint8),
-            lod="off", cast_shadow=False, receive_shadow=False, visible=n > 0)
-        hv, hf = pal.heading_mark_mesh(cfg.robot_radius, 0.005)
-        self.handles["headings"] = sc.add_batched_meshes_simple(
-            "/swarm/headings", hv, hf, identity, pos, batched_colors=pal.linear(pal.HEADING_MARK),
-            lod="off", cast_shadow=False, receive_shadow=False, visible=n > 0)
-        bv, bf = pal.hexagon_mesh(cfg.box_circumradius)
-        identity_b = np.tile(np.array([1.0, 0.0, 0.0, 0.0], np.float32), (max(m, 1), 1))
-        self.handles["boxes"] = sc.add_batched_meshes_simple(
-            "/swarm/boxes", bv, bf, identity_b, np.zeros((max(m, 1), 3), np.float32),
-            batched_colors=np.zeros((max(m, 1), 3), np.uint8), lod="off", cast_shadow=False,
-            receive_shadow=False, visible=m > 0)
+        # Discs need no rotation: a robot is a round point, its heading a dark dot near its front rim,
+        # a box a round point of its hexagon's area. (viser draws a point of size d as wide as an
+        # object 2d wide, so sizes are radii.)
+        r = cfg.robot_radius
+        self.handles["robots"] = sc.add_point_cloud(
+            "/swarm/robots", self._points(max(n, 1)), np.zeros((max(n, 1), 3), np.uint8), point_size=r, point_shape="circle",
+            point_shading="flat", position=(c, c, Z_ROBOTS), visible=n > 0)
+        self.handles["headings"] = sc.add_point_cloud(
+            "/swarm/headings", self._points(max(n, 1)), pal.HEADING_MARK, point_size=0.3 * r,
+            point_shape="circle", point_shading="flat", position=(c, c, Z_MARKS), visible=n > 0)
+        self.handles["boxes"] = sc.add_point_cloud(
+            "/swarm/boxes", self._points(max(m, 1)), np.zeros((max(m, 1), 3), np.uint8),
+            point_size=HEXAGON_AREA_RADIUS * cfg.box_circumradius, point_shape="circle", point_shading="flat", position=(c, c, Z_BOXES), visible=m > 0)
+        self.handles["caption"] = sc.add_label("/caption", caption(snap), position=(0.0, s + 0.8, Z_TOP),
+                                               anchor="bottom-left", font_screen_scale=1.2)
         empty = np.zeros((1, 2, 3), np.float32)
         self.handles["goal"] = sc.add_line_segments("/goal", empty, pal.GOAL_LINE, thickness=0.18)
         self.handles["light_outline"] = sc.add_line_segments("/light_outline", empty, pal.LIGHT_LINE, thickness=0.08)
@@ -153,6 +183,7 @@ class SceneView:
             "/draw/points", np.zeros((1, 3), np.float32), pal.DRAW_LINE, point_size=0.6, point_shape="circle",
             visible=False)
         self._built_for = _geometry_key(cfg, n, m)
+        self._sent = CompactSender()
         self._lights_key = self._field_key = self._goal_key = None
         self._outline_bytes = None
         self._n = (n, m)
@@ -167,7 +198,7 @@ class SceneView:
                 self._build(snap)
             h = self.handles
             if snap.lights_key != self._lights_key:
-                h["lights"].batched_colors = pal.linear(pal.light_colours(snap.intensities, peak=max(cfg.light_intensity, 1e-9)))
+                h["lights"].image = self._light_picture(snap)
                 self._lights_key = snap.lights_key
             if self.show_field and snap.field is not None and snap.lights_key != self._field_key:
                 h["field"].image = pal.field_image(snap.field, top_first=False)
@@ -179,23 +210,19 @@ class SceneView:
             if outline_bytes != self._outline_bytes:
                 h["light_outline"].points = pal.closed_segments(snap.outline, Z_LINES)
                 self._outline_bytes = outline_bytes
+            centre = cfg.arena_size / 2.0
+            send = self._sent.send
             if n:
-                pos = np.empty((n, 3), np.float32)
-                pos[:, :2], pos[:, 2] = snap.robot_positions, Z_ROBOTS
-                quat = pal.heading_quaternions(snap.robot_headings)
-                h["robots"].batched_positions = pos
-                h["robots"].batched_wxyzs = quat
-                h["robots"].batched_colors = pal.linear(pal.robot_colours(snap.robot_charges, cfg.capacity))
-                pos_marks = pos.copy()
-                pos_marks[:, 2] = Z_MARKS
-                h["headings"].batched_positions = pos_marks
-                h["headings"].batched_wxyzs = quat
+                send(h["robots"], "points", self._points(n, snap.robot_positions - centre))
+                send(h["robots"], "colors", pal.robot_colours(_charge_steps(snap.robot_charges, cfg.capacity),
+                                                                cfg.capacity))
+                front = 0.6 * cfg.robot_radius * np.stack([np.cos(snap.robot_headings),
+                                                            np.sin(snap.robot_headings)], axis=1)
+                send(h["headings"], "points", self._points(n, snap.robot_positions - centre + front))
             if m:
-                bpos = np.empty((m, 3), np.float32)
-                bpos[:, :2], bpos[:, 2] = snap.box_positions, Z_BOXES
-                h["boxes"].batched_positions = bpos
-                h["boxes"].batched_wxyzs = pal.heading_quaternions(snap.box_angles)
-                h["boxes"].batched_colors = pal.linear(pal.box_colours(snap.box_in_goal))
+                send(h["boxes"], "points", self._points(m, snap.box_positions - centre))
+                send(h["boxes"], "colors", pal.box_colours(snap.box_in_goal))
+            send(h["caption"], "text", caption(snap))
             robot = snap.robot
             if robot is not None:
                 a = np.linspace(0, 2 * np.pi, 33)
@@ -219,7 +246,22 @@ class SceneView:
                 self._field_key = snap.lights_key
             self.handles["field"].visible = self.show_field
             self.handles["lights"].visible = not self.show_field
-            self.handles["floor"].visible = not self.show_field
+
+    @staticmethod
+    def _light_picture(snap: Snapshot) -> np.ndarray:
+        cfg = snap.world_config
+        cells = max(2, LIGHT_TEXTURE_PIXELS // cfg.lights_per_side)
+        return pal.light_grid_image(snap.intensities, cell_pixels=cells, peak=max(cfg.light_intensity, 1e-9),
+                                    top_first=False)
+
+    @staticmethod
+    def _points(n: int, xy: np.ndarray | None = None) -> np.ndarray:
+        """(n, 3) half-precision points on the node's plane, relative to the arena's centre,
+        on a grid of POINT_GRID metres: a box that only trembles is not sent again."""
+        out = np.zeros((n, 3), np.float16)
+        if xy is not None:
+            out[:, :2] = np.round(np.asarray(xy) / POINT_GRID) * POINT_GRID
+        return out
 
     # ------------------------------------------------------------ drawing
     def set_draw_points(self, points: list[tuple[float, float]]) -> None:

@@ -59,3 +59,23 @@ class Snapshot:
     steps_per_frame: int
     steps_per_second: float
     robot: RobotView | None
+
+
+def case_name(shape: str, strategies: dict) -> str:
+    """The goal and its strategies in words: the paper's case name when they
+    are one of its seven cases, else e.g. ``heart + flare 1.5``."""
+    from sandbox.model.config import CASES, STRATEGY_NAMES
+
+    active = {name: float(strategies.get(name, 0.0)) for name in STRATEGY_NAMES if strategies.get(name, 0.0) > 0}
+    words = {"flare": "flare", "switch": "switch", "no_corners": "no corners"}
+    described = " + ".join([shape, *(f"{words[k]} {v:g}" for k, v in active.items())])
+    for name, case in CASES.items():
+        if case["shape"] == shape and active == {k: float(v) for k, v in case.items() if k != "shape"}:
+            return name if name == described else f"{name} ({described})"
+    return described
+
+
+def caption(snap: Snapshot) -> str:
+    """One line that says what a recorded frame shows: case, strategies and step."""
+    return (f"{case_name(snap.shape_name, snap.strategies)} | step {snap.step:,} | {snap.phase}, cycle {snap.cycle}"
+            f" | {100 * snap.sample.fraction_in_goal:.0f} % in goal")

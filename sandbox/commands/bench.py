@@ -39,6 +39,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--steps-per-frame", type=int, default=25, metavar="N",
                    help="with --live: the app's speed setting, 1-100 (default 25, the app's default; 100: as "
                         "fast as it can)")
+    p.add_argument("--viewers", type=int, default=1, metavar="K",
+                   help="with --live: K viewers besides the browser (websocket clients that receive the scene "
+                   "like a browser but draw nothing; they count the bytes); 9 makes a class of 10 (default 1)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.add_argument("--compare-reference", metavar="PATH",
                    help="also time a locally built binary of the authors' program (github AdamBignell/push) on "
@@ -204,7 +207,9 @@ def bench_command(args: argparse.Namespace) -> int:
             raise UserError(f"--seconds must be positive, got {args.seconds}")
         if not 1 <= args.steps_per_frame <= 100:
             raise UserError(f"--steps-per-frame must be between 1 and 100, got {args.steps_per_frame}")
-        result = live_bench.run(config, args.seconds, steps_per_frame=args.steps_per_frame)
+        if not 0 <= args.viewers <= 100:
+            raise UserError(f"--viewers must be between 0 and 100, got {args.viewers}")
+        result = live_bench.run(config, args.seconds, steps_per_frame=args.steps_per_frame, viewers=args.viewers)
     else:
         if config.steps <= 0:
             raise UserError("--steps must be at least 1 for a benchmark")

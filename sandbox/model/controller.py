@@ -405,3 +405,14 @@ def no_corners_count(fraction: float, lit: int, rule: str) -> int:
     while off < lit and off / lit < fraction:
         off += 1
     return off
+
+
+def first_cycle_steps(config: Config, vertices: np.ndarray | None, limit: int = 10**7) -> int:
+    """World steps until the first contract-hold-dilate cycle ends (the
+    controller alone: it never looks at robots or boxes, so this is exact)."""
+    ctrl = Controller(config, make_goal(config, vertices))
+    steps = 0
+    while ctrl.cycle == 0 and steps < limit:
+        ctrl.advance()
+        steps += 1
+    return steps

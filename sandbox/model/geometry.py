@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 from shapely.geometry import Polygon
 
 
@@ -94,8 +95,38 @@ def distances_to_edges(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
 
 
 def distance_to_outline(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
-    """Distance from each point (m, 2) to the closed polyline through ``vertices``."""
-    return distances_to_edges(points, vertices).min(axis=1)
+    """Distance from each point (m, 2) to the closed polyline through ``vertices``.
+
+    The controller asks this for all 4,096 lights at every update; with numpy's
+    (m, n, 2) temporaries that took 11 ms for a 49-edge outline, as long as 60
+    world steps. The compiled loop does the same arithmetic, in the same order,
+    as :func:`distances_to_edges`, so the answers are the same to the bit."""
+    p = np.ascontiguousarray(points, dtype=float).reshape(-1, 2)
+    v = np.ascontiguousarray(vertices, dtype=float).reshape(-1, 2)
+    if len(v) == 0:
+        return np.full(len(p), np.inf)
+    return _min_distance_to_closed_polyline(p, v)
+
+
+@njit(cache=True)
+def _min_distance_to_closed_polyline(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    m, n = points.shape[0], vertices.shape[0]
+    out = np.empty(m)
+    for i in range(m):
+        px, py = points[i, 0], points[i, 1]
+        best = np.inf
+        for j in range(n):
+            ax, ay = vertices[j, 0], vertices[j, 1]
+            k = j + 1 if j + 1 < n else 0
+            abx, aby = vertices[k, 0] - ax, vertices[k, 1] - ay
+            length2 = max(abx * abx + aby * aby, 1e-300)
+            t = min(max(((px - ax) * abx + (py - ay) * aby) / length2, 0.0), 1.0)
+            dx, dy = px - (ax + t * abx), py - (ay + t * aby)
+            d = math.sqrt(dx * dx + dy * dy)
+            if d < best:
+                best = d
+        out[i] = best
+    return out
 
 
 def points_in_polygon(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:

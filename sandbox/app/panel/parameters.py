@@ -61,8 +61,7 @@ class ParametersFolder:
 
     def _control(self, p: Any, value: Any) -> Any:
         gui = self.gui
-        unit = f" ({p.unit})" if p.unit and p.unit != "steps" else ""
-        label = p.name.replace("_", " ") + unit
+        label = _label(p)
         hint = p.help + (" (applies on reset)" if p.rebuild else " (applies at once)")
         if p.choices:
             handle = gui.add_dropdown(label, tuple(p.choices), initial_value=value, hint=hint)
@@ -117,3 +116,12 @@ def _step_for(value: float) -> float:
         return 0.01
     magnitude = 10 ** np.floor(np.log10(abs(value)))
     return float(magnitude / 100)
+
+
+def _label(p: Any) -> str:
+    """The control's name with its unit, e.g. ``update every (steps)``; a
+    name that already says its unit (``hold steps``) does not repeat it."""
+    name = p.name.replace("_", " ")
+    if not p.unit or name.endswith(p.unit):
+        return name
+    return f"{name} ({p.unit})"

@@ -108,4 +108,4 @@ class RunFolder:
                 f"**Seed** {snap.seed} &nbsp; {cfg.robots} robots, {cfg.boxes} boxes, goal *{snap.shape_name}*  \n"
                 + (f"**Speed** {runner.steps_per_second():,.0f} steps/s "
                    f"({runner.steps_per_second() * cfg.dt:,.1f}x real time), "
-                   f"{runner.frames_per_second():,.0f} frames/s" if snap.playing else "**Paused**"))
+                   f"{runner.frames_per_second():,.0f} frames/s sent" if snap.playing else "**Paused**"))

@@ -1,0 +1,114 @@
+"""What the scene sends to every viewer: only what changed, compactly."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from sandbox.app.runner import Runner
+from sandbox.app.scene import CHARGE_STEPS, POINT_GRID, CompactSender, SceneView, _charge_steps
+from sandbox.app.snapshot import caption, case_name
+from sandbox.model.config import Config
+
+
+class FakeHandle:
+    """Stands in for a viser handle: records every property assignment (one message each)."""
+
+    def __init__(self, log: list, path: str, **props):
+        object.__setattr__(self, "_log", log)
+        object.__setattr__(self, "_path", path)
+        for k, v in props.items():
+            object.__setattr__(self, k, v)
+
+    def __setattr__(self, name, value):
+        self._log.append((self._path, name))
+        object.__setattr__(self, name, value)
+
+    def remove(self):
+        pass
+
+
+class FakeScene:
+    def __init__(self):
+        self.sent: list[tuple[str, str]] = []
+
+    def __getattr__(self, name):
+        if not name.startswith("add_"):
+            raise AttributeError(name)
+
+        def add(path, *args, **kwargs):
+            props = {"visible": kwargs.get("visible", True), "points": args[0] if args else None}
+            return FakeHandle(self.sent, path, **props)
+        return add
+
+
+@pytest.fixture(scope="module")
+def snapshot():
+    r = Runner(Config(robots=12, boxes=20, update_every=10, hold_steps=3), shape=None, fps=60, steps_per_frame=2)
+    r.start()
+    try:
+        r.set_playing(False)
+        r.step_once(5)
+        snap = r.latest
+        while snap.step == 0:
+            snap = r.latest
+        return snap
+    finally:
+        r.stop()
+
+
+def test_sender_sends_a_value_only_when_it_changed():
+    log = []
+    handle = FakeHandle(log, "/x")
+    sender = CompactSender()
+    a = np.arange(6, dtype=np.float16)
+    assert sender.send(handle, "points", a)
+    assert not sender.send(handle, "points", a.copy())
+    assert sender.send(handle, "points", a + 1)
+    assert sender.send(handle, "text", "step 1") and not sender.send(handle, "text", "step 1")
+    assert log == [("/x", "points"), ("/x", "points"), ("/x", "text")]
+
+
+def test_points_are_half_precision_on_a_grid_exact_to_the_walls():
+    xy = np.array([[31.99, -31.99], [0.004, 12.3456]])
+    pts = SceneView._points(2, xy)
+    assert pts.dtype == np.float16 and pts.shape == (2, 3)
+    # 1/64 m steps are exact in half precision up to 32 m from the centre (2 ** 11 steps).
+    np.testing.assert_array_equal(pts[:, :2].astype(float) / POINT_GRID, np.round(xy / POINT_GRID))
+    assert pts[1, 0] == 0.0  # a 4 mm offset rounds to the grid point
+    resting = np.array([[10.0, -20.0], [0.5, 3.25]])  # a box that only trembles, by 3 mm either way
+    assert SceneView._points(2, resting + 0.003).tobytes() == SceneView._points(2, resting - 0.003).tobytes()
+
+
+def test_charge_colours_change_in_visible_steps():
+    capacity = 20.0
+    steps = _charge_steps(np.array([0.0, 0.2, 0.35, 19.9, 20.0]), capacity)
+    np.testing.assert_allclose(steps, [0.0, 0.0, 0.625, 20.0, 20.0])  # steps of 20 / 32 = 0.625
+    assert len(np.unique(_charge_steps(np.linspace(0, capacity, 1000), capacity))) == CHARGE_STEPS + 1
+
+
+def test_an_unchanged_frame_sends_only_nothing(snapshot):
+    scene = FakeScene()
+    SceneView(scene, snapshot).update(snapshot)
+    built = list(scene.sent)
+    view = SceneView(scene, snapshot)
+    scene.sent.clear()
+    view.update(snapshot)
+    assert scene.sent == [], "the same snapshot again must send nothing"
+    moved = dataclasses.replace(snapshot, robot_positions=snapshot.robot_positions + 0.5, step=snapshot.step + 1)
+    view.update(moved)
+    sent = set(scene.sent)
+    assert ("/swarm/robots", "points") in sent and ("/swarm/headings", "points") in sent
+    assert ("/caption", "text") in sent
+    assert ("/swarm/boxes", "points") not in sent and ("/arena/lights", "image") not in sent
+    assert built  # the first frame did build and send
+
+
+def test_caption_names_the_case_and_the_step(snapshot):
+    assert case_name("star", {"switch": 0.25}) == "star-switch (star + switch 0.25)"
+    assert case_name("circle", {}) == "circle"
+    assert case_name("heart", {"flare": 1.5}) == "heart + flare 1.5"
+    text = caption(snapshot)
+    assert text.startswith("circle | step ") and "cycle 0" in text and "% in goal" in text
