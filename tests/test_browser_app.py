@@ -172,6 +172,27 @@ def test_refused_population_is_never_stored(app, page):
     open_folder(page, "Population and physics")  # closed again, as the other tests expect
 
 
+def test_the_largest_world_builds_with_progress_and_can_be_cancelled(app, page):
+    runner = app.runner
+    before = len(runner.latest.robot_positions)
+    stored = runner.latest.config.robots
+    largest = runner.latest.config.max_robots
+    open_folder(page, "Population and physics")
+    robots = page.get_by_label("robots", exact=True)
+    robots.fill(str(largest))
+    robots.press("Tab")
+    wait_until(lambda: runner.latest.config.robots == largest, what="the largest population stored")
+    click_button(page, "Reset (same seed)")
+    page.get_by_text("Building the world").first.wait_for(timeout=15_000)  # progress in the panel
+    click_button(page, "Cancel building")
+    notification(page, "Reset cancelled")
+    assert len(runner.latest.robot_positions) == before  # the running world goes on
+    robots.fill(str(stored))
+    robots.press("Tab")
+    wait_until(lambda: runner.latest.config.robots == stored, what="the population put back")
+    open_folder(page, "Population and physics")  # closed again, as the other tests expect
+
+
 def test_run_controls(app, page):
     runner = app.runner
     click_button(page, "Pause")
@@ -221,6 +242,21 @@ def test_each_strategy_reaches_the_simulation(app, page, label, name):
     assert app.runner.latest.step >= steps  # no reset happened
     page.get_by_label(label, exact=True).uncheck()
     wait_until(lambda: app.runner.latest.strategies[name] == 0.0, what=f"{name} off")
+
+
+def test_a_strategy_that_would_change_nothing_says_so(app, page):
+    choose(page, "Shape", "square")
+    wait_until(lambda: app.runner.latest.shape_name == "square", what="the square goal")
+    slider = page.locator("label", has_text="Flare amount").first.get_attribute("for")
+    beside = page.locator(f"[id='{slider}']").locator("xpath=..")
+    amount = beside.locator("input:not([type=hidden])").first  # the slider's number box
+    amount.fill("1")
+    amount.press("Tab")
+    page.get_by_label("Flare", exact=True).check()
+    notification(page, "sharpest corner is 90 degrees")  # 90 x 1 is not above a square's corners
+    wait_until(lambda: app.runner.latest.strategies["flare"] == 1.0, what="flare 1 applied all the same")
+    page.get_by_label("Flare", exact=True).uncheck()
+    wait_until(lambda: app.runner.latest.strategies["flare"] == 0.0, what="flare off")
 
 
 def test_drawing_by_clicks_creates_a_valid_goal(app, page):

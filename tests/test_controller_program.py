@@ -210,3 +210,18 @@ def test_first_cycle_length_of_the_circle():
         radius, up = radius * 1.025, up + 1
     assert (down, up) == (58, 56)
     assert first_cycle_steps(cfg, shape_vertices("circle")) == (down + up + 1) * 100 == 11_500
+
+
+def test_a_strategy_that_would_change_nothing_says_so():
+    from sandbox.model.controller import strategy_effect_note
+
+    square, star = shape_vertices("square"), shape_vertices("star")
+    # 90 x 1.0 = 90 is not above the square's 90-degree corners; 90 x 1.1 = 99 is.
+    assert "sharpest corner is 90 degrees (flare acts above 1.00)" in strategy_effect_note("flare", 1.0, square)
+    assert strategy_effect_note("flare", 1.1, square) == ""
+    # The star's tips: the inner vertices sit at 2.5 m, 36 degrees either side of a 5 m tip, so half the
+    # tip angle is atan(2.5 sin 36 / (5 - 2.5 cos 36)) = 26.27 degrees: tips of 52.5 degrees, flare from 0.58.
+    assert strategy_effect_note("flare", 0.6, star) == ""
+    assert "sharpest corner is 53 degrees (flare acts above 0.58)" in strategy_effect_note("flare", 0.57, star)
+    assert "circle goal" in strategy_effect_note("switch", 0.25, None)
+    assert strategy_effect_note("switch", 0.25, star) == "" and strategy_effect_note("flare", 0.0, square) == ""

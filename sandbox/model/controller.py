@@ -416,3 +416,26 @@ def first_cycle_steps(config: Config, vertices: np.ndarray | None, limit: int = 
         ctrl.advance()
         steps += 1
     return steps
+
+
+def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | None) -> str:
+    """Why a strategy at this amount will change nothing on this goal ('' when it will).
+
+    A circle goal has no corners to flare or darken and is already a circle;
+    flare moves a convex corner of angle a only when 90 x amount > a, so on a
+    square it starts above 1 and on the star's 52.5-degree tips above 0.58."""
+    if amount <= 0:
+        return ""
+    if goal_vertices is None:
+        return {"flare": "Flare does nothing on a circle goal: it has no corners to push out.",
+                "switch": "Switch to circle does nothing on a circle goal: it is a circle already.",
+                "no_corners": "No corners does nothing on a circle goal: it has no corners."}.get(name, "")
+    if name == "flare":
+        angles = geometry.interior_angles(np.asarray(goal_vertices, dtype=float))
+        convex = angles[angles < 180.0]
+        if len(convex) and not (90.0 * amount > convex).any():
+            sharpest = float(convex.min())
+            return (f"Flare {amount:g} does nothing on this goal: flare moves a corner only when 90 x amount "
+                    f"exceeds its angle, and the sharpest corner is {sharpest:.0f} degrees "
+                    f"(flare acts above {sharpest / 90.0:.2f}).")
+    return ""

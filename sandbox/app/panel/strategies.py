@@ -9,9 +9,10 @@ from typing import Any, Callable
 
 import viser
 
-from sandbox.app.panel.common import notify_error
+from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.config import CASES, STRATEGIES
+from sandbox.model.controller import strategy_effect_note
 from sandbox.model.simulation import Simulation
 from sandbox.shapes import shape_vertices
 
@@ -75,3 +76,6 @@ class StrategiesFolder:
 
         self.runner.post(functools.partial(Simulation.set_strategies, **{name: value}), on_error=failed)
         self._on_change(f"{name} {value:g}")
+        note = strategy_effect_note(name, value, self.runner.latest.goal_vertices)
+        if note:  # applied all the same: the goal may change to one it acts on
+            notify(client, "No visible effect", note, "yellow")
