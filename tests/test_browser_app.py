@@ -223,6 +223,22 @@ def test_run_controls(app, page):
     wait_until(lambda: not app.view.show_field, what="the light grid")
 
 
+def test_quick_shape_picks_are_never_lost(app, page):
+    """Picks 2 s apart, as in the report that lost about 1 in 10: each one reaches
+    the simulation, and the dropdown still shows it a moment later."""
+    field = page.get_by_label("Shape", exact=True)
+    for name in ("square", "triangle", "house", "star", "l-shape", "circle"):
+        started = time.time()
+        field.click()
+        item = page.get_by_role("option", name=name, exact=True)
+        item.wait_for(state="visible", timeout=10_000)
+        page.wait_for_timeout(300)
+        item.click()
+        wait_until(lambda: app.runner.latest.shape_name == name, 10, f"the {name} goal")
+        time.sleep(max(0.0, 2.0 - (time.time() - started)))
+        assert field.input_value() == name and app.runner.latest.shape_name == name
+
+
 def test_shape_picker_changes_the_goal(app, page):
     choose(page, "Shape", "star")
     wait_until(lambda: app.runner.latest.shape_name == "star" and app.runner.latest.goal_vertices is not None,
