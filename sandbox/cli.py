@@ -74,3 +74,29 @@ def config_from_args(args: argparse.Namespace) -> Config:
         explicit.update(CASES[args.case])
     explicit.update({p.name: getattr(args, p.name) for p in params() if getattr(args, p.name, None) is not None})
     return Config().replace(**explicit)
+
+
+def add_controller_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--controller", metavar="PATH.py:CLASS", default=None,
+                   help="a light program of your own instead of the paper's controller: a class with "
+                        "update(observation) returning one intensity per light (see README, 'Light programs')")
+
+
+def controller_spec(args: argparse.Namespace) -> str | None:
+    """The --controller spec with its file made absolute, after checking that it loads
+    (a one-line UserError if not); None without the flag."""
+    from pathlib import Path
+
+    from sandbox.model.programs import ProgramError, load_program
+
+    spec = getattr(args, "controller", None)
+    if not spec:
+        return None
+    path, sep, name = spec.rpartition(":")
+    if sep and path.endswith(".py"):
+        spec = f"{Path(path).resolve()}:{name}"
+    try:
+        load_program(spec)
+    except ProgramError as exc:
+        raise UserError(str(exc)) from None
+    return spec

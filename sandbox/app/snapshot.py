@@ -67,7 +67,7 @@ def case_name(shape: str, strategies: dict) -> str:
     from sandbox.model.config import CASES, STRATEGY_NAMES
 
     active = {name: float(strategies.get(name, 0.0)) for name in STRATEGY_NAMES if strategies.get(name, 0.0) > 0}
-    words = {"flare": "flare", "switch": "switch", "no_corners": "no corners"}
+    words = {"flare": "flare", "switch": "switch", "no_corners": "no corners", "chase": "chase"}
     described = " + ".join([shape, *(f"{words[k]} {v:g}" for k, v in active.items())])
     for name, case in CASES.items():
         if case["shape"] == shape and active == {k: float(v) for k, v in case.items() if k != "shape"}:

@@ -12,9 +12,10 @@ from typing import IO, Any
 
 from tqdm import tqdm
 
-from sandbox.cli import UserError, add_config_arguments, config_from_args
+from sandbox.cli import UserError, add_config_arguments, add_controller_argument, config_from_args, controller_spec
 from sandbox.model.config import CASES, STRATEGY_NAMES, Config
 from sandbox.model.metrics import Sample, SampleWriter
+from sandbox.model.programs import ProgramError
 from sandbox.model.simulation import Simulation
 
 
@@ -26,6 +27,7 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--trace", metavar="FILE.csv", help="write both metrics every metrics_every steps to this CSV file")
     p.add_argument("--json", action="store_true", help="print one JSON object with the results on stdout")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_controller_argument(p)
     add_config_arguments(p)
     p.set_defaults(func=run_command)
     return p
@@ -54,10 +56,11 @@ def open_trace(path: str | None) -> tuple[IO[str] | None, Any]:
     return handle, SampleWriter(handle)
 
 
-def run_trial(config: Config, *, progress: bool = False, on_sample=None) -> tuple[Simulation, Sample, float]:
+def run_trial(config: Config, *, progress: bool = False, on_sample=None,
+              program: Any = None) -> tuple[Simulation, Sample, float]:
     """Run ``config.steps`` steps in chunks of ``metrics_every``; returns the
     simulation, its final sample and the wall time in seconds."""
-    sim = Simulation(config)
+    sim = Simulation(config, program=program)
     if on_sample:
         on_sample(sim.history[0])
     chunk = config.metrics_every
@@ -87,6 +90,12 @@ def run_trial(config: Config, *, progress: bool = False, on_sample=None) -> tupl
 def run_command(args: argparse.Namespace) -> int:
 
     config = config_from_args(args)
+    spec = controller_spec(args)
+    program = None
+    if spec:
+        from sandbox.model.programs import load_program
+
+        program = load_program(spec)
     handle, writer = open_trace(args.trace)
     try:
         def write(sample: Sample) -> None:
@@ -94,7 +103,9 @@ def run_command(args: argparse.Namespace) -> int:
                 writer.write(sample)
                 handle.flush()
 
-        sim, final, wall = run_trial(config, progress=not args.no_progress, on_sample=write)
+        sim, final, wall = run_trial(config, progress=not args.no_progress, on_sample=write, program=program)
+    except ProgramError as exc:
+        raise UserError(str(exc)) from None
     finally:
         if handle:
             handle.close()
@@ -108,6 +119,9 @@ def run_command(args: argparse.Namespace) -> int:
         "mean_outside_distance": final.mean_outside_distance,
         "boxes_escaped": final.boxes_escaped,
         "cycles": sim.cycle,
+        "controller": spec or "paper (open loop)",
+        "senses": sorted(sim.senses),
+        "light_energy": round(sim.light_energy, 3),
         "wall_seconds": round(wall, 3),
         "steps_per_second": round(sim.steps_done / wall, 1) if wall > 0 else None,
         "config": config.to_dict(),

@@ -96,7 +96,8 @@ def run_trials(trials: list[Trial], store: ResultStore, executor: Callable[[], c
 
             def submit(t: Trial) -> None:
                 attempts[t] = attempts.get(t, 0) + 1
-                running[pool[0].submit(run_sweep_trial, t.config, t.seed, t.config["steps"], t.shape)] = t
+                running[pool[0].submit(run_sweep_trial, t.config, t.seed, t.config["steps"], t.shape,
+                                           t.controller)] = t
 
             for t in todo:
                 submit(t)

@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sandbox.cli import UserError, add_config_arguments
+from sandbox.cli import UserError, add_config_arguments, add_controller_argument, controller_spec
 from sandbox.experiments.executors import dask_executor, local_executor, run_trials
 from sandbox.experiments.plan import Case, grid_cases, make_trials, paper_cases
 from sandbox.experiments.report import build_report
@@ -139,7 +139,7 @@ def _sweep(args: argparse.Namespace) -> int:
     store = ResultStore(out)
     store.check_writable()
     write_meta(out, cases, compare, _command_line(args), args.trials, seed_start)
-    trials = make_trials(cases, args.trials, seed_start)
+    trials = make_trials(cases, args.trials, seed_start, controller_spec(args))
 
     if args.scheduler:
         executor = lambda: dask_executor(args.scheduler)  # noqa: E731
@@ -201,6 +201,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR", help="folder for results (created; resumed if present)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-report", action="store_true", help="only run the trials; build the report later")
+    add_controller_argument(p)
     add_config_arguments(p, with_case=False)
     p.set_defaults(func=sweep_command)
     return p

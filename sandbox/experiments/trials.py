@@ -23,18 +23,21 @@ class SweepError(Exception):
     """A problem with a sweep a user can fix (shown as one line)."""
 
 
-def run_sweep_trial(config: dict, seed: int, steps: int, shape: list | None) -> dict:
+def run_sweep_trial(config: dict, seed: int, steps: int, shape: list | None, controller: str | None = None) -> dict:
     """Run one trial and return its samples, configuration and final layout.
 
     ``config`` is a full configuration as from ``Config.to_dict()``; ``shape``
     the goal polygon's vertices (None for the circle), resolved by the caller
-    so workers need not see the user's shape files.
+    so workers need not see the user's shape files; ``controller`` a light
+    program as ``path.py:ClassName`` (loaded in the worker), None for the paper's.
     """
+    from sandbox.model.programs import load_program
     from sandbox.model.simulation import Simulation  # only in the worker: the parent need not load numba
 
     cfg = Config(**config).replace(seed=int(seed), steps=int(steps))
     start, cpu = time.perf_counter(), time.process_time()
-    sim = Simulation(cfg, shape=None if shape is None else np.asarray(shape, dtype=float))
+    program = load_program(controller) if controller else None
+    sim = Simulation(cfg, shape=None if shape is None else np.asarray(shape, dtype=float), program=program)
     sim.step(cfg.steps)
     if sim.has_nan():
         raise RuntimeError(f"the simulation produced NaN (seed {seed})")
@@ -48,6 +51,9 @@ def run_sweep_trial(config: dict, seed: int, steps: int, shape: list | None) -> 
         "seconds": round(time.perf_counter() - start, 3),
         "cpu_seconds": round(time.process_time() - cpu, 3),
         "host": socket.gethostname(),
+        "controller": controller or "paper (open loop)",
+        "senses": sorted(sim.senses),  # what the light program looked at
+        "light_energy": round(sim.light_energy, 3),  # sum of all intensities over all steps
         "samples": samples,
         "final": {
             "box_positions": np.round(sim.box_positions, 4).tolist(),
@@ -65,6 +71,7 @@ class Trial:
     seed: int
     config: dict = field(compare=False, hash=False)  # full config dict, seed and steps included
     shape: list | None = field(default=None, compare=False, hash=False)
+    controller: str | None = field(default=None, compare=False, hash=False)  # a light program's path:Class
 
     @property
     def name(self) -> str:

@@ -81,6 +81,10 @@ STRATEGIES = (
     Strategy("no_corners", "No corners", 0.5, 0.95, 0.05,
              "fraction of band lights nearest convex corners that stay off (0 = off; 0.5 when on; at most "
              "0.95: at 1 the whole band would be dark)"),
+    Strategy("chase", "Chase stray boxes", 2.0, 10.0, 0.25,
+             "closed loop (senses the boxes, as an overhead camera would): dilate only until the outline is "
+             "this many metres beyond the farthest stray box, then contract again (0 = off, open loop; 2.0 "
+             "when on)"),
 )
 STRATEGY_NAMES = tuple(s.name for s in STRATEGIES)
 #: The value a strategy takes when it is switched on without an amount.
@@ -256,6 +260,7 @@ class Config:
         "the polygon below the same radius (the authors' program)", group="strategies",
         choices=("inradius", "fraction"), paper="fraction", rebuild=False)
     no_corners: float = _strategy("no_corners")
+    chase: float = _strategy("chase")
     no_corners_count: str = _param(
         "at-least", "how many lights no_corners c turns off of n lit: 'round', round(c n), equally near lights "
         "taken column by column (paper text), or 'at-least', the fewest k with k / n >= c, row by row (the "

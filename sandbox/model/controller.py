@@ -147,6 +147,7 @@ class Controller:
         self.outline = np.empty((0, 2))
         self.corners = np.empty((0, 2))
         self.intensities = np.zeros((config.lights_per_side,) * 2)
+        self._observation = None  # what the last update saw (closed loop only)
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
         #: outline does not fit is refused here with a ShapeError.
         self.notes = goal_fit_notes(self)
@@ -250,6 +251,24 @@ class Controller:
         if self.strategies["switch"] <= 0:
             self.circle_radius = None
 
+    # -- the light-program interface (sandbox.model.programs) ---------------
+    #: Called every world step: the controller keeps its own update clock.
+    every = 1
+
+    @property
+    def senses(self) -> frozenset:
+        """Open loop: nothing. With *chase*, the boxes' positions."""
+        return frozenset({"boxes"}) if self.strategies["chase"] > 0 or self._pending.get("chase", 0) > 0 \
+            else frozenset()
+
+    def reset(self, config: Config, goal: Goal) -> None:
+        """Nothing to do: the simulation builds a new Controller for a new world."""
+
+    def update(self, observation) -> np.ndarray | None:
+        """One world step: the new pattern when it changed, else None."""
+        self._observation = observation
+        return self.intensities if self.advance() else None
+
     # -- time -------------------------------------------------------------
     def advance(self) -> bool:
         """One world step. Returns whether the light pattern may have changed."""
@@ -295,6 +314,8 @@ class Controller:
             if self.scale >= self.max_scale:
                 self.scale = self.max_scale
                 self._turn_to_contracting()
+            elif self.inradius >= self._turn_radius():
+                self._turn_to_contracting()
 
     def _clamped_circle_step(self) -> None:
         """The circle lit in the polygon's place (switch_mode 'inradius') under
@@ -307,6 +328,27 @@ class Controller:
             self.circle_radius = min(self.circle_radius / rate, self.circle_max_radius)
             if self.circle_radius >= self.circle_max_radius:
                 self._turn_to_contracting()
+
+    def _turn_radius(self) -> float:
+        """The inradius (radius for a circle) at which dilation turns: the
+        largest, or with *chase* (closed loop) as soon as the outline is
+        ``chase`` metres beyond the farthest box outside the goal, and at least
+        ``chase`` metres beyond the smallest outline, so the robots always
+        back off and push again."""
+        largest = self.max_radius
+        margin = self.strategies["chase"]
+        observation = self._observation
+        if margin <= 0 or observation is None:
+            return largest
+        boxes = observation.box_positions
+        stray = boxes[~self.goal.contains(boxes)] - self.goal.centre
+        if not len(stray):
+            need = 0.0
+        elif self.circle_radius is not None or self.shape is None:
+            need = float(np.hypot(*stray.T).max()) + margin
+        else:
+            need = float(geometry.gauge(stray, self.shape.vertices).max()) * self.shape.inradius + margin
+        return min(largest, max(need, self.min_radius + margin))
 
     def _turn_to_contracting(self) -> None:
         self.phase = CONTRACTING
@@ -326,7 +368,7 @@ class Controller:
                 self._grow_back()
                 self._program_update()
             return
-        if self.phase == DILATING and self.inradius > self.max_radius * (1 + 1e-12):
+        if self.phase == DILATING and self.inradius > self._turn_radius() * (1 + 1e-12):
             # First size above the largest: not lit; turn and shrink from it.
             self._turn_to_contracting()
             self._step_size(rate)

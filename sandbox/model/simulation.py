@@ -12,14 +12,15 @@ imports a GUI library. Not thread-safe: drive it from one thread.
 from __future__ import annotations
 
 import time
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
 from sandbox.model import kernels, metrics, robots
 from sandbox.model.config import STRATEGY_NAMES, Config, param
 from sandbox.model.controller import Controller, Goal, make_goal
-from sandbox.model.lights import LightField
+from sandbox.model.lights import LightField, light_centres
+from sandbox.model.programs import Observation, ProgramError, check_pattern, senses_of
 from sandbox.model.world import World
 from sandbox.shapes import ShapeError, shape_vertices
 
@@ -53,8 +54,10 @@ class Simulation:
     """
 
     def __init__(self, config: Config | None = None, *, seed: int | None = None,
-                 shape: np.ndarray | None | str = "from-config"):
+                 shape: np.ndarray | None | str = "from-config", program: Any = None):
         self.config = config or Config()
+        #: A light program of the user's (see sandbox.model.programs); None: the paper's controller.
+        self.user_program = program
         if isinstance(shape, str):
             shape = shape_vertices(self.config.shape if shape == "from-config" else shape)
         self.shape_vertices = None if shape is None else np.asarray(shape, dtype=float)
@@ -78,7 +81,7 @@ class Simulation:
         # Built: from here on nothing can fail halfway.
         self.config, self.seed, self.world, self.goal, self.controller = cfg, cfg.seed, world, goal, controller
         self.lights = LightField(cfg)
-        self.lights.set_intensities(self.controller.intensities)
+        self._start_program()
         self._layout = kernels.sample_layout(self.lights)
         self._robot_params = kernels.robot_params(cfg)
         n = cfg.robots
@@ -94,6 +97,8 @@ class Simulation:
         self._due = [np.flatnonzero((r + phase) % cfg.command_period == 0) for r in range(cfg.command_period)]
         self._fresh = True
         self.history = []
+        #: Sum of all intensities over all steps so far (intensity x steps): the light energy spent.
+        self.light_energy = 0.0
         #: Wall seconds spent in pymunk's Space.step, in light-pattern changes
         #: (controller redraw + field update) and in metrics, for `bench`.
         self.timings = {"physics": 0.0, "lights": 0.0, "metrics": 0.0}
@@ -111,10 +116,17 @@ class Simulation:
     def _step_once(self) -> None:
         cfg = self.config
         state = self._sync()
-        t0 = time.perf_counter()
-        if self.controller.advance():
-            self.lights.set_intensities(self.controller.intensities)
-            self.timings["lights"] += time.perf_counter() - t0
+        self._until_program -= 1
+        if self._until_program <= 0:
+            t0 = time.perf_counter()
+            self._until_program = self._program_every
+            program = self.program
+            pattern = (program.update(self._observation()) if program is self.controller
+                       else self._call_program(program.update, self._observation()))
+            if pattern is not None:
+                self.set_pattern(pattern)
+                self.timings["lights"] += time.perf_counter() - t0
+        self.light_energy += self._pattern_sum
         world = self.world
         if world.n_robots:
             # Photocells, commands, energy and velocities: SPEC §4 and §9, compiled.
@@ -142,6 +154,60 @@ class Simulation:
             self.world.read()
             self._fresh = True
         return self.world.state
+
+    # ------------------------------------------------------ light programs
+    @property
+    def program(self) -> Any:
+        """What decides the lights: the user's program, else the paper's controller."""
+        return self.user_program if self.user_program is not None else self.controller
+
+    @property
+    def senses(self) -> frozenset:
+        """What the light program may look at (recorded with the results)."""
+        return senses_of(self.program)
+
+    def _start_program(self) -> None:
+        program = self.program
+        if program is not self.controller and callable(getattr(program, "reset", None)):
+            self._call_program(program.reset, self.config, self.goal)
+        every = getattr(program, "every", None)
+        self._program_every = max(1, int(every or self.config.update_every))
+        self._until_program = self._program_every if program is not self.controller else 1
+        self.set_pattern(self.controller.intensities if program is self.controller
+                          else np.zeros_like(self.controller.intensities))
+        if program is not self.controller:
+            self._until_program = 1  # ask the program for its first pattern at the first step
+
+    def _call_program(self, method: Callable, *args: Any) -> Any:
+        """A user's program's method; whatever goes wrong in it is a one-line ProgramError."""
+        try:
+            return method(*args)
+        except ProgramError:
+            raise
+        except Exception as exc:
+            name = f"{type(self.program).__name__}.{method.__name__}"
+            raise ProgramError(f"{name} failed at step {self.steps_done}: {type(exc).__name__}: {exc}") from exc
+
+    def set_pattern(self, pattern: Any) -> None:
+        """Light this pattern now (one intensity per light, [ix, iy]); the light program may change it at
+        its next update."""
+        if self.program is not self.controller:
+            who = f"{type(self.program).__name__}.update"
+            pattern = check_pattern(pattern, self.controller.intensities.shape, who)
+        self.lights.set_intensities(pattern)
+        self._pattern_sum = float(np.sum(pattern))
+
+    def _observation(self) -> Observation:
+        return Observation(self.steps_done, self.goal, self._light_centres(), _read_only(self.lights.intensities),
+                           self.senses, self._sensed)
+
+    def _sensed(self, name: str) -> np.ndarray:
+        return np.array(getattr(self, name))  # a copy: the program cannot move anything
+
+    def _light_centres(self) -> np.ndarray:
+        if getattr(self, "_centres_cache", None) is None or self._centres_cache[0] is not self.config:
+            self._centres_cache = (self.config, light_centres(self.config))
+        return self._centres_cache[1]
 
     # ------------------------------------------------------------ changes
     def set_strategies(self, **values: float) -> None:
@@ -182,7 +248,7 @@ class Simulation:
         controller = _controller(config, goal)
         controller.set_strategies(**{name_: getattr(config, name_) for name_ in STRATEGY_NAMES})
         self.shape_vertices, self.config, self.goal, self.controller = shape, config, goal, controller
-        self.lights.set_intensities(self.controller.intensities)
+        self._start_program()
         return controller.notes
 
     # ------------------------------------------------------------- state
