@@ -376,6 +376,46 @@ def test_profile_switch_shows_its_values_and_applies_on_reset(app, page):
     wait_until(lambda: runner.latest.world_config.profile == "authors-code", what="the program's model again")
 
 
+def test_light_program_from_the_page(app, page, tmp_path):
+    example = Path(__file__).resolve().parent.parent / "examples" / "shrinking_ring.py"
+    failing = tmp_path / "failing.py"
+    failing.write_text("import numpy as np\n"
+                       "class Fails:\n"
+                       "    every = 1\n"
+                       "    def update(self, observation):\n"
+                       "        if observation.step % 50 == 49:\n"
+                       "            return np.ones(3)  # the wrong shape\n"
+                       "        return None\n")
+    runner = app.runner
+    runner.set_playing(True)  # the failing program fails while stepping
+    open_folder(page, "Light program")
+    # viser's text inputs are not tied to their label (its for= names another id): find the input in the row.
+    label = page.locator("label:text-is('Program')")
+    row = label.locator("xpath=ancestor::div[contains(@class,'mantine-Flex-root')][1]")
+    field = row.locator("input").first
+
+    def use(spec: str) -> None:
+        field.fill(spec)
+        field.press("Tab")
+        click_button(page, "Use this program")
+
+    use(f"{example}:ShrinkingRing")
+    wait_until(lambda: runner.latest.program.endswith("shrinking_ring.py:ShrinkingRing"), what="the program in use")
+    notification(page, "The lights follow")
+    use("/no/such/file.py:Mine")
+    notification(page, "no such file")
+    assert runner.latest.program.endswith(":ShrinkingRing")  # refused: the running one stays
+    use(f"{failing}:Fails")
+    wait_until(lambda: runner.latest.program_error is not None, what="the failing program to stop")
+    notification(page, "Light program stopped")
+    assert runner.latest.program == "the paper's controller" and "shape (3,)" in runner.latest.program_error[1]
+    use(f"{example}:ShrinkingRing")
+    wait_until(lambda: runner.latest.program.endswith(":ShrinkingRing"), what="a program again")
+    click_button(page, "Back to the paper's controller")
+    wait_until(lambda: runner.latest.program == "the paper's controller", what="the paper's controller back")
+    open_folder(page, "Light program")  # closed again, as the other tests expect
+
+
 def test_second_browser_and_disconnect(app, browser, page):
     other = browser.new_page(viewport={"width": 800, "height": 760})  # a narrower window than the first
     other.goto(f"http://127.0.0.1:{app.port}/")

@@ -53,6 +53,15 @@ STRATEGIES = """\
   spreads robots evenly instead of letting them bunch at far vertices.
 - **No corners** leaves the band lights nearest the corners dark, so robots
   do not pile up in sharp points (and light is saved).
+- **Chase stray boxes** closes the loop: it looks at the boxes (as an
+  overhead camera would) and grows the outline back only until it is a
+  couple of metres beyond the farthest box still outside the goal, instead
+  of all the way to the edge. Cycles get shorter, so the pile is pushed
+  together more often, with less light (the circle: about 30 cycles in a
+  trial instead of 8).
+- **Light program** (its own folder) hands the lights to a Python class of
+  your own: each update it is told the step and the goal (and the boxes or
+  robots, if it asks to sense them) and returns one intensity per light.
 
 Below, each strategy (right) beside the same moment without it (left).
 """

@@ -75,6 +75,7 @@ class ProcessRunner:
         #: The goal as last given (a name, or vertices as drawn): a restarted child gets it back unchanged,
         #: since the program's largest outline depends on the size a shape was drawn at.
         self._shape = shape
+        self._program: str | None = None  # a light program's path:Class; a restarted child gets it back
         self._launch(config, shape, seed)
 
     # ------------------------------------------------------------ process
@@ -98,6 +99,8 @@ class ProcessRunner:
         for name, value in (("selected", self.selected), ("want_field", self._want_field)):
             if value is not None and value is not False:
                 self._control(name, value)
+        if self._program:
+            self._runner_call("set_program", None, None, self._program)
         if self._started:
             self._control("start")
 
@@ -266,6 +269,15 @@ class ProcessRunner:
                 on_done(notes)
 
         self._runner_call("set_shape", used, on_error, shape, name)
+
+    def set_program(self, spec: str | None, *, on_done: Callable[[Any], None] | None = None,
+                    on_error: Callable[[BaseException], None] | None = None) -> None:
+        def used(name: Any) -> None:
+            self._program = spec
+            if on_done:
+                on_done(name)
+
+        self._runner_call("set_program", used, on_error, spec)
 
     def _runner_call(self, method: str, on_done: Callable | None, on_error: Callable | None, *args: Any) -> None:
         """Call one of the child's Runner methods that report back (reset, set_shape, update_config)."""

@@ -30,6 +30,7 @@ Command = Callable[[Simulation], Any]
 #: steps in chunks of FASTEST_CHUNK until the next frame is due.
 FASTEST = 100
 FASTEST_CHUNK = 10
+PAPER_PROGRAM = "the paper's controller"
 
 
 
@@ -68,6 +69,8 @@ class Runner:
         self.selected: int | None = None
         #: Whether snapshots should carry the luminosity field (costly: only for the heat map).
         self.want_field = False
+        self.program_name = PAPER_PROGRAM
+        self.program_error: tuple[int, str] | None = None
         self.shape_name = config.shape
         #: Changes that need a new world, kept until the next reset (the simulation holds only the
         #: configuration its world was built with).
@@ -131,7 +134,7 @@ class Runner:
         """Headless use (no threads): step ``n`` steps and take a snapshot."""
         assert not self._threads, "advance() is for a runner that was not started"
         self._run_commands()
-        self.sim.step(n)
+        self._step(n)
         self._record_series()
         self._snapshot()
         return self.latest
@@ -152,7 +155,7 @@ class Runner:
 
     def step_once(self, n: int = 1) -> None:
         """Advance ``n`` steps now (used while paused)."""
-        self.post(lambda sim: sim.step(n))
+        self.post(lambda sim: self._step(n))
 
     def update_config(self, changes: dict[str, Any], *, on_done: Callable[[Any], None] | None = None,
                       on_error: Callable[[BaseException], None] | None = None) -> None:
@@ -267,6 +270,37 @@ class Runner:
             if on_done:
                 on_done(result)
 
+    # ------------------------------------------------------- light programs
+    def set_program(self, spec: str | None, *, on_done: Callable[[Any], None] | None = None,
+                    on_error: Callable[[BaseException], None] | None = None) -> None:
+        """Light the floor with a program loaded from ``path.py:Class`` (None: the
+        paper's controller again), keeping the world. A program that cannot be
+        loaded or started is refused and the running one stays."""
+
+        def do(sim: Simulation) -> str:
+            from sandbox.model.programs import load_program
+
+            sim.use_program(load_program(spec) if spec else None)
+            self.program_name = spec or PAPER_PROGRAM
+            return self.program_name
+
+        self.post(do, on_done=on_done, on_error=on_error)
+
+    def _step(self, n: int | None = None, deadline: float | None = None) -> None:
+        """Step; a light program that fails while running hands the lights back to the paper's controller."""
+        from sandbox.model.programs import ProgramError
+
+        try:
+            if deadline is not None:
+                self._step_for(deadline)
+            else:
+                self.sim.step(n)
+        except ProgramError as exc:
+            self.sim.use_program(None)
+            self.program_name = PAPER_PROGRAM
+            count = self.program_error[0] + 1 if self.program_error else 1
+            self.program_error = (count, str(exc))
+
     def _loop(self) -> None:
         interval = 1.0 / self.fps
         next_frame = time.perf_counter()
@@ -274,9 +308,9 @@ class Runner:
             self._run_commands()
             if self.playing:
                 if self.steps_per_frame >= FASTEST:
-                    self._step_for(next_frame + interval)  # as many steps as fit in one frame
+                    self._step(deadline=next_frame + interval)  # as many steps as fit in one frame
                 else:
-                    self.sim.step(self.steps_per_frame)
+                    self._step(self.steps_per_frame)
                 self._record_series()
             self._step_times.append((time.perf_counter(), self.sim.steps_done))
             self._snapshot()
@@ -388,6 +422,8 @@ class Runner:
             steps_per_frame=self.steps_per_frame,
             steps_per_second=self.steps_per_second(),
             robot=robot,
+            program=self.program_name,
+            program_error=self.program_error,
         )
         with self._new_frame:
             self._latest = snap

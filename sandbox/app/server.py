@@ -25,7 +25,7 @@ from sandbox.app.process import ProcessRunner
 from sandbox.app.runner import Runner
 from sandbox.app.scene import SceneView, configure_scene, frame_arena
 from sandbox.app.snapshot import Snapshot
-from sandbox.cli import UserError, add_config_arguments, config_from_args
+from sandbox.cli import UserError, add_config_arguments, add_controller_argument, config_from_args, controller_spec
 from sandbox.model.config import Config
 from sandbox.shapes import shape_vertices
 
@@ -39,7 +39,8 @@ class App:
 
     def __init__(self, config: Config, *, host: str = "127.0.0.1", port: int = 8080, shape: Any = "from-config",
                  fps: float = 30.0, steps_per_frame: int = 25, playing: bool = True, verbose: bool = False,
-                 process: bool = True, keep_running: bool = False, idle_pause_seconds: float = IDLE_PAUSE_SECONDS):
+                 process: bool = True, keep_running: bool = False, idle_pause_seconds: float = IDLE_PAUSE_SECONDS,
+                 controller: str | None = None, allow_programs: bool | None = None):
         if isinstance(shape, str) and shape == "from-config":
             shape = shape_vertices(config.shape)  # raises ShapeError before any server starts
         self.config = config
@@ -50,7 +51,11 @@ class App:
         try:
             self._configure_page()
             self.view = SceneView(self.server.scene, self.runner.latest)
-            self.panel = Panel(self.server, self.runner, self.view)
+            # Loading a program runs a Python file on this machine: from the page, only for a page served
+            # to this machine alone, unless allowed outright.
+            if allow_programs is None:
+                allow_programs = host in ("127.0.0.1", "localhost", "::1")
+            self.panel = Panel(self.server, self.runner, self.view, allow_programs=allow_programs)
         except BaseException:
             self.server.stop()  # do not leave a half-built server listening
             raise
@@ -66,6 +71,7 @@ class App:
         self._stopping = threading.Event()
         self.server.on_client_connect(self._on_connect)
         self.server.on_client_disconnect(lambda client: setattr(self, "_last_viewer", time.monotonic()))
+        self._controller = controller
 
     # ------------------------------------------------------------ set-up
     def _configure_page(self) -> None:
@@ -132,6 +138,16 @@ class App:
 
     def start(self) -> "App":
         self.runner.start()
+        if self._controller:  # the light program given on the command line, before anyone looks
+            box: dict = {}
+            self.runner.set_program(self._controller, on_done=lambda name: box.setdefault("ok", name),
+                                    on_error=lambda exc: box.setdefault("error", exc))
+            deadline = time.monotonic() + 30
+            while not box and time.monotonic() < deadline:
+                time.sleep(0.02)
+            if "error" in box:
+                self.stop()
+                raise UserError(str(box["error"]))
         threading.Thread(target=self._watch_viewers, name="phototaxis-viewers", daemon=True).start()
         return self
 
@@ -163,6 +179,10 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                    help="speed: world steps between two frames (default 25: 750 steps/s, 25x real time; "
                         "100: as fast as the machine can)")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate the page is updated at (default 30)")
+    add_controller_argument(p)
+    p.add_argument("--allow-programs", action="store_true",
+                   help="let the page load light programs (Python files on this machine) even when served "
+                        "beyond it (--host 0.0.0.0); on 127.0.0.1 it always may")
     p.add_argument("--keep-running", action="store_true",
                    help=f"keep simulating with no browser connected (by default it pauses after "
                         f"{IDLE_PAUSE_SECONDS:.0f} s without one and goes on when one connects)")
@@ -182,7 +202,8 @@ def serve_command(args: argparse.Namespace) -> int:
         raise UserError("--fps must be between 1 and 240")
     try:
         app = App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
-                  playing=not args.paused, keep_running=args.keep_running)
+                  playing=not args.paused, keep_running=args.keep_running, controller=controller_spec(args),
+                  allow_programs=True if args.allow_programs else None)
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
     app.start()

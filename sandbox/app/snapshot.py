@@ -59,6 +59,10 @@ class Snapshot:
     steps_per_frame: int
     steps_per_second: float
     robot: RobotView | None
+    #: What lights the floor: "the paper's controller" or a light program's path:Class.
+    program: str = "the paper's controller"
+    #: (count, message) of the last light program that failed while running (the paper's took over).
+    program_error: tuple[int, str] | None = None
 
 
 def case_name(shape: str, strategies: dict) -> str:

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from sandbox.cli import UserError
-from sandbox.experiments import figures, reference, stats
+from sandbox.experiments import figures, reference, stats, versus
 from sandbox.experiments.storage import ResultStore, load_meta
 from sandbox.experiments.trials import METRICS, SweepError
 from sandbox.model.config import Config, params
@@ -33,8 +33,10 @@ def group(results: list[dict], meta: dict) -> dict[str, list[dict]]:
     return {c: sorted(ts, key=lambda t: t["seed"]) for c, ts in by_case.items() if ts}
 
 
-def build_report(out: str | Path, dest: str | Path | None = None) -> Path:
-    """Write tables, figures and report.md for the sweep in ``out`` into ``dest`` (default ``out``)."""
+def build_report(out: str | Path, dest: str | Path | None = None, against: str | Path | None = None,
+                 against_label: str = "the other set") -> Path:
+    """Write tables, figures and report.md for the sweep in ``out`` into ``dest`` (default ``out``),
+    with the same cases of the report folder ``against`` beside them if given."""
     out = Path(out)
     dest = Path(dest) if dest is not None else out
     store = ResultStore(out)
@@ -63,6 +65,11 @@ def build_report(out: str | Path, dest: str | Path | None = None) -> Path:
     figs["layouts"] = figures.plot_layouts(by_case, dest / FIGURES_DIR / "final_layouts")
 
     text = _markdown(meta, by_case, tables, first, tests, figs, dest, store.load_failures())
+    if against is not None:
+        lines, rows = versus.versus_section(by_case, against, against_label)
+        _write_rows(dest / "versus.csv", rows)
+        head, sep, tail = text.partition("\n## Table II.")
+        text = head + "\n".join(lines) + "\n" + sep + tail
     report = dest / "report.md"
     report.write_text(text, encoding="utf-8")
     return report
@@ -287,7 +294,7 @@ def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: l
 
 def report_command(args: argparse.Namespace) -> int:
     try:
-        report = build_report(args.dir, args.out)
+        report = build_report(args.dir, args.out, args.against, args.against_label)
     except SweepError as exc:
         raise UserError(str(exc)) from None
     print(report)
@@ -302,5 +309,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("dir", metavar="DIR", help="the folder a sweep wrote (its --out)")
     p.add_argument("--out", metavar="DEST", default=None,
                    help="write the report here instead (e.g. static/paper), without the raw trial files")
+    p.add_argument("--against", metavar="FOLDER", default=None,
+                   help="set the same cases of another report folder (its final.csv) beside these, with KS "
+                        "tests and light energy, e.g. --against static/paper")
+    p.add_argument("--against-label", default="open loop", metavar="TEXT",
+                   help="what to call that other set in the tables [default: open loop]")
     p.set_defaults(func=report_command)
     return p

@@ -166,6 +166,19 @@ class Simulation:
         """What the light program may look at (recorded with the results)."""
         return senses_of(self.program)
 
+    def use_program(self, program: Any) -> None:
+        """Hand the lights to ``program`` (None: back to the paper's controller), keeping the world.
+        If the program fails to start, the previous one stays (the ProgramError propagates)."""
+        previous = self.user_program
+        self.user_program = program
+        try:
+            senses_of(self.program)
+            self._start_program()
+        except Exception:
+            self.user_program = previous
+            self._start_program()
+            raise
+
     def _start_program(self) -> None:
         program = self.program
         if program is not self.controller and callable(getattr(program, "reset", None)):

@@ -16,6 +16,7 @@ from sandbox.app.panel.common import PANEL_HZ, floor_point
 from sandbox.app.panel.inspector import InspectorFolder
 from sandbox.app.panel.metrics import MetricsFolder
 from sandbox.app.panel.parameters import ParametersFolder
+from sandbox.app.panel.program import ProgramFolder
 from sandbox.app.panel.recording import RecordFolder
 from sandbox.app.panel.run import RunFolder
 from sandbox.app.panel.shape import ShapeFolder
@@ -27,7 +28,7 @@ class Panel:
     """Builds the GUI on ``server`` for ``runner`` and keeps its read-outs current.
     ``view`` is the scene (it shows drawn points and the heat map)."""
 
-    def __init__(self, server: Any, runner: Any, view: Any):
+    def __init__(self, server: Any, runner: Any, view: Any, *, allow_programs: bool = True):
         gui = server.gui
         self.runner = runner
         self._last_refresh = 0.0
@@ -37,10 +38,11 @@ class Panel:
                              after_reset=self._after_reset)
         self.shape = ShapeFolder(gui, runner, show_draw_points=view.set_draw_points, on_change=self.metrics.mark)
         self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark)
+        self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark)
         self.inspector = InspectorFolder(gui, runner, server)
         self.record = RecordFolder(gui, server)
-        self.folders = (self.run, self.shape, self.strategies, self.metrics, self.inspector, self.record,
-                        self.parameters)
+        self.folders = (self.run, self.shape, self.strategies, self.program, self.metrics, self.inspector,
+                        self.record, self.parameters)
         snap = runner.latest
         self._build_legend(gui)
         for folder in self.folders:

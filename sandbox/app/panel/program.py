@@ -1,0 +1,79 @@
+"""The Light program folder: hand the lights to a program of your own (a
+``path.py:ClassName`` on the server's machine) and back, without a restart.
+
+A program that cannot be loaded is refused with one line and the running one
+stays; one that fails while running (an exception, a pattern of the wrong
+shape) hands the lights back to the paper's controller and every viewer is
+told why. Loading runs a Python file on the server, so on a server shared
+beyond this machine the folder only works with ``serve --allow-programs``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import viser
+
+from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.snapshot import Snapshot
+
+
+class ProgramFolder:
+    def __init__(self, gui: Any, runner: Any, server: Any, *, allowed: bool, on_change: Any):
+        self.gui, self.runner, self.server = gui, runner, server
+        self.allowed, self._on_change = allowed, on_change
+        self._errors_seen = 0
+        self._shown: str | None = None
+
+    def build(self, snap: Snapshot) -> None:
+        gui = self.gui
+        with gui.add_folder("Light program", expand_by_default=False):
+            self.status = gui.add_markdown(self._status(snap))
+            self.path = gui.add_text("Program", "examples/shrinking_ring.py:ShrinkingRing",
+                                     hint="path/to/module.py:ClassName on the server's machine: a class with "
+                                          "update(observation) returning one intensity per light",
+                                     disabled=not self.allowed)
+            self.use = gui.add_button("Use this program", icon=viser.Icon.PLAYER_PLAY, disabled=not self.allowed)
+            self.back = gui.add_button("Back to the paper's controller", icon=viser.Icon.ARROW_BACK_UP)
+            if not self.allowed:
+                gui.add_markdown("*Shared beyond this machine: start with* `serve --allow-programs` *to load "
+                                 "programs from the page.*")
+
+        @self.use.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self.load(self.path.value.strip(), event.client)
+
+        @self.back.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self.load(None, event.client)
+
+    def load(self, spec: str | None, client: Any) -> None:
+        if spec is not None:
+            path, sep, name = spec.rpartition(":")
+            if not sep or not path.endswith(".py") or not name:
+                notify_error(client, "Program not used", f"{spec!r}: give path/to/module.py:ClassName")
+                return
+
+        def done(name: str) -> None:
+            notify(client, "Light program", f"The lights follow {name} now.", "green")
+            self._on_change(f"program {name}")
+
+        def failed(exc: BaseException) -> None:
+            notify_error(client, "Program not used", f"{exc} (the lights stay as they were)")
+
+        self.runner.set_program(spec, on_done=done, on_error=failed)
+
+    def update(self, snap: Snapshot) -> None:
+        text = self._status(snap)
+        if text != self._shown:
+            self.status.content = self._shown = text
+        error = snap.program_error
+        if error and error[0] > self._errors_seen:
+            self._errors_seen = error[0]
+            for client in self.server.get_clients().values():
+                notify_error(client, "Light program stopped",
+                             f"{error[1]}; the paper's controller lights the floor again.")
+
+    @staticmethod
+    def _status(snap: Snapshot) -> str:
+        return f"**Lights:** {snap.program}"
