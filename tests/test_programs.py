@@ -203,3 +203,31 @@ def test_environment_reset_step_reward_and_truncation():
         env.step(np.ones(5))
     again, _ = env.reset(seed=3)
     np.testing.assert_array_equal(again["box_positions"], LightFieldEnv(env.config).reset(seed=3)[0]["box_positions"])
+
+
+# ------------------------------------------------------------------ evaluation beside the open loop
+def test_open_loop_energy_needs_no_physics():
+    from sandbox.experiments.versus import open_loop_energy
+
+    config = Config(robots=10, boxes=15, update_every=10, hold_steps=3, steps=400)
+    sim = Simulation(config)
+    sim.step(400)
+    assert open_loop_energy(config) == pytest.approx(sim.light_energy)
+
+
+def test_report_against_another_set(tmp_path):
+    from sandbox.experiments.report import build_report
+
+    common = ["--cases", "circle", "--trials", "2", "--steps", "300", "--robots", "8", "--boxes", "10",
+              "--workers", "1", "--no-progress", "--no-report"]
+    assert main(["sweep", *common, "--out", str(tmp_path / "open")]) == 0
+    build_report(tmp_path / "open", tmp_path / "open-report")
+    assert main(["sweep", *common, "--chase", "--out", str(tmp_path / "closed")]) == 0
+    report = build_report(tmp_path / "closed", tmp_path / "closed-report", against=tmp_path / "open-report",
+                          against_label="open loop")
+    text = report.read_text()
+    assert "## Beside open loop" in text and "| circle |" in text
+    rows = (tmp_path / "closed-report" / "versus.csv").read_text().splitlines()
+    assert rows[0].startswith("case,") and rows[1].startswith("circle,")
+    with pytest.raises(Exception, match="no final.csv"):
+        build_report(tmp_path / "closed", tmp_path / "x", against=tmp_path / "nowhere")
