@@ -6,7 +6,8 @@ A light program is an object with
   (an overhead camera, say). An open-loop program senses nothing;
 - ``every``: world steps between two calls of :meth:`update` (0 or None: the
   configuration's ``update_every``, 100 steps by default);
-- ``reset(config, goal)``: called when a world is built;
+- ``reset(config, goal)``: called when a world is built; it may return the
+  first pattern (else the floor is dark until the first update);
 - ``update(observation)``: returns the new pattern, one intensity per light
   (an (n, n) array indexed [ix, iy], or n * n values in that order), or None
   to keep the current one.
@@ -86,8 +87,9 @@ class LightProgram:
     senses: frozenset = frozenset()
     every: int | None = None
 
-    def reset(self, config: Config, goal: Any) -> None:
+    def reset(self, config: Config, goal: Any) -> np.ndarray | None:
         self.config, self.goal = config, goal
+        return None
 
     def update(self, observation: Observation) -> np.ndarray | None:
         raise NotImplementedError

@@ -181,13 +181,16 @@ class Simulation:
 
     def _start_program(self) -> None:
         program = self.program
+        first = None
         if program is not self.controller and callable(getattr(program, "reset", None)):
-            self._call_program(program.reset, self.config, self.goal)
+            first = self._call_program(program.reset, self.config, self.goal)
         every = getattr(program, "every", None)
         self._program_every = max(1, int(every or self.config.update_every))
         self._until_program = self._program_every if program is not self.controller else 1
-        self.set_pattern(self.controller.intensities if program is self.controller
-                          else np.zeros_like(self.controller.intensities))
+        if program is self.controller:
+            self.set_pattern(self.controller.intensities)
+        else:  # what reset returned, else dark until the first update
+            self.set_pattern(first if first is not None else np.zeros_like(self.controller.intensities))
         if program is not self.controller:
             self._until_program = 1  # ask the program for its first pattern at the first step
 
