@@ -48,6 +48,7 @@ from sandbox.model.lights import light_centres
 from sandbox.shapes.errors import ShapeError
 
 CONTRACTING, HOLDING, DILATING = "contracting", "holding", "dilating"
+_SENSES_BOXES, _SENSES_NOTHING = frozenset({"boxes"}), frozenset()
 CIRCLE_DRAW_VERTICES = 96
 #: After holding, the authors' program grows a circle back by this much (its ``delta``, m).
 PROGRAM_CIRCLE_REGROWTH = 0.6
@@ -258,8 +259,7 @@ class Controller:
     @property
     def senses(self) -> frozenset:
         """Open loop: nothing. With *chase*, the boxes' positions."""
-        return frozenset({"boxes"}) if self.strategies["chase"] > 0 or self._pending.get("chase", 0) > 0 \
-            else frozenset()
+        return _SENSES_BOXES if self.strategies["chase"] > 0 or self._pending.get("chase", 0) > 0 else _SENSES_NOTHING
 
     def reset(self, config: Config, goal: Goal) -> None:
         """Nothing to do: the simulation builds a new Controller for a new world."""

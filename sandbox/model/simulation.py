@@ -121,8 +121,10 @@ class Simulation:
             t0 = time.perf_counter()
             self._until_program = self._program_every
             program = self.program
-            pattern = (program.update(self._observation()) if program is self.controller
-                       else self._call_program(program.update, self._observation()))
+            if program is self.controller:  # asked every step: an observation only when it senses (chase)
+                pattern = program.update(self._observation() if program.senses else None)
+            else:
+                pattern = self._call_program(program.update, self._observation())
             if pattern is not None:
                 self.set_pattern(pattern)
                 self.timings["lights"] += time.perf_counter() - t0
