@@ -10,6 +10,7 @@ beyond this machine the folder only works with ``serve --allow-programs``.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import viser
@@ -29,7 +30,7 @@ class ProgramFolder:
         gui = self.gui
         with gui.add_folder("Light program", expand_by_default=False):
             self.status = gui.add_markdown(self._status(snap))
-            self.path = gui.add_text("Program", "examples/shrinking_ring.py:ShrinkingRing",
+            self.path = gui.add_text("Program", _example_spec(),
                                      hint="path/to/module.py:ClassName on the server's machine: a class with "
                                           "update(observation) returning one intensity per light",
                                      disabled=not self.allowed)
@@ -77,3 +78,13 @@ class ProgramFolder:
     @staticmethod
     def _status(snap: Snapshot) -> str:
         return f"**Lights:** {snap.program}"
+
+
+def _example_spec() -> str:
+    """The example program of a source checkout, as a path that works from where the server runs."""
+    example = Path(__file__).resolve().parents[3] / "examples" / "shrinking_ring.py"
+    try:
+        shown = example.relative_to(Path.cwd())
+    except ValueError:
+        shown = example
+    return f"{shown.as_posix()}:ShrinkingRing"
