@@ -159,12 +159,12 @@ def app():
 def test_upload_validation_leaves_the_simulation_alone(app):
     client = FakeClient()
     assert not app.panel.shape.use_shape_file("bowtie.txt", b"0 0\n1 1\n1 0\n0 1\n", client)
-    assert client.notes[-1][0] == "Shape not used" and "crosses itself" in client.notes[-1][1]
+    assert client.notes[-1][0] == "File received, shape not used" and "crosses itself" in client.notes[-1][1]
     assert not app.panel.shape.use_shape_file("two.txt", b"0 0\n1 1\n", client)
     assert "at least 3" in client.notes[-1][1]
     assert not app.panel.shape.use_shape_file("bin.txt", b"\x00\xff", client)
     assert not app.panel.shape.use_shape_file("deep.json", b"[" * 100_000 + b"]" * 100_000, client)
-    assert client.notes[-1][0] == "Shape not used" and client.notes[-1][1].startswith("deep.json")
+    assert client.notes[-1][0] == "File received, shape not used" and client.notes[-1][1].startswith("deep.json")
     assert not app.panel.shape.use_shape_file("huge.txt", b"0 0\n1e308 0\n0 1e308\n", client)
     assert "too large" in client.notes[-1][1]
     assert app.runner.latest.shape_name == "circle"

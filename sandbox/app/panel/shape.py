@@ -20,8 +20,11 @@ from sandbox.shapes import (
     shape_vertices,
     validate_polygon,
 )
+from sandbox.shapes.formats import EXTENSIONS
 
 CUSTOM_SHAPE = "(drawn or uploaded)"
+#: The title of a refused upload: viser's own notice beside it says the file arrived, which it did.
+UPLOAD_REFUSED = "File received, shape not used"
 
 
 class ShapeFolder:
@@ -51,9 +54,11 @@ class ShapeFolder:
                 self.draw_undo = gui.add_button("Undo last point", icon=viser.Icon.ARROW_BACK_UP, disabled=True)
                 self.draw_close = gui.add_button("Close and use", icon=viser.Icon.CHECK, disabled=True)
                 self.draw_clear = gui.add_button("Clear", icon=viser.Icon.TRASH, disabled=True)
+            # The file chooser offers polygon files first; viser's own notice then says the bytes arrived,
+            # and ours whether the shape is used.
             self.upload = gui.add_upload_button(
-                "Upload polygon file", icon=viser.Icon.UPLOAD,
-                hint="Plain text x y per line, GeoJSON, WKT, JSON [[x, y], ...] or SVG")
+                "Upload polygon file", icon=viser.Icon.UPLOAD, mime_type=",".join(sorted(EXTENSIONS)),
+                hint="Plain text x y per line, GeoJSON, WKT, JSON [[x, y], ...] or SVG; at most 1 MB")
             self.download_shape = gui.add_button("Download shape", icon=viser.Icon.DOWNLOAD,
                                                  hint="The current goal as a polygon file for --shape")
 
@@ -135,10 +140,10 @@ class ShapeFolder:
                 path.write_bytes(content)
                 vertices = load_polygon(path)
         except ShapeError as exc:
-            notify_error(client, "Shape not used", str(exc))
+            notify_error(client, UPLOAD_REFUSED, str(exc))
             return False
         except OSError as exc:
-            notify_error(client, "Shape not used", f"{safe}: cannot read the upload ({exc})")
+            notify_error(client, UPLOAD_REFUSED, f"{safe}: cannot read the upload ({exc})")
             return False
         self.use(vertices, safe, client)
         return True
