@@ -82,21 +82,21 @@ def add_controller_argument(p: argparse.ArgumentParser) -> None:
                         "update(observation) returning one intensity per light (see README, 'Light programs')")
 
 
-def controller_spec(args: argparse.Namespace) -> str | None:
-    """The --controller spec with its file made absolute, after checking that it loads
-    (a one-line UserError if not); None without the flag."""
+def controller_from_args(args: argparse.Namespace) -> tuple[str | None, Any]:
+    """The --controller spec with its file made absolute, and the program it loads (a one-line
+    UserError if it cannot be loaded); (None, None) without the flag. A sweep's workers and a
+    server's simulation process load the spec again themselves; ``run`` uses the program."""
     from pathlib import Path
 
     from sandbox.model.programs import ProgramError, load_program
 
     spec = getattr(args, "controller", None)
     if not spec:
-        return None
+        return None, None
     path, sep, name = spec.rpartition(":")
     if sep and path.endswith(".py"):
         spec = f"{Path(path).resolve()}:{name}"
     try:
-        load_program(spec)
+        return spec, load_program(spec)
     except ProgramError as exc:
         raise UserError(str(exc)) from None
-    return spec

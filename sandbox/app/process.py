@@ -32,7 +32,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from sandbox.app.runner import Command, Runner, wait_for
+from sandbox.app.runner import Command, Runner, publish, wait_for
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
@@ -141,13 +141,7 @@ class ProcessRunner:
                 self.errors.append(exc)
 
     def _publish(self, snap: Snapshot) -> None:
-        for listener in list(self._listeners):
-            try:
-                listener(snap)
-            except Exception as exc:  # a broken listener must not stop the others
-                self.errors.append(exc)
-        self.frames_published += 1
-        self.publish_times.append(time.perf_counter())
+        publish(self, snap)
 
     def _receive_loop(self) -> None:
         while not self._stop.is_set():

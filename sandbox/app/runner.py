@@ -35,6 +35,17 @@ PAPER_PROGRAM = "the paper's controller"
 
 
 
+def publish(runner: Any, snap: Snapshot) -> None:
+    """Hand a frame to a runner's listeners (a broken one must not stop the others) and count it."""
+    for listener in list(runner._listeners):
+        try:
+            listener(snap)
+        except Exception as exc:
+            runner.errors.append(exc)
+    runner.frames_published += 1
+    runner.publish_times.append(time.perf_counter())
+
+
 def wait_for(post: Callable, command: Command, timeout: float) -> Any:
     """``post`` the command, wait for its result and return it (or raise its exception)."""
     done = threading.Event()
@@ -342,13 +353,7 @@ class Runner:
                     self._new_frame.wait(0.5)
                 snap = self._latest
             self._published = snap.frame
-            for listener in list(self._listeners):
-                try:
-                    listener(snap)
-                except Exception as exc:  # a broken listener must not stop the others
-                    self.errors.append(exc)
-            self.frames_published += 1
-            self.publish_times.append(time.perf_counter())
+            publish(self, snap)
 
     # ---------------------------------------------------------- snapshots
     def _record_series(self, force: bool = False) -> None:

@@ -22,10 +22,10 @@ import viser
 
 from sandbox.app.panel import Panel
 from sandbox.app.process import ProcessRunner
-from sandbox.app.runner import Runner
+from sandbox.app.runner import Runner, wait_for
 from sandbox.app.scene import SceneView, configure_scene, frame_arena
 from sandbox.app.snapshot import Snapshot
-from sandbox.cli import UserError, add_config_arguments, add_controller_argument, config_from_args, controller_spec
+from sandbox.cli import UserError, add_config_arguments, add_controller_argument, config_from_args, controller_from_args
 from sandbox.model.config import Config
 from sandbox.shapes import shape_vertices
 
@@ -139,15 +139,11 @@ class App:
     def start(self) -> "App":
         self.runner.start()
         if self._controller:  # the light program given on the command line, before anyone looks
-            box: dict = {}
-            self.runner.set_program(self._controller, on_done=lambda name: box.setdefault("ok", name),
-                                    on_error=lambda exc: box.setdefault("error", exc))
-            deadline = time.monotonic() + 30
-            while not box and time.monotonic() < deadline:
-                time.sleep(0.02)
-            if "error" in box:
+            try:
+                wait_for(self.runner.set_program, self._controller, 30.0)
+            except Exception as exc:
                 self.stop()
-                raise UserError(str(box["error"]))
+                raise UserError(str(exc)) from None
         threading.Thread(target=self._watch_viewers, name="phototaxis-viewers", daemon=True).start()
         return self
 
@@ -202,7 +198,7 @@ def serve_command(args: argparse.Namespace) -> int:
         raise UserError("--fps must be between 1 and 240")
     try:
         app = App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
-                  playing=not args.paused, keep_running=args.keep_running, controller=controller_spec(args),
+                  playing=not args.paused, keep_running=args.keep_running, controller=controller_from_args(args)[0],
                   allow_programs=True if args.allow_programs else None)
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None

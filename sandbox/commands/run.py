@@ -12,10 +12,10 @@ from typing import IO, Any
 
 from tqdm import tqdm
 
-from sandbox.cli import UserError, add_config_arguments, add_controller_argument, config_from_args, controller_spec
+from sandbox.cli import UserError, add_config_arguments, add_controller_argument, config_from_args, controller_from_args
 from sandbox.model.config import CASES, STRATEGY_NAMES, Config
 from sandbox.model.metrics import Sample, SampleWriter
-from sandbox.model.programs import ProgramError
+from sandbox.model.programs import PAPER_CONTROLLER, ProgramError
 from sandbox.model.simulation import Simulation
 
 
@@ -90,12 +90,7 @@ def run_trial(config: Config, *, progress: bool = False, on_sample=None,
 def run_command(args: argparse.Namespace) -> int:
 
     config = config_from_args(args)
-    spec = controller_spec(args)
-    program = None
-    if spec:
-        from sandbox.model.programs import load_program
-
-        program = load_program(spec)
+    spec, program = controller_from_args(args)
     handle, writer = open_trace(args.trace)
     try:
         def write(sample: Sample) -> None:
@@ -119,7 +114,7 @@ def run_command(args: argparse.Namespace) -> int:
         "mean_outside_distance": final.mean_outside_distance,
         "boxes_escaped": final.boxes_escaped,
         "cycles": sim.cycle,
-        "controller": spec or "paper (open loop)",
+        "controller": spec or PAPER_CONTROLLER,
         "senses": sorted(sim.senses),
         "light_energy": round(sim.light_energy, 3),
         "wall_seconds": round(wall, 3),

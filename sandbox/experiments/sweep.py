@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sandbox.cli import UserError, add_config_arguments, add_controller_argument, controller_spec
+from sandbox.cli import UserError, add_config_arguments, add_controller_argument, controller_from_args
 from sandbox.experiments.executors import dask_executor, local_executor, run_trials
 from sandbox.experiments.plan import Case, grid_cases, make_trials, paper_cases
 from sandbox.experiments.report import build_report
@@ -139,7 +139,7 @@ def _sweep(args: argparse.Namespace) -> int:
     store = ResultStore(out)
     store.check_writable()
     write_meta(out, cases, compare, _command_line(args), args.trials, seed_start)
-    trials = make_trials(cases, args.trials, seed_start, controller_spec(args))
+    trials = make_trials(cases, args.trials, seed_start, controller_from_args(args)[0])
 
     if args.scheduler:
         executor = lambda: dask_executor(args.scheduler)  # noqa: E731

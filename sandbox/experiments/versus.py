@@ -18,7 +18,7 @@ import numpy as np
 
 from sandbox.experiments import stats
 from sandbox.experiments.trials import SweepError
-from sandbox.model.config import Config, param_names
+from sandbox.model.config import Config, coerce, param_names
 
 METRICS = ("fraction_in_goal", "mean_outside_distance")
 
@@ -52,14 +52,9 @@ def open_loop_energy(config: Config) -> float:
 
 
 def _config_of(row: dict) -> Config:
+    """The configuration a final.csv row records (its parameter columns, as text)."""
     known = set(param_names())
-    values = {}
-    defaults = Config().to_dict()
-    for key, text in row.items():
-        if key in known and text not in (None, ""):
-            kind = type(defaults[key])
-            values[key] = kind(float(text)) if kind in (int, float) else text
-    return Config(**values)
+    return Config(**{key: coerce(key, text) for key, text in row.items() if key in known and text not in (None, "")})
 
 
 def _mean_se(values: np.ndarray, digits: int) -> str:

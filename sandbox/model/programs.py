@@ -36,6 +36,8 @@ import numpy as np
 from sandbox.model.config import Config
 
 SENSES = frozenset({"boxes", "robots"})
+#: How result files name the paper's controller in their ``controller`` field.
+PAPER_CONTROLLER = "paper (open loop)"
 
 
 class ProgramError(ValueError):

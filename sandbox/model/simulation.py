@@ -81,6 +81,7 @@ class Simulation:
         # Built: from here on nothing can fail halfway.
         self.config, self.seed, self.world, self.goal, self.controller = cfg, cfg.seed, world, goal, controller
         self.lights = LightField(cfg)
+        self._centres = _read_only(light_centres(cfg))  # the pitch and arena only change with a new world
         self._start_program()
         self._layout = kernels.sample_layout(self.lights)
         self._robot_params = kernels.robot_params(cfg)
@@ -183,18 +184,17 @@ class Simulation:
 
     def _start_program(self) -> None:
         program = self.program
-        first = None
-        if program is not self.controller and callable(getattr(program, "reset", None)):
-            first = self._call_program(program.reset, self.config, self.goal)
-        every = getattr(program, "every", None)
-        self._program_every = max(1, int(every or self.config.update_every))
-        self._until_program = self._program_every if program is not self.controller else 1
         if program is self.controller:
-            self.set_pattern(self.controller.intensities)
+            first = self.controller.intensities
         else:  # what reset returned, else dark until the first update
-            self.set_pattern(first if first is not None else np.zeros_like(self.controller.intensities))
-        if program is not self.controller:
-            self._until_program = 1  # ask the program for its first pattern at the first step
+            reset = getattr(program, "reset", None)
+            first = self._call_program(reset, self.config, self.goal) if callable(reset) else None
+            if first is None:
+                first = np.zeros_like(self.controller.intensities)
+        every = getattr(program, "every", None)  # read after reset, which may set it
+        self._program_every = max(1, int(every or self.config.update_every))
+        self._until_program = 1  # asked at the first step
+        self.set_pattern(first)
 
     def _call_program(self, method: Callable, *args: Any) -> Any:
         """A user's program's method; whatever goes wrong in it is a one-line ProgramError."""
@@ -216,16 +216,11 @@ class Simulation:
         self._pattern_sum = float(np.sum(pattern))
 
     def _observation(self) -> Observation:
-        return Observation(self.steps_done, self.goal, self._light_centres(), _read_only(self.lights.intensities),
+        return Observation(self.steps_done, self.goal, self._centres, _read_only(self.lights.intensities),
                            self.senses, self._sensed)
 
     def _sensed(self, name: str) -> np.ndarray:
         return np.array(getattr(self, name))  # a copy: the program cannot move anything
-
-    def _light_centres(self) -> np.ndarray:
-        if getattr(self, "_centres_cache", None) is None or self._centres_cache[0] is not self.config:
-            self._centres_cache = (self.config, light_centres(self.config))
-        return self._centres_cache[1]
 
     # ------------------------------------------------------------ changes
     def set_strategies(self, **values: float) -> None:
