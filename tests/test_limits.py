@@ -3,6 +3,7 @@ placed, goals that cannot fit, outlines of thousands of vertices."""
 
 import math
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -69,6 +70,10 @@ def test_building_a_world_reports_progress_and_can_be_cancelled():
         assert done.wait(60)
         assert isinstance(outcome.get("error"), BuildCancelled)
         assert seen[-1] is None and any(f is not None and 0 < f < 1 for f in seen)
+        # The error is reported before the loop takes its next snapshot: wait for that one.
+        deadline = time.time() + 10
+        while runner.latest.config.robots != 3_000 and time.time() < deadline:
+            time.sleep(0.01)
         snap = runner.latest
         assert len(snap.robot_positions) == 10 and snap.config.robots == 3_000  # old world on; change still waits
         assert runner.steps_per_second() >= 0.0
