@@ -275,6 +275,20 @@ def test_a_strategy_that_would_change_nothing_says_so(app, page):
     wait_until(lambda: app.runner.latest.strategies["flare"] == 0.0, what="flare off")
 
 
+def test_flare_under_chase_says_what_it_still_changes(app, page):
+    choose(page, "Shape", "square")
+    wait_until(lambda: app.runner.latest.shape_name == "square", what="the square goal")
+    page.get_by_label("Chase stray boxes", exact=True).check()
+    wait_until(lambda: app.runner.latest.strategies["chase"] > 0, what="chase in the controller")
+    page.get_by_label("Flare", exact=True).check()
+    notification(page, "flare changes only the largest size")
+    wait_until(lambda: app.runner.latest.strategies["flare"] > 0, what="flare applied all the same")
+    page.get_by_label("Flare", exact=True).uncheck()
+    page.get_by_label("Chase stray boxes", exact=True).uncheck()
+    wait_until(lambda: app.runner.latest.strategies["chase"] == 0 and app.runner.latest.strategies["flare"] == 0,
+               what="both off")
+
+
 def test_drawing_by_clicks_creates_a_valid_goal(app, page):
     open_folder(page, "Draw")
     click_button(page, "Start drawing")

@@ -225,3 +225,4 @@ def test_a_strategy_that_would_change_nothing_says_so():
     assert "sharpest corner is 53 degrees (flare acts above 0.58)" in strategy_effect_note("flare", 0.57, star)
     assert "circle goal" in strategy_effect_note("switch", 0.25, None)
     assert strategy_effect_note("switch", 0.25, star) == "" and strategy_effect_note("flare", 0.0, square) == ""
+    assert "flare changes only the largest size" in strategy_effect_note("flare", 1.75, square, chase=2.0)

@@ -54,11 +54,14 @@ STRATEGIES = """\
 - **No corners** leaves the band lights nearest the corners dark, so robots
   do not pile up in sharp points (and light is saved).
 - **Chase stray boxes** closes the loop: it looks at the boxes (as an
-  overhead camera would) and grows the outline back only until it is a
-  couple of metres beyond the farthest box still outside the goal, instead
-  of all the way to the edge. Cycles get shorter, so the pile is pushed
-  together more often, with less light (the circle: about 30 cycles in a
-  trial instead of 8).
+  overhead camera would). The band runs the same distance from every part
+  of the goal (the goal grown, not scaled), so robots reach a star's tips
+  and its notches together. It grows back only until it is a couple of
+  metres beyond the farthest box still outside the goal, not to the edge.
+  Near the goal it presses in where boxes spill out and goes dark where
+  the goal still lacks boxes, so the pile flows there; and it holds the
+  smallest outline as long as boxes keep arriving. More boxes end in the
+  goal, with less light.
 - **Light program** (its own folder) hands the lights to a Python class of
   your own: each update it is told the step and the goal (and the boxes or
   robots, if it asks to sense them) and returns one intensity per light.
@@ -82,6 +85,16 @@ def _pattern(config: Config, shape: str, steps: int = 0, **strategies: float) ->
     return ctrl.intensities.copy(), ctrl.outline.copy(), goal.outline().copy()
 
 
+def _smallest(config: Config, shape: str, **strategies: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pattern at the smallest size (for chase: with no boxes seen, the plain grown goal)."""
+    cfg = config.replace(**strategies)
+    goal = make_goal(cfg, shape_vertices(shape))
+    ctrl = Controller(cfg, goal)
+    ctrl.scale = ctrl.min_scale
+    ctrl._redraw()
+    return ctrl.intensities.copy(), ctrl.outline.copy(), goal.outline().copy()
+
+
 #: Caption size in picture pixels: the panel shows a two-tile row at about
 #: 0.9x, so 17 px reads as about 15 px on screen (the old default font was 7).
 CAPTION = 17
@@ -93,7 +106,7 @@ def _font(size: int = CAPTION) -> ImageFont.ImageFont:
 
 
 def _tile(config: Config, intensities: np.ndarray, outline: np.ndarray, goal: np.ndarray, label: str,
-          cell: int = 3) -> Image.Image:
+          cell: int = 3, view: float | None = None) -> Image.Image:
     img = Image.fromarray(pal.light_grid_image(intensities, cell_pixels=cell)).convert("RGB")
     size = img.size[0]
     k = size / config.arena_size
@@ -104,6 +117,11 @@ def _tile(config: Config, intensities: np.ndarray, outline: np.ndarray, goal: np
 
     draw.polygon(xy(outline), outline=pal.LIGHT_LINE, width=2)
     draw.polygon(xy(goal), outline=pal.GOAL_LINE, width=2)
+    if view:  # only the middle ``view`` metres, enlarged (drawn first, so lines stay 2 px at full size)
+        half = view / 2.0 * k
+        mid = size / 2.0
+        img = img.crop((round(mid - half), round(mid - half), round(mid + half), round(mid + half)))
+        img = img.resize((size, size), Image.NEAREST)
     top = CAPTION + 8
     out = Image.new("RGB", (size, size + top), pal.BACKGROUND)
     out.paste(img, (0, top))
@@ -201,5 +219,7 @@ def strategies_picture(config: Config | None = None) -> np.ndarray:
         _tile(cfg, *_pattern(cfg, "star", switched, switch=switch), "+ switch: a circle"),
         _tile(cfg, *_pattern(cfg, "star", 2500), "star"),
         _tile(cfg, *_pattern(cfg, "star", 2500, no_corners=no_corners), "+ no corners"),
+        _tile(cfg, *_smallest(cfg, "star"), "star, smallest (zoomed)", view=20.0),
+        _tile(cfg, *_smallest(cfg, "star", chase=2.0), "+ chase: goal grown", view=20.0),
     ]
     return _grid(tiles)

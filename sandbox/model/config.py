@@ -82,9 +82,11 @@ STRATEGIES = (
              "fraction of band lights nearest convex corners that stay off (0 = off; 0.5 when on; at most "
              "0.95: at 1 the whole band would be dark)"),
     Strategy("chase", "Chase stray boxes", 2.0, 10.0, 0.25,
-             "closed loop (senses the boxes, as an overhead camera would): dilate only until the outline is "
-             "this many metres beyond the farthest stray box, then contract again (0 = off, open loop; 2.0 "
-             "when on)"),
+             "closed loop (senses the boxes, as an overhead camera would): the outline is the goal grown by "
+             "the same distance all round; it dilates only until it is this many metres beyond the farthest "
+             "stray box; near the goal it presses in where boxes spill out and goes dark where the goal lacks "
+             "boxes, and the smallest outline is held while boxes keep arriving (0 = off, open loop; 2.0 when "
+             "on)"),
 )
 STRATEGY_NAMES = tuple(s.name for s in STRATEGIES)
 #: The value a strategy takes when it is switched on without an amount.

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sandbox.model import geometry, outlines
+from sandbox.model import geometry, outlines, sculpt
 from sandbox.model.config import STRATEGY_NAMES, Config
 from sandbox.model.lights import light_centres
 from sandbox.shapes.errors import ShapeError
@@ -145,6 +145,7 @@ class Controller:
         self.updates = 0
         self._until_update = config.update_every
         self._hold_left = 0
+        self._hold: sculpt.Hold | None = None  # the closed loop's hold (chase), else None
         self.outline = np.empty((0, 2))
         self.corners = np.empty((0, 2))
         self.intensities = np.zeros((config.lights_per_side,) * 2)
@@ -273,17 +274,53 @@ class Controller:
     def advance(self) -> bool:
         """One world step. Returns whether the light pattern may have changed."""
         if self.phase == HOLDING:
+            if self._hold is not None and self._observation is not None:
+                return self._closed_loop_hold()
             self._hold_left -= 1
             if self._hold_left > 0:
                 return False
-            self.phase = DILATING
-            if self._program:
-                self._grow_back()
-            return self._update()
+            return self._end_hold()
         self._until_update -= 1
         if self._until_update > 0:
             return False
         return self._update()
+
+    def _end_hold(self) -> bool:
+        self._hold = None
+        self.phase = DILATING
+        if self._program:
+            self._grow_back()
+        return self._update()
+
+    def _start_hold(self) -> None:
+        """At the smallest size: hold for ``hold_steps`` (none: dilate at once);
+        the closed loop holds as long as :class:`sculpt.Hold` says."""
+        self.phase = HOLDING if self.config.hold_steps > 0 else DILATING
+        self._hold_left = self.config.hold_steps
+        if self.phase == HOLDING and self._closed_loop and self._observation is not None:
+            self._hold = sculpt.Hold(self.config.hold_steps, self._boxes_in_goal())
+
+    def _closed_loop_hold(self) -> bool:
+        """One step of the closed loop's hold: the band is re-sculpted every update."""
+        if self._hold.tick(self._boxes_in_goal, self._boxes_out_of_reach):
+            if self._hold.clock % self.config.update_every == 0:
+                self._redraw()
+                return True
+            return False
+        return self._end_hold()
+
+    @property
+    def _closed_loop(self) -> bool:
+        return self.strategies["chase"] > 0
+
+    def _boxes_in_goal(self) -> int:
+        return int(self.goal.contains(self._observation.box_positions).sum())
+
+    def _boxes_out_of_reach(self) -> int:
+        """Boxes beyond the reach of robots on the smallest outline (one robot
+        diameter from the goal): farther than three robot radii from it."""
+        distance = self.goal.distance(self._observation.box_positions)
+        return int((distance > 3.0 * self.config.robot_radius).sum())
 
     def _update(self) -> bool:
         self._until_update = self.config.update_every
@@ -307,8 +344,7 @@ class Controller:
             self.scale *= rate
             if self.scale <= self.min_scale:
                 self.scale = self.min_scale
-                self.phase = HOLDING if self.config.hold_steps > 0 else DILATING
-                self._hold_left = self.config.hold_steps
+                self._start_hold()
         elif self.phase == DILATING:
             self.scale /= rate
             if self.scale >= self.max_scale:
@@ -346,8 +382,8 @@ class Controller:
             need = 0.0
         elif self.circle_radius is not None or self.shape is None:
             need = float(np.hypot(*stray.T).max()) + margin
-        else:
-            need = float(geometry.gauge(stray, self.shape.vertices).max()) * self.shape.inradius + margin
+        else:  # the outline is the goal grown by (inradius - its inradius at scale 1): see _redraw_closed_loop
+            need = self.shape.inradius + float(self.goal.distance(stray + self.goal.centre).max()) + margin
         return min(largest, max(need, self.min_radius + margin))
 
     def _turn_to_contracting(self) -> None:
@@ -361,8 +397,7 @@ class Controller:
         rate = self.config.scale_rate
         if self.inradius < self.min_radius and self.phase == CONTRACTING:
             # First size below the smallest: lit while holding, then grown back.
-            self.phase = HOLDING if self.config.hold_steps > 0 else DILATING
-            self._hold_left = self.config.hold_steps
+            self._start_hold()
             self._redraw()
             if self.phase == DILATING:
                 self._grow_back()
@@ -406,6 +441,9 @@ class Controller:
     def _redraw(self) -> None:
         """Recompute the outline and which lights are on."""
         cfg, goal = self.config, self.goal
+        if self._closed_loop and self.circle_radius is None and (goal.is_circle or not self.is_circle):
+            self._redraw_closed_loop()
+            return
         if self.is_circle:
             radius = self.circle_radius if self.circle_radius is not None else goal.radius * self.scale
             self.outline = geometry.regular_polygon(radius, CIRCLE_DRAW_VERTICES, goal.centre)
@@ -418,6 +456,30 @@ class Controller:
             on = geometry.distance_to_outline(self._centres, self.outline) <= cfg.band + 1e-9
             if self.strategies["no_corners"] > 0 and len(self.corners):
                 on = self._darken_corners(on)
+        self.intensities = (on * cfg.light_intensity).reshape(self.intensities.shape)
+
+    def _redraw_closed_loop(self) -> None:
+        """*Chase*: the goal grown by the distance the scale gives, sculpted near
+        the goal from what the boxes show (see :mod:`sandbox.model.sculpt`)."""
+        cfg, goal = self.config, self.goal
+        polygon = goal.outline()
+        distance = self.inradius - (goal.radius if self.shape is None else self.shape.inradius)
+        observation = self._observation
+        if observation is None:
+            shaped = sculpt.Sculpted(sculpt.offset_outline(polygon, distance), np.empty((0, 2)))
+        else:
+            boxes = observation.box_positions
+            shaped = sculpt.sculpt(polygon, distance, boxes, goal.contains(boxes), cfg.box_area)
+        self.outline = shaped.outline
+        if goal.is_circle:
+            self.corners = np.empty((0, 2))
+        else:
+            convex = geometry.interior_angles(polygon) < 180.0
+            self.corners = sculpt.corner_points(polygon, convex, distance)
+        on = geometry.distance_to_outline(self._centres, self.outline) <= cfg.band + 1e-9
+        if self.strategies["no_corners"] > 0 and len(self.corners):
+            on = self._darken_corners(on)
+        on = sculpt.darken_near(on, self._centres, shaped.dark, sculpt.SCULPTING.dark)
         self.intensities = (on * cfg.light_intensity).reshape(self.intensities.shape)
 
     def _darken_corners(self, on: np.ndarray) -> np.ndarray:
@@ -460,14 +522,19 @@ def first_cycle_steps(config: Config, vertices: np.ndarray | None, limit: int = 
     return steps
 
 
-def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | None) -> str:
+def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | None, chase: float = 0.0) -> str:
     """Why a strategy at this amount will change nothing on this goal ('' when it will).
 
     A circle goal has no corners to flare or darken and is already a circle;
     flare moves a convex corner of angle a only when 90 x amount > a, so on a
-    square it starts above 1 and on the star's 52.5-degree tips above 0.58."""
+    square it starts above 1 and on the star's 52.5-degree tips above 0.58.
+    With chase on, the lit outline is the goal grown, so flare changes only
+    how far it grows."""
     if amount <= 0:
         return ""
+    if name == "flare" and chase > 0 and goal_vertices is not None:
+        return ("With chase on, the band follows the goal grown by the same distance all round, not a flared "
+                "outline: flare changes only the largest size it grows to.")
     if goal_vertices is None:
         return {"flare": "Flare does nothing on a circle goal: it has no corners to push out.",
                 "switch": "Switch to circle does nothing on a circle goal: it is a circle already.",

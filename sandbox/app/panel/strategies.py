@@ -76,6 +76,7 @@ class StrategiesFolder:
 
         self.runner.post(functools.partial(Simulation.set_strategies, **{name: value}), on_error=failed)
         self._on_change(f"{name} {value:g}")
-        note = strategy_effect_note(name, value, self.runner.latest.goal_vertices)
+        chase = float(self.controls["chase"][1].value) if self.controls["chase"][0].value else 0.0
+        note = strategy_effect_note(name, value, self.runner.latest.goal_vertices, chase)
         if note:  # applied all the same: the goal may change to one it acts on
             notify(client, "No visible effect", note, "yellow")

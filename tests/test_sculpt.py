@@ -1,0 +1,165 @@
+"""The closed loop's geometry near the goal (sandbox.model.sculpt), values worked by hand."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sandbox.model import geometry, sculpt
+from sandbox.model.config import Config
+from sandbox.model.controller import HOLDING, Controller, make_goal
+from sandbox.shapes import shape_vertices
+
+SQUARE = np.array([[-2.0, -2.0], [2.0, -2.0], [2.0, 2.0], [-2.0, 2.0]])  # side 4, inradius 2
+BOX_AREA = 0.1624  # hexagon of circumradius 0.25: 3 sqrt(3) / 2 * 0.25^2
+
+
+def test_offset_outline_is_the_same_distance_from_every_part_of_the_polygon():
+    grown = sculpt.offset_outline(SQUARE, 0.5)
+    d = geometry.distance_to_outline(grown, SQUARE)
+    assert d == pytest.approx(np.full(len(grown), 0.5))
+    # Edges pushed out by 0.5: the grown square spans -2.5 .. 2.5 on both axes.
+    assert grown.min(axis=0) == pytest.approx([-2.5, -2.5]) and grown.max(axis=0) == pytest.approx([2.5, 2.5])
+
+
+def test_corner_points_lie_on_the_bisector():
+    convex = np.ones(4, dtype=bool)
+    corners = sculpt.corner_points(SQUARE, convex, 1.0)
+    s = 1.0 / math.sqrt(2.0)
+    assert corners[2] == pytest.approx([2.0 + s, 2.0 + s])
+    assert len(sculpt.corner_points(SQUARE, np.array([True, False, False, False]), 1.0)) == 1
+
+
+def test_densify_splits_edges_evenly():
+    dense = sculpt.densify(SQUARE, 0.5)
+    assert len(dense) == 4 * 8  # each 4 m edge in 8 pieces
+    assert dense[1] == pytest.approx([-1.5, -2.0])
+    edges = np.hypot(*(np.roll(dense, -1, axis=0) - dense).T)
+    assert edges == pytest.approx(np.full(32, 0.5))
+
+
+def test_nearest_on_outline():
+    points = np.array([[3.0, 0.5], [3.0, 3.0], [0.0, -2.5]])
+    assert sculpt.nearest_on_outline(points, SQUARE) == pytest.approx(np.array([[2.0, 0.5], [2.0, 2.0], [0.0, -2.0]]))
+
+
+def test_full_counts_is_the_goal_part_of_a_disc_at_the_packing():
+    # Mid-edge: half of a unit disc is in the goal; at a corner, a quarter.
+    counts = sculpt.full_counts(SQUARE, np.array([[2.0, 0.0], [2.0, 2.0]]), 1.0, BOX_AREA, 0.85)
+    assert counts == pytest.approx([math.pi / 2 * 0.85 / BOX_AREA, math.pi / 4 * 0.85 / BOX_AREA], rel=2e-3)
+
+
+def test_sculpt_presses_where_boxes_spill_and_darkens_where_the_goal_lacks_them():
+    """Right side: three boxes just outside, so the band there moves in by 0.45 m
+    from 0.5 m, but not nearer than 0.2 m. Left side: no box within 1 m of the
+    edge, where a full pile holds pi/2 * 0.85 / 0.1624 = 8.2: dark."""
+    inside = np.array([[x, y] for x in (0.5, 1.0, 1.5) for y in np.linspace(-1.8, 1.8, 9)])
+    spill = np.array([[2.2, -0.3], [2.2, 0.0], [2.2, 0.3]])
+    boxes = np.vstack([inside, spill])
+    in_goal = geometry.points_in_polygon(boxes, SQUARE)
+    shaped = sculpt.sculpt(SQUARE, 0.5, boxes, in_goal, BOX_AREA)
+    right = shaped.outline[(np.abs(shaped.outline[:, 1]) < 0.01) & (shaped.outline[:, 0] > 0)]
+    assert right[:, 0] == pytest.approx([2.2])  # 2 + max(0.5 - 0.45, 0.2)
+    top = shaped.outline[(np.abs(shaped.outline[:, 0]) < 0.01) & (shaped.outline[:, 1] > 0)]
+    assert top[:, 1] == pytest.approx([2.5])  # boxes held there, none spilt: left alone
+    dark = shaped.dark
+    left = dark[(np.abs(dark[:, 0] + 2.5) < 1e-9) & (np.abs(dark[:, 1]) < 1.0)]
+    assert len(left) == 3  # the empty left side: band points every 0.5 m, here y = -0.5, 0, 0.5
+    assert not ((dark[:, 0] > 2.0) & (np.abs(dark[:, 1]) < 0.5)).any()  # boxes spill there: lit, pressed
+
+
+def test_sculpt_is_a_plain_offset_beyond_its_start():
+    boxes = np.array([[2.2, 0.0], [2.2, 0.1], [2.2, -0.1]])
+    far = sculpt.sculpt(SQUARE, 2.0, boxes, np.zeros(3, dtype=bool), BOX_AREA)
+    assert far.outline == pytest.approx(sculpt.offset_outline(SQUARE, 2.0)) and not len(far.dark)
+
+
+def test_darken_near():
+    centres = np.array([[0.0, 0.0], [0.7, 0.0], [0.9, 0.0]])
+    on = sculpt.darken_near(np.ones(3, dtype=bool), centres, np.array([[0.0, 0.0]]), 0.8)
+    assert on.tolist() == [False, False, True]
+
+
+def _hold_steps(hold: sculpt.Hold, arrivals, out_of_reach) -> int:
+    """Steps until the hold lets go; ``arrivals(clock)`` is the count in the goal."""
+    while hold.tick(lambda: arrivals(hold.clock), lambda: out_of_reach):
+        pass
+    return hold.clock
+
+
+def test_hold_lasts_one_check_without_progress():
+    tuning = sculpt.Sculpting()
+    assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=50) == 500
+    assert _hold_steps(sculpt.Hold(800, 300, tuning), lambda clock: 300, out_of_reach=50) == 800
+
+
+def test_hold_goes_on_while_boxes_arrive():
+    # Two boxes per 500 steps until step 2000, then none: checks at 500..2000 extend, 2500 does not.
+    arrivals = lambda clock: 300 + 2 * min(clock, 2000) // 500  # noqa: E731
+    assert _hold_steps(sculpt.Hold(100, 300), arrivals, out_of_reach=50) == 2500
+
+
+def test_hold_stays_while_little_is_out_of_reach_but_not_forever():
+    tuning = sculpt.Sculpting(longest=3000)
+    assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=14) == 3000
+    assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=15) == 500
+
+
+# ------------------------------------------------------------------ in the controller
+def test_chase_lights_the_goal_grown_by_a_robot_diameter_at_the_smallest_size():
+    """Open loop, the star's smallest outline is the star scaled: its tips end
+    well over a metre beyond the goal's. With chase every point of it is one
+    robot diameter (0.5 m) from the goal."""
+    star = shape_vertices("star")
+    open_loop = Controller(Config(), make_goal(Config(), star))
+    closed = Controller(Config(chase=2.0), make_goal(Config(chase=2.0), star))
+    for c in (open_loop, closed):
+        c.scale = c.min_scale
+        c._redraw()
+    goal = closed.goal.vertices
+    assert geometry.distance_to_outline(closed.outline, goal) == pytest.approx(np.full(len(closed.outline), 0.5))
+    assert geometry.distance_to_outline(open_loop.outline, goal).max() > 1.0
+
+
+def test_chase_turns_beyond_the_farthest_stray_box_star():
+    """Star goal: a stray box 3 m from the goal; the outline is the goal grown by
+    (inradius - the outline's inradius at scale 1), so turn at inradius h + 3 + 2."""
+    cfg = Config(chase=2.0)
+    c = Controller(cfg, make_goal(cfg, shape_vertices("star")))
+    h = c.shape.inradius
+    tip = c.goal.vertices[np.argmax(np.hypot(*(c.goal.vertices - c.goal.centre).T))]
+    outward = (tip - c.goal.centre) / np.hypot(*(tip - c.goal.centre))
+
+    class Seen:
+        box_positions = np.array([c.goal.centre, tip + 3.0 * outward])
+
+    c._observation = Seen()
+    assert c._turn_radius() == pytest.approx(h + 3.0 + 2.0)
+
+
+def test_chase_hold_with_nothing_out_of_reach_lasts_until_the_longest():
+    cfg = Config(chase=2.0, hold_steps=100)
+    c = Controller(cfg, make_goal(cfg, None))
+    centre = c.goal.centre
+
+    class Seen:
+        box_positions = np.vstack([np.tile(centre, (10, 1)), centre + [20.0, 0.0] + np.zeros((20, 2))])
+
+    c._observation = Seen()
+    c.phase, c.scale = "contracting", c.min_scale * 0.99
+    c._program_update()
+    steps = 0
+    while c.phase == HOLDING and steps < 30000:
+        c.update(Seen())
+        steps += 1
+    assert steps == 500  # 20 boxes out of reach (>= 15), none arriving: let go at the first check
+    Seen.box_positions = np.tile(centre, (10, 1))
+    c.phase, c.scale = "contracting", c.min_scale * 0.99
+    c._program_update()
+    steps = 0
+    while c.phase == HOLDING and steps < 30000:
+        c.update(Seen())
+        steps += 1
+    assert steps == sculpt.SCULPTING.longest  # nothing out of reach: hold until no more extensions
