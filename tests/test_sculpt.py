@@ -103,8 +103,8 @@ def test_hold_goes_on_while_boxes_arrive():
 
 def test_hold_stays_while_little_is_out_of_reach_but_not_forever():
     tuning = sculpt.Sculpting(longest=3000)
-    assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=14) == 3000
-    assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=15) == 500
+    assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=4) == 3000
+    assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=5) == 500
 
 
 # ------------------------------------------------------------------ in the controller
@@ -154,7 +154,7 @@ def test_chase_hold_with_nothing_out_of_reach_lasts_until_the_longest():
     while c.phase == HOLDING and steps < 30000:
         c.update(Seen())
         steps += 1
-    assert steps == 500  # 20 boxes out of reach (>= 15), none arriving: let go at the first check
+    assert steps == 500  # 20 boxes out of reach (>= 5), none arriving: let go at the first check
     Seen.box_positions = np.tile(centre, (10, 1))
     c.phase, c.scale = "contracting", c.min_scale * 0.99
     c._program_update()
@@ -163,3 +163,18 @@ def test_chase_hold_with_nothing_out_of_reach_lasts_until_the_longest():
         c.update(Seen())
         steps += 1
     assert steps == sculpt.SCULPTING.longest  # nothing out of reach: hold until no more extensions
+
+
+def test_a_sharp_corner_lacks_when_half_a_full_pile_is_missing():
+    """With a 0.7 m neighbourhood a full pile holds pi/4 * 0.49 * 0.85 / 0.1624 = 2.01
+    boxes at the square's corner: one box there is 1.01 missing (under the 2 of
+    `lack`, but half of a full pile): dark; two boxes: lit."""
+    tuning = sculpt.Sculpting(near=0.7)
+
+    def corner_dark(boxes):
+        boxes = np.array(boxes)
+        shaped = sculpt.sculpt(SQUARE, 0.5, boxes, np.ones(len(boxes), dtype=bool), BOX_AREA, tuning)
+        return ((shaped.dark[:, 0] > 2.0) & (shaped.dark[:, 1] > 2.0)).any()
+
+    assert corner_dark([[1.8, 1.8]])
+    assert not corner_dark([[1.8, 1.8], [1.6, 1.9]])

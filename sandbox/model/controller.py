@@ -130,6 +130,9 @@ def goal_fit_notes(controller: "Controller") -> list[str]:
 class Controller:
     """State machine driving the light pattern. Call :meth:`advance` once per world step."""
 
+    #: How the closed loop (chase) shapes the band near the goal and holds it.
+    sculpting: sculpt.Sculpting = sculpt.SCULPTING
+
     def __init__(self, config: Config, goal: Goal):
         self.config = config
         self.goal = goal
@@ -298,7 +301,7 @@ class Controller:
         self.phase = HOLDING if self.config.hold_steps > 0 else DILATING
         self._hold_left = self.config.hold_steps
         if self.phase == HOLDING and self._closed_loop and self._observation is not None:
-            self._hold = sculpt.Hold(self.config.hold_steps, self._boxes_in_goal())
+            self._hold = sculpt.Hold(self.config.hold_steps, self._boxes_in_goal(), self.sculpting)
 
     def _closed_loop_hold(self) -> bool:
         """One step of the closed loop's hold: the band is re-sculpted every update."""
@@ -469,7 +472,7 @@ class Controller:
             shaped = sculpt.Sculpted(sculpt.offset_outline(polygon, distance), np.empty((0, 2)))
         else:
             boxes = observation.box_positions
-            shaped = sculpt.sculpt(polygon, distance, boxes, goal.contains(boxes), cfg.box_area)
+            shaped = sculpt.sculpt(polygon, distance, boxes, goal.contains(boxes), cfg.box_area, self.sculpting)
         self.outline = shaped.outline
         if goal.is_circle:
             self.corners = np.empty((0, 2))
@@ -479,7 +482,7 @@ class Controller:
         on = geometry.distance_to_outline(self._centres, self.outline) <= cfg.band + 1e-9
         if self.strategies["no_corners"] > 0 and len(self.corners):
             on = self._darken_corners(on)
-        on = sculpt.darken_near(on, self._centres, shaped.dark, sculpt.SCULPTING.dark)
+        on = sculpt.darken_near(on, self._centres, shaped.dark, self.sculpting.dark)
         self.intensities = (on * cfg.light_intensity).reshape(self.intensities.shape)
 
     def _darken_corners(self, on: np.ndarray) -> np.ndarray:
