@@ -139,30 +139,32 @@ def test_chase_turns_beyond_the_farthest_stray_box_star():
     assert c._turn_radius() == pytest.approx(h + 3.0 + 2.0)
 
 
-def test_chase_hold_with_nothing_out_of_reach_lasts_until_the_longest():
-    cfg = Config(chase=2.0, hold_steps=100)
-    c = Controller(cfg, make_goal(cfg, None))
-    centre = c.goal.centre
+def _closed_loop_hold_steps(c: Controller, boxes: np.ndarray) -> int:
+    """Steps the controller holds its smallest outline while it sees ``boxes``."""
 
     class Seen:
-        box_positions = np.vstack([np.tile(centre, (10, 1)), centre + [20.0, 0.0] + np.zeros((20, 2))])
+        box_positions = boxes
 
     c._observation = Seen()
     c.phase, c.scale = "contracting", c.min_scale * 0.99
-    c._program_update()
+    c._program_update()  # the first size below the smallest: hold
     steps = 0
     while c.phase == HOLDING and steps < 30000:
         c.update(Seen())
         steps += 1
-    assert steps == 500  # 20 boxes out of reach (>= 5), none arriving: let go at the first check
-    Seen.box_positions = np.tile(centre, (10, 1))
-    c.phase, c.scale = "contracting", c.min_scale * 0.99
-    c._program_update()
-    steps = 0
-    while c.phase == HOLDING and steps < 30000:
-        c.update(Seen())
-        steps += 1
-    assert steps == sculpt.SCULPTING.longest  # nothing out of reach: hold until no more extensions
+    return steps
+
+
+def test_chase_hold_lets_go_only_for_boxes_out_of_reach():
+    cfg = Config(chase=2.0, hold_steps=100)
+    c = Controller(cfg, make_goal(cfg, None))
+    centre = c.goal.centre
+    in_goal = np.tile(centre, (10, 1))
+    far = centre + [20.0, 0.0] + np.zeros((20, 2))
+    # 20 boxes out of reach (>= 5), none arriving: let go at the first check.
+    assert _closed_loop_hold_steps(c, np.vstack([in_goal, far])) == 500
+    # Nothing out of reach: extended at every check until the longest.
+    assert _closed_loop_hold_steps(c, in_goal) == sculpt.SCULPTING.longest
 
 
 def test_a_sharp_corner_lacks_when_half_a_full_pile_is_missing():
