@@ -180,3 +180,21 @@ def test_a_sharp_corner_lacks_when_half_a_full_pile_is_missing():
 
     assert corner_dark([[1.8, 1.8]])
     assert not corner_dark([[1.8, 1.8], [1.6, 1.9]])
+
+
+def test_with_chase_no_corners_darkens_only_while_dilating():
+    """Contracting, the tips need their robots (with no corners on top of chase the
+    star-switch-nocorners case fell from 0.772 to 0.745 in the goal); dilating, half
+    the lit band (the 'at-least' rule: the fewest k with k / n >= 0.5) stays dark."""
+    star = shape_vertices("star")
+    plain = Controller(Config(chase=2.0), make_goal(Config(chase=2.0), star))
+    cfg = Config(chase=2.0, no_corners=0.5)
+    c = Controller(cfg, make_goal(cfg, star))
+    for ctrl in (plain, c):
+        ctrl.scale = 2.0
+        ctrl._redraw()
+    lit = int(plain.intensities.sum())
+    assert int(c.intensities.sum()) == lit  # contracting: nothing darkened
+    c.phase = "dilating"
+    c._redraw()
+    assert int(c.intensities.sum()) == lit - math.ceil(lit / 2)

@@ -480,7 +480,7 @@ class Controller:
             convex = geometry.interior_angles(polygon) < 180.0
             self.corners = sculpt.corner_points(polygon, convex, distance)
         on = geometry.distance_to_outline(self._centres, self.outline) <= cfg.band + 1e-9
-        if self.strategies["no_corners"] > 0 and len(self.corners):
+        if self.strategies["no_corners"] > 0 and len(self.corners) and self.phase == DILATING:
             on = self._darken_corners(on)
         on = sculpt.darken_near(on, self._centres, shaped.dark, self.sculpting.dark)
         self.intensities = (on * cfg.light_intensity).reshape(self.intensities.shape)
