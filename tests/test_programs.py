@@ -56,6 +56,24 @@ def test_a_program_is_called_every_n_steps_and_its_pattern_is_lit():
     assert sim.senses == frozenset()
 
 
+def test_a_program_without_every_follows_a_live_update_every():
+    class Unset(Blink):
+        every = None
+
+    program = Unset()
+    sim = Simulation(SMALL, program=program)  # update_every 10
+    sim.step(12)
+    assert program.calls == [0, 10]
+    sim.update_config(update_every=3)  # after step 12: the next call within 3 steps (at 14), not at 20
+    sim.step(8)
+    assert program.calls == [0, 10, 14, 17]
+    blink = Blink()  # every = 5 of its own: unchanged
+    sim = Simulation(SMALL, program=blink)
+    sim.update_config(update_every=3)
+    sim.step(11)
+    assert blink.calls == [0, 5, 10]
+
+
 def test_a_program_senses_only_what_it_declares():
     with pytest.raises(ProgramError, match="does not sense 'boxes'"):
         Simulation(SMALL, program=Peeker()).step(1)

@@ -191,10 +191,13 @@ class Simulation:
             first = self._call_program(reset, self.config, self.goal) if callable(reset) else None
             if first is None:
                 first = np.zeros_like(self.controller.intensities)
-        every = getattr(program, "every", None)  # read after reset, which may set it
-        self._program_every = max(1, int(every or self.config.update_every))
+        self._program_every = self._program_period()  # read after reset, which may set ``every``
         self._until_program = 1  # asked at the first step
         self.set_pattern(first)
+
+    def _program_period(self) -> int:
+        """World steps between two calls of the program: its ``every``, else ``update_every``."""
+        return max(1, int(getattr(self.program, "every", None) or self.config.update_every))
 
     def _call_program(self, method: Callable, *args: Any) -> Any:
         """A user's program's method; whatever goes wrong in it is a one-line ProgramError."""
@@ -246,6 +249,9 @@ class Simulation:
             self.config = self.config.replace(**live)
             self._robot_params = kernels.robot_params(self.config)
             self.controller.reconfigure(self.config)
+            # A program without its own ``every`` follows update_every, from its next call.
+            self._program_every = self._program_period()
+            self._until_program = min(self._until_program, self._program_every)
         if strategies:
             self.set_strategies(**strategies)
         return deferred
