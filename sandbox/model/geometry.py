@@ -154,28 +154,3 @@ def simplify(vertices: np.ndarray, tolerance: float) -> np.ndarray:
     if (signed_area(coords) > 0) != (signed_area(vertices) > 0):
         coords = coords[::-1]
     return coords
-
-
-def gauge(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
-    """The scale at which each point (m, 2) lies on ``scale * vertices``, for a
-    polygon star-shaped about the origin: < 1 inside it, 1 on it, > 1 outside.
-
-    Along the ray from the origin through p, the outline is met at t p where
-    t p = a + u (b - a) for an edge a -> b with 0 <= u <= 1; crossing with
-    e = b - a gives t = cross(a, e) / cross(p, e) and u = cross(a, p) / cross(p, e).
-    The nearest crossing (smallest t > 0) is the outline, and the gauge is 1 / t."""
-    p = np.asarray(points, dtype=float).reshape(-1, 2)[:, None, :]
-    a = np.asarray(vertices, dtype=float)[None, :, :]
-    e = np.roll(a, -1, axis=1) - a
-
-    def cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
-
-    with np.errstate(divide="ignore", invalid="ignore"):
-        pe = cross(p, e)
-        t = cross(a, e) / pe
-        u = cross(a, p) / pe
-    t = np.where((t > 0) & (u >= -1e-12) & (u <= 1 + 1e-12) & np.isfinite(t), t, np.inf)
-    nearest = t.min(axis=1)
-    out = np.where(np.isfinite(nearest), 1.0 / nearest, 0.0)
-    return np.where(np.abs(p[:, 0]).sum(-1) > 0, out, 0.0)  # the origin itself: 0

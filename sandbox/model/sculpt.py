@@ -24,7 +24,7 @@ an overhead camera would, and does three things the open loop cannot:
    that worked their way into the pile drive out through it.
 
 The numbers in :class:`Sculpting` were chosen by trying a few values on
-seeds 0, 1 and 100-104, never on the evaluation's seeds' results as a
+seeds 0, 1 and 100-103, never on the evaluation's seeds' results as a
 target (the trials are in ``static/closed-loop/README.md``).
 """
 
