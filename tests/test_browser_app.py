@@ -102,6 +102,18 @@ def notification(page, text: str):
     return page.get_by_text(text).first.wait_for(timeout=15_000)
 
 
+def dismiss_notifications(page) -> None:
+    """Close every notification: the page lives for the whole module, and stacked
+    notices can cover the floor where a later test clicks."""
+    close_all = "document.querySelectorAll('.mantine-Notification-closeButton').forEach(b => b.click())"
+    for _ in range(50):  # closing is animated: click until none is left
+        if not page.locator(".mantine-Notification-root").count():
+            return
+        page.evaluate(close_all)
+        page.wait_for_timeout(100)
+    raise AssertionError("notifications did not close")
+
+
 # --------------------------------------------------------------------- tests
 def test_page_loads_and_draws_the_arena(app, page):
     from PIL import Image
@@ -287,9 +299,11 @@ def test_flare_under_chase_says_what_it_still_changes(app, page):
     page.get_by_label("Chase stray boxes", exact=True).uncheck()
     wait_until(lambda: app.runner.latest.strategies["chase"] == 0 and app.runner.latest.strategies["flare"] == 0,
                what="both off")
+    dismiss_notifications(page)
 
 
 def test_drawing_by_clicks_creates_a_valid_goal(app, page):
+    dismiss_notifications(page)
     open_folder(page, "Draw")
     click_button(page, "Start drawing")
     wait_until(lambda: app.panel.shape.drawing, what="draw mode")
