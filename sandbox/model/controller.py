@@ -263,7 +263,7 @@ class Controller:
     @property
     def senses(self) -> frozenset:
         """Open loop: nothing. With *chase*, the boxes' positions."""
-        return _SENSES_BOXES if self.strategies["chase"] > 0 or self._pending.get("chase", 0) > 0 else _SENSES_NOTHING
+        return _SENSES_BOXES if self._closed_loop or self._pending.get("chase", 0) > 0 else _SENSES_NOTHING
 
     def reset(self, config: Config, goal: Goal) -> None:
         """Nothing to do: the simulation builds a new Controller for a new world."""
@@ -380,13 +380,13 @@ class Controller:
         if margin <= 0 or observation is None:
             return largest
         boxes = observation.box_positions
-        stray = boxes[~self.goal.contains(boxes)] - self.goal.centre
+        stray = boxes[~self.goal.contains(boxes)]
         if not len(stray):
             need = 0.0
         elif self.circle_radius is not None or self.shape is None:
-            need = float(np.hypot(*stray.T).max()) + margin
+            need = float(np.hypot(*(stray - self.goal.centre).T).max()) + margin
         else:  # the outline is the goal grown by (inradius - its inradius at scale 1): see _redraw_closed_loop
-            need = self.shape.inradius + float(self.goal.distance(stray + self.goal.centre).max()) + margin
+            need = self.shape.inradius + float(self.goal.distance(stray).max()) + margin
         return min(largest, max(need, self.min_radius + margin))
 
     def _turn_to_contracting(self) -> None:
