@@ -107,6 +107,14 @@ def test_hold_stays_while_little_is_out_of_reach_but_not_forever():
     assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=5) == 500
 
 
+def test_cycle_steps_out_and_back():
+    """From inradius 5 to 10 and back: ln 2 / ln 1.025 = 28.07 -> 29 updates out,
+    ln 2 / -ln 0.975 = 27.38 -> 28 back; 57 updates of 100 steps."""
+    assert sculpt.cycle_steps(5.0, 10.0, 1.025, 0.975, 100) == 5700
+    assert sculpt.cycle_steps(5.0, 5.0, 1.025, 0.975, 100) == 0
+    assert sculpt.cycle_steps(5.0, 4.0, 1.025, 0.975, 100) == 0
+
+
 # ------------------------------------------------------------------ in the controller
 def test_chase_lights_the_goal_grown_by_a_robot_diameter_at_the_smallest_size():
     """Open loop, the star's smallest outline is the star scaled: its tips end
@@ -144,6 +152,7 @@ def _closed_loop_hold_steps(c: Controller, boxes: np.ndarray) -> int:
 
     class Seen:
         box_positions = boxes
+        step = 0
 
     c._observation = Seen()
     c.phase, c.scale = "contracting", c.min_scale * 0.99
@@ -165,6 +174,46 @@ def test_chase_hold_lets_go_only_for_boxes_out_of_reach():
     assert _closed_loop_hold_steps(c, np.vstack([in_goal, far])) == 500
     # Nothing out of reach: extended at every check until the longest.
     assert _closed_loop_hold_steps(c, in_goal) == sculpt.SCULPTING.longest
+
+
+def _hold_until_released(c: Controller, boxes: np.ndarray, limit: int) -> int:
+    """Like _closed_loop_hold_steps, with the observation's step counting from 0."""
+
+    class Seen:
+        box_positions = boxes
+        step = 0
+
+    c._observation = Seen()
+    c.phase, c.scale = "contracting", c.min_scale * 0.99
+    c._program_update()
+    while c.phase == HOLDING and Seen.step < limit:
+        c.update(Seen())
+        Seen.step += 1
+    return Seen.step
+
+
+def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
+    """Circle goal (radius 5.084, smallest outline 5.584), 20 boxes 20 m out: the
+    turn is at 22 m, a cycle out and back ln(22 / 5.584) / ln 1.025 = 55.5 -> 56
+    and / -ln 0.975 = 54.1 -> 55 updates, 11,100 steps, plus the shortest hold
+    (500). With more steps left than that the hold lets go at its first check
+    (500 steps); with fewer it lasts past the deadline; an open-ended run never
+    finishes."""
+    cfg = Config(chase=2.0, hold_steps=100)
+    goal = make_goal(cfg, None)
+    boxes = np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [20.0, 0.0] + np.zeros((20, 2))])
+    cycle = sculpt.cycle_steps(goal.radius + 0.5, 22.0, 1.025, 0.975, 100)
+    assert cycle == 11100
+
+    def released_at(deadline):
+        c = Controller(cfg.replace(steps=deadline), goal)
+        return _hold_until_released(c, boxes, 30000)
+
+    assert released_at(499 + 11600) == 500  # at the check (step 499) exactly a cycle and a hold are left
+    assert released_at(498 + 11600) == 498 + 11600 + 2  # one step fewer: held past the deadline
+    c = Controller(cfg.replace(steps=5000), goal)
+    c.deadline = None
+    assert _hold_until_released(c, boxes, 30000) == 500
 
 
 def test_a_sharp_corner_lacks_when_half_a_full_pile_is_missing():

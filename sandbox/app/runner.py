@@ -72,7 +72,7 @@ class Runner:
 
     def __init__(self, config: Config, *, shape: Any = "from-config", seed: int | None = None,
                  fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, chart_every: int = 100):
-        self.sim = Simulation(config, seed=seed, shape=shape)
+        self.sim = Simulation(config, seed=seed, shape=shape, open_ended=True)  # a live run has no last step
         self.fps = float(fps)
         self.steps_per_frame = int(steps_per_frame)
         self.playing = bool(playing)

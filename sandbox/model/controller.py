@@ -153,6 +153,10 @@ class Controller:
         self.corners = np.empty((0, 2))
         self.intensities = np.zeros((config.lights_per_side,) * 2)
         self._observation = None  # what the last update saw (closed loop only)
+        #: The step at which the run is measured (the closed loop finishes in a hold
+        #: before it); None for an open-ended run, such as the live app's.
+        self.deadline: int | None = config.steps
+        self._finishing = False
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
         #: outline does not fit is refused here with a ShapeError.
         self.notes = goal_fit_notes(self)
@@ -230,6 +234,8 @@ class Controller:
         """Take new controller values (rate, band, sizes...) keeping the phase
         and a scale within the new limits; the pattern is redrawn at once."""
         self.config = config
+        if self.deadline is not None:
+            self.deadline = config.steps
         self._set_limits()
         self.scale = min(max(self.scale, self.min_scale), self.max_scale)
         self._until_update = min(self._until_update, config.update_every)
@@ -305,12 +311,25 @@ class Controller:
 
     def _closed_loop_hold(self) -> bool:
         """One step of the closed loop's hold: the band is re-sculpted every update."""
-        if self._hold.tick(self._boxes_in_goal, self._boxes_out_of_reach):
+        if self._hold.tick(self._boxes_in_goal, self._boxes_out_of_reach) or self._finish_in_hold():
             if self._hold.clock % self.config.update_every == 0:
                 self._redraw()
                 return True
             return False
         return self._end_hold()
+
+    def _finish_in_hold(self) -> bool:
+        """Whether the hold should last to the deadline: fewer steps are left than a
+        cycle out to the farthest stray box and back and the shortest hold after it."""
+        step = self._observation.step
+        if self.deadline is None or step > self.deadline:
+            return False
+        if not self._finishing:
+            cfg = self.config
+            grow = 2.0 - cfg.scale_rate if self._program else 1.0 / cfg.scale_rate
+            cycle = sculpt.cycle_steps(self.min_radius, self._turn_radius(), grow, cfg.scale_rate, cfg.update_every)
+            self._finishing = self.deadline - step < cycle + max(cfg.hold_steps, self.sculpting.check)
+        return self._finishing
 
     @property
     def _closed_loop(self) -> bool:

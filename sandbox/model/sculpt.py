@@ -22,6 +22,10 @@ an overhead camera would, and does three things the open loop cannot:
    nearly every stray box is within the robots' reach; it lets go only to
    fetch boxes that are out of reach. Each dilation costs boxes: robots
    that worked their way into the pile drive out through it.
+4. **Finishing** (:func:`cycle_steps`). A run is measured at its last step.
+   A dilation that cannot come back before then only scatters the pile, so
+   the last hold lasts to the end when the steps left are fewer than a
+   cycle out to the farthest stray box and back (plus the shortest hold).
 
 The numbers in :class:`Sculpting` were chosen by trying a few values on
 seeds 0, 1 and 100-103, never on the evaluation's seeds' results as a
@@ -30,6 +34,7 @@ target (the trials are in ``static/closed-loop/README.md``).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -187,6 +192,15 @@ class Hold:
             elif out_of_reach() < tuning.stay:
                 self.left = max(self.left, tuning.check)
         return self.left > 0
+
+
+def cycle_steps(smallest: float, turn: float, grow: float, shrink: float, update_every: int) -> int:
+    """World steps to dilate from inradius ``smallest`` to ``turn`` and contract back:
+    each update multiplies the inradius by ``grow`` (> 1) or ``shrink`` (< 1)."""
+    if turn <= smallest:
+        return 0
+    span = math.log(turn / smallest)
+    return update_every * (math.ceil(span / math.log(grow)) + math.ceil(span / -math.log(shrink)))
 
 
 def _unit(v: np.ndarray) -> np.ndarray:

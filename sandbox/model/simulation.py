@@ -54,8 +54,11 @@ class Simulation:
     """
 
     def __init__(self, config: Config | None = None, *, seed: int | None = None,
-                 shape: np.ndarray | None | str = "from-config", program: Any = None):
+                 shape: np.ndarray | None | str = "from-config", program: Any = None, open_ended: bool = False):
         self.config = config or Config()
+        #: Whether the run goes on past ``config.steps`` (the live app): then no controller
+        #: plans for the run's end.
+        self.open_ended = open_ended
         #: A light program of the user's (see sandbox.model.programs); None: the paper's controller.
         self.user_program = program
         if isinstance(shape, str):
@@ -76,7 +79,7 @@ class Simulation:
             cfg = cfg.replace(seed=int(seed))
         rng = np.random.default_rng(cfg.seed)
         goal = make_goal(cfg, self.shape_vertices)
-        controller = _controller(cfg, goal)  # first: a goal that cannot fit stops here
+        controller = self._new_controller(cfg, goal)  # first: a goal that cannot fit stops here
         world = World(cfg, rng, progress)
         # Built: from here on nothing can fail halfway.
         self.config, self.seed, self.world, self.goal, self.controller = cfg, cfg.seed, world, goal, controller
@@ -104,6 +107,12 @@ class Simulation:
         #: (controller redraw + field update) and in metrics, for `bench`.
         self.timings = {"physics": 0.0, "lights": 0.0, "metrics": 0.0}
         self._record()
+
+    def _new_controller(self, config: Config, goal: Goal) -> Controller:
+        controller = _controller(config, goal)
+        if self.open_ended:
+            controller.deadline = None
+        return controller
 
     def step(self, n: int = 1) -> None:
         """Advance ``n`` world steps."""
@@ -264,7 +273,7 @@ class Simulation:
         shape = None if vertices is None else np.asarray(vertices, dtype=float)
         config = self.config if name is None else self.config.replace(shape=name)
         goal = make_goal(config, shape)
-        controller = _controller(config, goal)
+        controller = self._new_controller(config, goal)
         controller.set_strategies(**{name_: getattr(config, name_) for name_ in STRATEGY_NAMES})
         self.shape_vertices, self.config, self.goal, self.controller = shape, config, goal, controller
         self._start_program()
