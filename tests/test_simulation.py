@@ -146,3 +146,17 @@ def test_a_reset_takes_the_waiting_changes_when_given_them(small_config):
     assert waiting == ["boxes"] and sim.config.k_turn == 7.0
     sim.reset(config=sim.config.replace(boxes=40))
     assert len(sim.box_positions) == 40 and sim.config.k_turn == 7.0
+
+
+def test_only_a_run_with_a_last_step_plans_for_it(small_config):
+    """The closed loop finishes in a hold before ``config.steps`` (sculpt.cycle_steps);
+    the live app's runs go on, so there the controller has no deadline, also after
+    a reset or a new goal."""
+    cfg = small_config.replace(chase=2.0, steps=5000)
+    assert Simulation(cfg, seed=1).controller.deadline == 5000
+    sim = Simulation(cfg, seed=1, open_ended=True)
+    assert sim.controller.deadline is None
+    sim.reset(2)
+    assert sim.controller.deadline is None
+    sim.set_shape(None, "circle")
+    assert sim.controller.deadline is None
