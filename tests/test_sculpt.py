@@ -115,6 +115,17 @@ def test_cycle_steps_out_and_back():
     assert sculpt.cycle_steps(5.0, 4.0, 1.025, 0.975, 100) == 0
 
 
+def test_hold_for_the_end():
+    """A cycle of 1,000 steps: none fits in 999 (hold); 1,000 fits exactly (go); 1,500
+    fits one but not two (hold until 1,000 are left); 2,000 fits two (go); after the
+    end, never."""
+    assert sculpt.hold_for_the_end(999, 1000)
+    assert not sculpt.hold_for_the_end(1000, 1000)
+    assert sculpt.hold_for_the_end(1500, 1000)
+    assert not sculpt.hold_for_the_end(2000, 1000)
+    assert not sculpt.hold_for_the_end(-1, 1000)
+
+
 # ------------------------------------------------------------------ in the controller
 def test_chase_lights_the_goal_grown_by_a_robot_diameter_at_the_smallest_size():
     """Open loop, the star's smallest outline is the star scaled: its tips end
@@ -197,7 +208,8 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     turn is at 22 m, a cycle out and back ln(22 / 5.584) / ln 1.025 = 55.5 -> 56
     and / -ln 0.975 = 54.1 -> 55 updates, 11,100 steps, plus the shortest hold
     (500). With more steps left than that the hold lets go at its first check
-    (500 steps); with fewer it lasts past the deadline; an open-ended run never
+    (500 steps); with fewer it lasts past the deadline; with room for one such
+    cycle but not two it waits until one is left; an open-ended run never
     finishes."""
     cfg = Config(chase=2.0, hold_steps=100)
     goal = make_goal(cfg, None)
@@ -211,6 +223,9 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
 
     assert released_at(499 + 11600) == 500  # at the check (step 499) exactly a cycle and a hold are left
     assert released_at(498 + 11600) == 498 + 11600 + 2  # one step fewer: held past the deadline
+    # Room for one more cycle but not two: held until exactly one is left, at step 3499.
+    assert released_at(499 + 11600 + 3000) == 3500
+    assert released_at(499 + 2 * 11600) == 500  # room for two: let go at once
     c = Controller(cfg.replace(steps=5000), goal)
     c.deadline = None
     assert _hold_until_released(c, boxes, 30000) == 500

@@ -156,7 +156,7 @@ class Controller:
         #: The step at which the run is measured (the closed loop finishes in a hold
         #: before it); None for an open-ended run, such as the live app's.
         self.deadline: int | None = config.steps
-        self._finishing = False
+        self._planned_cycle: int | None = None  # steps of one more cycle, planned in a hold
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
         #: outline does not fit is refused here with a ShapeError.
         self.notes = goal_fit_notes(self)
@@ -308,6 +308,7 @@ class Controller:
         self._hold_left = self.config.hold_steps
         if self.phase == HOLDING and self._closed_loop and self._observation is not None:
             self._hold = sculpt.Hold(self.config.hold_steps, self._boxes_in_goal(), self.sculpting)
+            self._planned_cycle = None
 
     def _closed_loop_hold(self) -> bool:
         """One step of the closed loop's hold: the band is re-sculpted every update."""
@@ -319,17 +320,18 @@ class Controller:
         return self._end_hold()
 
     def _finish_in_hold(self) -> bool:
-        """Whether the hold should last to the deadline: fewer steps are left than a
-        cycle out to the farthest stray box and back and the shortest hold after it."""
+        """Whether a hold that would let go now goes on, planning for the step the run is
+        measured at (see :func:`sculpt.hold_for_the_end`)."""
         step = self._observation.step
         if self.deadline is None or step > self.deadline:
             return False
-        if not self._finishing:
+        if self._planned_cycle is None:  # once per hold: the farthest stray box sets it
             cfg = self.config
             grow = 2.0 - cfg.scale_rate if self._program else 1.0 / cfg.scale_rate
-            cycle = sculpt.cycle_steps(self.min_radius, self._turn_radius(), grow, cfg.scale_rate, cfg.update_every)
-            self._finishing = self.deadline - step < cycle + max(cfg.hold_steps, self.sculpting.check)
-        return self._finishing
+            out_and_back = sculpt.cycle_steps(self.min_radius, self._turn_radius(), grow, cfg.scale_rate,
+                                              cfg.update_every)
+            self._planned_cycle = out_and_back + max(cfg.hold_steps, self.sculpting.check)
+        return sculpt.hold_for_the_end(self.deadline - step, self._planned_cycle)
 
     @property
     def _closed_loop(self) -> bool:

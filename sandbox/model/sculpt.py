@@ -22,10 +22,12 @@ an overhead camera would, and does three things the open loop cannot:
    nearly every stray box is within the robots' reach; it lets go only to
    fetch boxes that are out of reach. Each dilation costs boxes: robots
    that worked their way into the pile drive out through it.
-4. **Finishing** (:func:`cycle_steps`). A run is measured at its last step.
-   A dilation that cannot come back before then only scatters the pile, so
-   the last hold lasts to the end when the steps left are fewer than a
-   cycle out to the farthest stray box and back (plus the shortest hold).
+4. **Finishing** (:func:`hold_for_the_end`). A run is measured at its last
+   step. A dilation that cannot come back before then only scatters the
+   pile, so the last hold lasts to the end when the steps left are fewer
+   than a cycle out to the farthest stray box and back (plus the shortest
+   hold, :func:`cycle_steps`); and the hold before it waits so that the
+   last cycle ends just before the end, with the far boxes swept in.
 
 The numbers in :class:`Sculpting` were chosen by trying a few values on
 seeds 0, 1 and 100-103, never on the evaluation's seeds' results as a
@@ -201,6 +203,17 @@ def cycle_steps(smallest: float, turn: float, grow: float, shrink: float, update
         return 0
     span = math.log(turn / smallest)
     return update_every * (math.ceil(span / math.log(grow)) + math.ceil(span / -math.log(shrink)))
+
+
+def hold_for_the_end(left: int, cycle: int) -> bool:
+    """Whether a hold that would let go now goes on, ``left`` steps before the run is
+    measured, when one more cycle (out, back and the shortest hold) takes ``cycle``
+    steps. When none fits, to the end: a dilation that cannot come back only scatters
+    the pile. When one fits but not two, until exactly one does, so that the last
+    cycle sweeps the far boxes in just before the end."""
+    if left < 0:
+        return False
+    return left < cycle or (left < 2 * cycle and left > cycle)
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
