@@ -158,8 +158,9 @@ def test_chase_turns_beyond_the_farthest_stray_box_star():
     assert c._turn_radius() == pytest.approx(h + 3.0 + 2.0)
 
 
-def _closed_loop_hold_steps(c: Controller, boxes: np.ndarray) -> int:
-    """Steps the controller holds its smallest outline while it sees ``boxes``."""
+def _closed_loop_hold_steps(c: Controller, boxes: np.ndarray, limit: int = 30000) -> int:
+    """Steps the controller holds its smallest outline while it sees ``boxes``
+    (the observation's step counts from 0 at the hold's start)."""
 
     class Seen:
         box_positions = boxes
@@ -168,11 +169,10 @@ def _closed_loop_hold_steps(c: Controller, boxes: np.ndarray) -> int:
     c._observation = Seen()
     c.phase, c.scale = "contracting", c.min_scale * 0.99
     c._program_update()  # the first size below the smallest: hold
-    steps = 0
-    while c.phase == HOLDING and steps < 30000:
+    while c.phase == HOLDING and Seen.step < limit:
         c.update(Seen())
-        steps += 1
-    return steps
+        Seen.step += 1
+    return Seen.step
 
 
 def test_chase_hold_lets_go_only_for_boxes_out_of_reach():
@@ -185,22 +185,6 @@ def test_chase_hold_lets_go_only_for_boxes_out_of_reach():
     assert _closed_loop_hold_steps(c, np.vstack([in_goal, far])) == 500
     # Nothing out of reach: extended at every check until the longest.
     assert _closed_loop_hold_steps(c, in_goal) == sculpt.SCULPTING.longest
-
-
-def _hold_until_released(c: Controller, boxes: np.ndarray, limit: int) -> int:
-    """Like _closed_loop_hold_steps, with the observation's step counting from 0."""
-
-    class Seen:
-        box_positions = boxes
-        step = 0
-
-    c._observation = Seen()
-    c.phase, c.scale = "contracting", c.min_scale * 0.99
-    c._program_update()
-    while c.phase == HOLDING and Seen.step < limit:
-        c.update(Seen())
-        Seen.step += 1
-    return Seen.step
 
 
 def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
@@ -219,7 +203,7 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
 
     def released_at(deadline):
         c = Controller(cfg.replace(steps=deadline), goal)
-        return _hold_until_released(c, boxes, 30000)
+        return _closed_loop_hold_steps(c, boxes)
 
     assert released_at(499 + 11600) == 500  # at the check (step 499) exactly a cycle and a hold are left
     assert released_at(498 + 11600) == 498 + 11600 + 2  # one step fewer: held past the deadline
@@ -228,7 +212,7 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     assert released_at(499 + 2 * 11600) == 500  # room for two: let go at once
     c = Controller(cfg.replace(steps=5000), goal)
     c.deadline = None
-    assert _hold_until_released(c, boxes, 30000) == 500
+    assert _closed_loop_hold_steps(c, boxes) == 500
 
 
 def test_a_sharp_corner_lacks_when_half_a_full_pile_is_missing():
