@@ -325,7 +325,6 @@ def test_charts_are_sent_only_when_new_and_thinned():
     assert Chart.sends == sent + 1  # only the text
 
 
-
 def test_the_live_app_runs_without_a_deadline():
     r = Runner(SMALL, shape=None, playing=False)
     assert r.sim.controller.deadline is None

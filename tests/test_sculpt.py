@@ -211,7 +211,7 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     assert released_at(499 + 11600 + 3000) == 3500
     assert released_at(499 + 2 * 11600) == 500  # room for two: let go at once
     c = Controller(cfg.replace(steps=5000), goal)
-    c.deadline = None
+    c.open_ended = True
     assert _closed_loop_hold_steps(c, boxes) == 500
 
 

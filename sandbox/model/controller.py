@@ -153,9 +153,8 @@ class Controller:
         self.corners = np.empty((0, 2))
         self.intensities = np.zeros((config.lights_per_side,) * 2)
         self._observation = None  # what the last update saw (closed loop only)
-        #: The step at which the run is measured (the closed loop finishes in a hold
-        #: before it); None for an open-ended run, such as the live app's.
-        self.deadline: int | None = config.steps
+        #: Whether the run goes on past ``config.steps`` (the live app's): then there is no deadline.
+        self.open_ended = False
         self._planned_cycle: int | None = None  # steps of one more cycle, planned in a hold
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
         #: outline does not fit is refused here with a ShapeError.
@@ -234,8 +233,6 @@ class Controller:
         """Take new controller values (rate, band, sizes...) keeping the phase
         and a scale within the new limits; the pattern is redrawn at once."""
         self.config = config
-        if self.deadline is not None:
-            self.deadline = config.steps
         self._set_limits()
         self.scale = min(max(self.scale, self.min_scale), self.max_scale)
         self._until_update = min(self._until_update, config.update_every)
@@ -318,6 +315,12 @@ class Controller:
                 return True
             return False
         return self._end_hold()
+
+    @property
+    def deadline(self) -> int | None:
+        """The step at which the run is measured (the closed loop plans its last cycle
+        for it); None for an open-ended run."""
+        return None if self.open_ended else self.config.steps
 
     def _finish_in_hold(self) -> bool:
         """Whether a hold that would let go now goes on, planning for the step the run is

@@ -5,7 +5,7 @@ that leaves the band far beyond a star's tips (scaling by (r + 0.5) / r
 moves a tip out by 0.5 R / r, over a metre) while it touches the notches,
 so the tips stay empty. And it never knows where boxes spill out or where
 the goal still lacks them. With *chase* the controller sees the boxes, as
-an overhead camera would, and does three things the open loop cannot:
+an overhead camera would, and does four things the open loop cannot:
 
 1. **Offsets, not scales.** The outline is the goal grown by a distance
    ``t`` (round corners), so near the goal the band is the same distance

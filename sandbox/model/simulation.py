@@ -110,8 +110,7 @@ class Simulation:
 
     def _new_controller(self, config: Config, goal: Goal) -> Controller:
         controller = _controller(config, goal)
-        if self.open_ended:
-            controller.deadline = None
+        controller.open_ended = self.open_ended
         return controller
 
     def step(self, n: int = 1) -> None:
