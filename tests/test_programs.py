@@ -153,6 +153,16 @@ def test_chase_runs_shorter_cycles():
     assert closed.cycle > open_loop.cycle
 
 
+def test_result_files_name_the_paper_controller_open_or_closed(capsys):
+    args = ["run", "--robots", "10", "--boxes", "15", "--steps", "200", "--no-progress", "--json"]
+    named = []
+    for extra in ([], ["--chase", "2"]):
+        assert main(args + extra) == 0
+        result = json.loads(capsys.readouterr().out)
+        named.append((result["controller"], result["senses"]))
+    assert named == [("paper (open loop)", []), ("paper (closed loop: chase)", ["boxes"])]
+
+
 # ------------------------------------------------------------------ files
 def test_example_controller_runs_from_the_command_line(capsys):
     code = main(["run", "--controller", f"{EXAMPLE}:ShrinkingRing", "--robots", "10", "--boxes", "15",

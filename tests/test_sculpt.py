@@ -107,14 +107,6 @@ def test_hold_stays_while_little_is_out_of_reach_but_not_forever():
     assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=5) == 500
 
 
-def test_cycle_steps_out_and_back():
-    """From inradius 5 to 10 and back: ln 2 / ln 1.025 = 28.07 -> 29 updates out,
-    ln 2 / -ln 0.975 = 27.38 -> 28 back; 57 updates of 100 steps."""
-    assert sculpt.cycle_steps(5.0, 10.0, 1.025, 0.975, 100) == 5700
-    assert sculpt.cycle_steps(5.0, 5.0, 1.025, 0.975, 100) == 0
-    assert sculpt.cycle_steps(5.0, 4.0, 1.025, 0.975, 100) == 0
-
-
 def test_hold_for_the_end():
     """A cycle of 1,000 steps: none fits in 999 (hold); 1,000 fits exactly (go); 1,500
     fits one but not two (hold until 1,000 are left); 2,000 fits two (go); after the
@@ -188,31 +180,57 @@ def test_chase_hold_lets_go_only_for_boxes_out_of_reach():
 
 
 def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
-    """Circle goal (radius 5.084, smallest outline 5.584), 20 boxes 20 m out: the
-    turn is at 22 m, a cycle out and back ln(22 / 5.584) / ln 1.025 = 55.5 -> 56
-    and / -ln 0.975 = 54.1 -> 55 updates, 11,100 steps, plus the shortest hold
-    (500). With more steps left than that the hold lets go at its first check
+    """Circle goal (radius 5.084, smallest outline 5.584), held at the first size
+    below it (0.99 x 5.584 = 5.528), 20 boxes 20 m out, so the turn is at 22 m.
+    Let go, the circle grows back by 0.6 m to 6.128 and is lit; each update (100
+    steps) grows it by 1.025 until the first size past 22 m, after
+    ceil(ln(22 / 6.128) / ln 1.025) = ceil(51.8) = 52 updates (22.128 m), which
+    turns; then it shrinks by 0.975 until below 5.584, after
+    ceil(ln(22.128 / 5.584) / -ln 0.975) = ceil(54.4) = 55 updates: the next hold
+    starts 10,700 steps after letting go, and a cycle with the shortest hold is
+    11,200. With more steps left than that the hold lets go at its first check
     (500 steps); with fewer it lasts past the deadline; with room for one such
     cycle but not two it waits until one is left; an open-ended run never
     finishes."""
     cfg = Config(chase=2.0, hold_steps=100)
     goal = make_goal(cfg, None)
     boxes = np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [20.0, 0.0] + np.zeros((20, 2))])
-    cycle = sculpt.cycle_steps(goal.radius + 0.5, 22.0, 1.025, 0.975, 100)
-    assert cycle == 11100
 
     def released_at(deadline):
         c = Controller(cfg.replace(steps=deadline), goal)
         return _closed_loop_hold_steps(c, boxes)
 
-    assert released_at(499 + 11600) == 500  # at the check (step 499) exactly a cycle and a hold are left
-    assert released_at(498 + 11600) == 498 + 11600 + 2  # one step fewer: held past the deadline
+    assert released_at(499 + 11200) == 500  # at the check (step 499) exactly a cycle and a hold are left
+    assert released_at(498 + 11200) == 498 + 11200 + 2  # one step fewer: held past the deadline
     # Room for one more cycle but not two: held until exactly one is left, at step 3499.
-    assert released_at(499 + 11600 + 3000) == 3500
-    assert released_at(499 + 2 * 11600) == 500  # room for two: let go at once
+    assert released_at(499 + 11200 + 3000) == 3500
+    assert released_at(499 + 2 * 11200) == 500  # room for two: let go at once
     c = Controller(cfg.replace(steps=5000), goal)
     c.open_ended = True
     assert _closed_loop_hold_steps(c, boxes) == 500
+
+
+@pytest.mark.parametrize("case", [dict(shape="star", switch=0.0), dict(shape="star", switch=0.25),
+                                  dict(shape="square", flare=1.5, switch=0.25)])
+def test_the_planned_cycle_is_the_one_the_controller_then_runs(case):
+    """With the boxes kept still, the copy's count is what the controller itself
+    takes from letting go to its next hold, the circle switched in included (which
+    grows farther than the polygon would: a box 9 m out in a corner of the arena)."""
+    cfg = Config(chase=2.0, hold_steps=100, **case)
+    goal = make_goal(cfg, shape_vertices(cfg.shape))
+    boxes = np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [9.0, 9.0] + np.zeros((20, 2))])
+    c = Controller(cfg, goal)
+    _closed_loop_hold_steps(c, boxes)
+    assert c.phase == "dilating"
+    c.phase, c._hold = HOLDING, sculpt.Hold(cfg.hold_steps, 0)  # back to the moment before letting go
+    planned = c._steps_to_next_hold(limit=10**6)
+    assert c.phase == HOLDING  # the copy left the controller alone
+    c._end_hold()
+    steps = 0
+    while c.phase != HOLDING:
+        c.update(c._observation)
+        steps += 1
+    assert steps == planned > 0
 
 
 def test_a_sharp_corner_lacks_when_half_a_full_pile_is_missing():

@@ -15,7 +15,7 @@ from tqdm import tqdm
 from sandbox.cli import UserError, add_config_arguments, add_controller_argument, config_from_args, controller_from_args
 from sandbox.model.config import CASES, STRATEGY_NAMES, Config
 from sandbox.model.metrics import Sample, SampleWriter
-from sandbox.model.programs import PAPER_CONTROLLER, ProgramError
+from sandbox.model.programs import ProgramError, paper_controller_name
 from sandbox.model.simulation import Simulation
 
 
@@ -114,7 +114,7 @@ def run_command(args: argparse.Namespace) -> int:
         "mean_outside_distance": final.mean_outside_distance,
         "boxes_escaped": final.boxes_escaped,
         "cycles": sim.cycle,
-        "controller": spec or PAPER_CONTROLLER,
+        "controller": spec or paper_controller_name(config),
         "senses": sorted(sim.senses),
         "light_energy": round(sim.light_energy, 3),
         "wall_seconds": round(wall, 3),

@@ -31,7 +31,7 @@ def run_sweep_trial(config: dict, seed: int, steps: int, shape: list | None, con
     so workers need not see the user's shape files; ``controller`` a light
     program as ``path.py:ClassName`` (loaded in the worker), None for the paper's.
     """
-    from sandbox.model.programs import PAPER_CONTROLLER, load_program
+    from sandbox.model.programs import load_program, paper_controller_name
     from sandbox.model.simulation import Simulation  # only in the worker: the parent need not load numba
 
     cfg = Config(**config).replace(seed=int(seed), steps=int(steps))
@@ -51,7 +51,7 @@ def run_sweep_trial(config: dict, seed: int, steps: int, shape: list | None, con
         "seconds": round(time.perf_counter() - start, 3),
         "cpu_seconds": round(time.process_time() - cpu, 3),
         "host": socket.gethostname(),
-        "controller": controller or PAPER_CONTROLLER,
+        "controller": controller or paper_controller_name(cfg),
         "senses": sorted(sim.senses),  # what the light program looked at
         "light_energy": round(sim.light_energy, 3),  # sum of all intensities over all steps
         "samples": samples,

@@ -37,6 +37,7 @@ And two readings of *switch to circle* (``Config.switch_mode``):
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
@@ -125,6 +126,14 @@ def goal_fit_notes(controller: "Controller") -> list[str]:
         return []
     return [f"the goal's largest outline spans {outlines.describe_box(box)}, past the "
             f"{controller.config.arena_size:g} m arena's walls: the lights there do not exist"]
+
+
+@dataclass(frozen=True)
+class _Snapshot:
+    """The part of an observation the controller reads, kept still (see _steps_to_next_hold)."""
+
+    step: int
+    box_positions: np.ndarray
 
 
 class Controller:
@@ -328,13 +337,28 @@ class Controller:
         step = self._observation.step
         if self.deadline is None or step > self.deadline:
             return False
-        if self._planned_cycle is None:  # once per hold: the farthest stray box sets it
-            cfg = self.config
-            grow = 2.0 - cfg.scale_rate if self._program else 1.0 / cfg.scale_rate
-            out_and_back = sculpt.cycle_steps(self.min_radius, self._turn_radius(), grow, cfg.scale_rate,
-                                              cfg.update_every)
-            self._planned_cycle = out_and_back + max(cfg.hold_steps, self.sculpting.check)
-        return sculpt.hold_for_the_end(self.deadline - step, self._planned_cycle)
+        left = self.deadline - step
+        if self._planned_cycle is None:  # once per hold, with the boxes as they are now
+            shortest_hold = max(self.config.hold_steps, self.sculpting.check)
+            self._planned_cycle = self._steps_to_next_hold(limit=left + 1) + shortest_hold
+        return sculpt.hold_for_the_end(left, self._planned_cycle)
+
+    def _steps_to_next_hold(self, limit: int) -> int:
+        """World steps from letting go of this hold until the next one starts (at most
+        ``limit``), found by running a copy of this controller on the boxes as they are
+        now. Exact for the schedule, whatever it is (the program's overshoot, a circle
+        switched in that grows farther than the polygon would); boxes that move
+        while it runs can still make the real cycle longer or shorter."""
+        ghost = copy.copy(self)
+        ghost.strategies, ghost._pending = dict(self.strategies), dict(self._pending)
+        ghost._observation = _Snapshot(self._observation.step, np.array(self._observation.box_positions))
+        ghost._redraw = lambda: None  # only its sizes and phases matter, not which lights are on
+        ghost._end_hold()
+        steps = 0
+        while ghost.phase != HOLDING and steps < limit:
+            ghost.advance()
+            steps += 1
+        return steps
 
     @property
     def _closed_loop(self) -> bool:

@@ -40,6 +40,11 @@ SENSES = frozenset({"boxes", "robots"})
 PAPER_CONTROLLER = "paper (open loop)"
 
 
+def paper_controller_name(config: Config) -> str:
+    """How result files name the paper's controller: with *chase* it senses the boxes."""
+    return "paper (closed loop: chase)" if config.chase > 0 else PAPER_CONTROLLER
+
+
 class ProgramError(ValueError):
     """A light program that cannot be used: the message says why, in one line."""
 

@@ -25,9 +25,10 @@ an overhead camera would, and does four things the open loop cannot:
 4. **Finishing** (:func:`hold_for_the_end`). A run is measured at its last
    step. A dilation that cannot come back before then only scatters the
    pile, so the last hold lasts to the end when the steps left are fewer
-   than a cycle out to the farthest stray box and back (plus the shortest
-   hold, :func:`cycle_steps`); and the hold before it waits so that the
-   last cycle ends just before the end, with the far boxes swept in.
+   than a cycle out to the farthest stray box and back plus the shortest
+   hold (the controller finds the cycle by running a copy of itself on the
+   boxes as they are); and the hold before it waits so that the last cycle
+   ends just before the end, with the far boxes swept in.
 
 The numbers in :class:`Sculpting` were chosen by trying a few values on
 seeds 0, 1 and 100-103, never on the evaluation's seeds' results as a
@@ -36,7 +37,6 @@ target (the trials are in ``static/closed-loop/README.md``).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -194,15 +194,6 @@ class Hold:
             elif out_of_reach() < tuning.stay:
                 self.left = max(self.left, tuning.check)
         return self.left > 0
-
-
-def cycle_steps(smallest: float, turn: float, grow: float, shrink: float, update_every: int) -> int:
-    """World steps to dilate from inradius ``smallest`` to ``turn`` and contract back:
-    each update multiplies the inradius by ``grow`` (> 1) or ``shrink`` (< 1)."""
-    if turn <= smallest:
-        return 0
-    span = math.log(turn / smallest)
-    return update_every * (math.ceil(span / math.log(grow)) + math.ceil(span / -math.log(shrink)))
 
 
 def hold_for_the_end(left: int, cycle: int) -> bool:
