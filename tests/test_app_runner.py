@@ -16,7 +16,7 @@ from sandbox.model.config import Config
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 
 
-def wait_until(condition, timeout=10.0):
+def wait_until(condition, timeout=30.0):  # generous: a loaded machine (a sweep beside the tests) is slow
     deadline = time.time() + timeout
     while time.time() < deadline:
         if condition():

@@ -7,7 +7,8 @@ import pytest
 
 from sandbox.model import geometry
 from sandbox.model.config import Config
-from sandbox.model.controller import CONTRACTING, DILATING, HOLDING, Controller, make_goal
+from sandbox.model.controller import CONTRACTING, DILATING, HOLDING, Controller
+from sandbox.model.goal import make_goal
 from sandbox.shapes import shape_vertices
 
 

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from sandbox.model.config import Config
-from sandbox.model.controller import Controller, make_goal
+from sandbox.model.controller import Controller
+from sandbox.model.goal import make_goal
 from sandbox.model.lights import LightField, brightness_kernel, light_centres, luminosity_direct
 from sandbox.shapes import shape_vertices
 

@@ -10,7 +10,8 @@ import pytest
 
 from sandbox.commands import main
 from sandbox.model.config import Config
-from sandbox.model.controller import Controller, make_goal
+from sandbox.model.controller import Controller
+from sandbox.model.goal import make_goal
 from sandbox.model.env import LightFieldEnv
 from sandbox.model.programs import LightProgram, ProgramError, check_pattern, load_program
 from sandbox.model.simulation import Simulation

@@ -9,7 +9,8 @@ import pytest
 
 from sandbox.model import geometry, sculpt
 from sandbox.model.config import Config
-from sandbox.model.controller import HOLDING, Controller, make_goal
+from sandbox.model.controller import HOLDING, Controller
+from sandbox.model.goal import make_goal
 from sandbox.shapes import shape_vertices
 
 SQUARE = np.array([[-2.0, -2.0], [2.0, -2.0], [2.0, 2.0], [-2.0, 2.0]])  # side 4, inradius 2

@@ -11,7 +11,8 @@ from PIL import Image, ImageDraw, ImageFont
 
 from sandbox.app import palette as pal
 from sandbox.model.config import Config
-from sandbox.model.controller import DILATING, Controller, make_goal
+from sandbox.model.controller import DILATING, Controller
+from sandbox.model.goal import make_goal
 from sandbox.model.lights import LightField
 from sandbox.model.robots import PHOTOCELLS
 from sandbox.shapes import shape_vertices

@@ -38,7 +38,8 @@ def read_final_csv(folder: str | Path) -> dict[str, list[dict]]:
 def open_loop_energy(config: Config) -> float:
     """Sum of all intensities over ``config.steps`` steps of the paper's
     controller: what it lights never depends on the world, so no physics is run."""
-    from sandbox.model.controller import Controller, make_goal
+    from sandbox.model.controller import Controller
+    from sandbox.model.goal import make_goal
     from sandbox.shapes import shape_vertices
 
     controller = Controller(config, make_goal(config, shape_vertices(config.shape)))

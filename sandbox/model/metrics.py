@@ -10,7 +10,7 @@ from typing import IO, Any, Sequence
 
 import numpy as np
 
-from sandbox.model.controller import Goal
+from sandbox.model.goal import Goal
 
 
 @dataclass(frozen=True)

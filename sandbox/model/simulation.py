@@ -18,7 +18,8 @@ import numpy as np
 
 from sandbox.model import kernels, metrics, robots
 from sandbox.model.config import STRATEGY_NAMES, Config, param
-from sandbox.model.controller import Controller, Goal, make_goal
+from sandbox.model.controller import Controller
+from sandbox.model.goal import Goal, make_goal
 from sandbox.model.lights import LightField, light_centres
 from sandbox.model.programs import Observation, ProgramError, check_pattern, senses_of
 from sandbox.model.world import World
