@@ -211,6 +211,32 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     assert _closed_loop_hold_steps(c, boxes) == 500
 
 
+def test_chase_stretches_its_plan_by_the_longest_overrun_seen():
+    """A cycle that ran 6,000 steps where the copy counted 4,000 makes every later
+    plan 1.5 times the count: for the circle above, 1.5 x 10,700 + 500 = 16,550."""
+    cfg = Config(chase=2.0, hold_steps=100)
+    goal = make_goal(cfg, None)
+    boxes = np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [20.0, 0.0] + np.zeros((20, 2))])
+
+    def released_at(deadline):
+        c = Controller(cfg.replace(steps=deadline), goal)
+
+        class Seen:
+            box_positions = boxes
+            step = 6000
+
+        c._observation, c._released_at, c._predicted = Seen(), 0, 4000
+        c.phase = "contracting"
+        c._start_hold()  # a hold starts 6,000 steps after the last one let go
+        assert c._overrun == 1.5 and c._predicted is None
+        c._start_hold()  # the next hold, with nothing predicted, keeps it
+        assert c._overrun == 1.5
+        return _closed_loop_hold_steps(c, boxes)
+
+    assert released_at(499 + 16550) == 500
+    assert released_at(498 + 16550) == 498 + 16550 + 2
+
+
 @pytest.mark.parametrize("case", [dict(shape="star", switch=0.0), dict(shape="star", switch=0.25),
                                   dict(shape="square", flare=1.5, switch=0.25)])
 def test_the_planned_cycle_is_the_one_the_controller_then_runs(case):

@@ -38,6 +38,7 @@ And two readings of *switch to circle* (``Config.switch_mode``):
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -108,6 +109,10 @@ class Controller:
         #: Whether the run goes on past ``config.steps`` (the live app's): then there is no deadline.
         self.open_ended = False
         self._planned_cycle: int | None = None  # steps of one more cycle, planned in a hold
+        self._released_at: int | None = None  # the step the last hold let go at (closed loop)
+        self._predicted: int | None = None  # steps the copy predicted from then to the next hold
+        #: The longest a cycle ran in this run, as a multiple of the copy's prediction (at least 1).
+        self._overrun = 1.0
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
         #: outline does not fit is refused here with a ShapeError.
         self.notes = goal_fit_notes(self)
@@ -245,6 +250,8 @@ class Controller:
 
     def _end_hold(self) -> bool:
         self._hold = None
+        if self._observation is not None:
+            self._released_at = self._observation.step
         self.phase = DILATING
         if self._program:
             self._grow_back()
@@ -258,6 +265,10 @@ class Controller:
         if self.phase == HOLDING and self._closed_loop and self._observation is not None:
             self._hold = sculpt.Hold(self.config.hold_steps, self._boxes_in_goal(), self.sculpting)
             self._planned_cycle = None
+            if self._released_at is not None and self._predicted:
+                ran = self._observation.step - self._released_at
+                self._overrun = max(self._overrun, ran / self._predicted)
+            self._predicted = None
 
     def _closed_loop_hold(self) -> bool:
         """One step of the closed loop's hold: the band is re-sculpted every update."""
@@ -281,9 +292,13 @@ class Controller:
         if self.deadline is None or step > self.deadline:
             return False
         left = self.deadline - step
-        if self._planned_cycle is None:  # once per hold, with the boxes as they are now
+        if self._planned_cycle is None:  # once per hold
+            # The copy keeps the boxes still, but a dilation drags boxes out and turns
+            # later: cycles ran up to 1.9 times the copy's count (with switch; the circle
+            # 0.93-1.16). So the count is stretched by the most this run has seen.
+            self._predicted = self._steps_to_next_hold(limit=left + 1)
             shortest_hold = max(self.config.hold_steps, self.sculpting.check)
-            self._planned_cycle = self._steps_to_next_hold(limit=left + 1) + shortest_hold
+            self._planned_cycle = math.ceil(self._predicted * self._overrun) + shortest_hold
         return sculpt.hold_for_the_end(left, self._planned_cycle)
 
     def _steps_to_next_hold(self, limit: int) -> int:
