@@ -26,9 +26,11 @@ an overhead camera would, and does four things the open loop cannot:
    step. A dilation that cannot come back before then only scatters the
    pile, so the last hold lasts to the end when the steps left are fewer
    than a cycle out to the farthest stray box and back plus the shortest
-   hold (the controller finds the cycle by running a copy of itself on the
-   boxes as they are); and the hold before it waits so that the last cycle
-   ends just before the end, with the far boxes swept in.
+   hold; and the hold before it waits so that the last cycle ends just
+   before the end, with the far boxes swept in. The controller counts a
+   cycle by running a copy of itself on the boxes as they are, stretched by
+   the most a real cycle has overrun such a count in this run (a dilation
+   drags boxes out, so the turn comes later).
 
 The numbers in :class:`Sculpting` were chosen by trying a few values on
 seeds 0, 1 and 100-103, never on the evaluation's seeds' results as a
