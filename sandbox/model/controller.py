@@ -44,8 +44,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from sandbox.model import geometry, outlines, sculpt
-from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal, make_goal
 from sandbox.model.config import STRATEGY_NAMES, Config
+from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal, make_goal
 from sandbox.model.lights import light_centres
 from sandbox.shapes.errors import ShapeError
 
