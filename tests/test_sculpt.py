@@ -180,6 +180,14 @@ def test_chase_hold_lets_go_only_for_boxes_out_of_reach():
     assert _closed_loop_hold_steps(c, in_goal) == sculpt.SCULPTING.longest
 
 
+def _circle_with_boxes_20_m_out():
+    """A chase configuration, its circle goal, 10 boxes at the centre and 20 boxes 20 m out."""
+    cfg = Config(chase=2.0, hold_steps=100)
+    goal = make_goal(cfg, None)
+    boxes = np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [20.0, 0.0] + np.zeros((20, 2))])
+    return cfg, goal, boxes
+
+
 def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     """Circle goal (radius 5.084, smallest outline 5.584), held at the first size
     below it (0.99 x 5.584 = 5.528), 20 boxes 20 m out, so the turn is at 22 m.
@@ -193,9 +201,7 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     (500 steps); with fewer it lasts past the deadline; with room for one such
     cycle but not two it waits until one is left; an open-ended run never
     finishes."""
-    cfg = Config(chase=2.0, hold_steps=100)
-    goal = make_goal(cfg, None)
-    boxes = np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [20.0, 0.0] + np.zeros((20, 2))])
+    cfg, goal, boxes = _circle_with_boxes_20_m_out()
 
     def released_at(deadline):
         c = Controller(cfg.replace(steps=deadline), goal)
@@ -214,9 +220,7 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
 def test_chase_stretches_its_plan_by_the_longest_overrun_seen():
     """A cycle that ran 6,000 steps where the copy counted 4,000 makes every later
     plan 1.5 times the count: for the circle above, 1.5 x 10,700 + 500 = 16,550."""
-    cfg = Config(chase=2.0, hold_steps=100)
-    goal = make_goal(cfg, None)
-    boxes = np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [20.0, 0.0] + np.zeros((20, 2))])
+    cfg, goal, boxes = _circle_with_boxes_20_m_out()
 
     def released_at(deadline):
         c = Controller(cfg.replace(steps=deadline), goal)

@@ -149,7 +149,7 @@ def test_a_reset_takes_the_waiting_changes_when_given_them(small_config):
 
 
 def test_only_a_run_with_a_last_step_plans_for_it(small_config):
-    """The closed loop finishes in a hold before ``config.steps`` (sculpt.cycle_steps);
+    """The closed loop plans its last cycle to end before ``config.steps``;
     the live app's runs go on, so there the controller has no deadline, also after
     a reset or a new goal."""
     cfg = small_config.replace(chase=2.0, steps=5000)

@@ -108,9 +108,9 @@ class Controller:
         self._observation = None  # what the last update saw (closed loop only)
         #: Whether the run goes on past ``config.steps`` (the live app's): then there is no deadline.
         self.open_ended = False
-        self._planned_cycle: int | None = None  # steps of one more cycle, planned in a hold
         self._released_at: int | None = None  # the step the last hold let go at (closed loop)
-        self._predicted: int | None = None  # steps the copy predicted from then to the next hold
+        #: Steps the copy counted from letting go of this hold to the next (planned once per hold).
+        self._predicted: int | None = None
         #: The longest a cycle ran in this run, as a multiple of the copy's prediction (at least 1).
         self._overrun = 1.0
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
@@ -264,7 +264,6 @@ class Controller:
         self._hold_left = self.config.hold_steps
         if self.phase == HOLDING and self._closed_loop and self._observation is not None:
             self._hold = sculpt.Hold(self.config.hold_steps, self._boxes_in_goal(), self.sculpting)
-            self._planned_cycle = None
             if self._released_at is not None and self._predicted:
                 ran = self._observation.step - self._released_at
                 self._overrun = max(self._overrun, ran / self._predicted)
@@ -292,14 +291,14 @@ class Controller:
         if self.deadline is None or step > self.deadline:
             return False
         left = self.deadline - step
-        if self._planned_cycle is None:  # once per hold
-            # The copy keeps the boxes still, but a dilation drags boxes out and turns
-            # later: cycles ran up to 1.9 times the copy's count (with switch; the circle
-            # 0.93-1.16). So the count is stretched by the most this run has seen.
+        if self._predicted is None:
             self._predicted = self._steps_to_next_hold(limit=left + 1)
-            shortest_hold = max(self.config.hold_steps, self.sculpting.check)
-            self._planned_cycle = math.ceil(self._predicted * self._overrun) + shortest_hold
-        return sculpt.hold_for_the_end(left, self._planned_cycle)
+        # The copy keeps the boxes still, but a dilation drags boxes out and turns later:
+        # cycles ran up to 1.9 times the copy's count (with switch; the circle 0.93-1.16).
+        # So the count is stretched by the most this run has seen.
+        shortest_hold = max(self.config.hold_steps, self.sculpting.check)
+        cycle = math.ceil(self._predicted * self._overrun) + shortest_hold
+        return sculpt.hold_for_the_end(left, cycle)
 
     def _steps_to_next_hold(self, limit: int) -> int:
         """World steps from letting go of this hold until the next one starts (at most
