@@ -109,13 +109,16 @@ def test_hold_stays_while_little_is_out_of_reach_but_not_forever():
 
 
 def test_hold_for_the_end():
-    """A cycle of 1,000 steps: none fits in 999 (hold); 1,000 fits exactly (go); 1,500
-    fits one but not two (hold until 1,000 are left); 2,000 fits two (go); after the
-    end, never."""
-    assert sculpt.hold_for_the_end(999, 1000)
+    """A cycle of 1,000 steps: 1,000 fits exactly (go); 1,500 fits one but not two
+    (hold until 1,000 are left); 2,000 fits two (go); 500-999 fit half a cycle or
+    more (go: the dilation turns back in time); 499 not even half (hold to the end);
+    after the end, never."""
     assert not sculpt.hold_for_the_end(1000, 1000)
     assert sculpt.hold_for_the_end(1500, 1000)
     assert not sculpt.hold_for_the_end(2000, 1000)
+    assert not sculpt.hold_for_the_end(999, 1000)
+    assert not sculpt.hold_for_the_end(500, 1000)
+    assert sculpt.hold_for_the_end(499, 1000)
     assert not sculpt.hold_for_the_end(-1, 1000)
 
 
@@ -198,8 +201,9 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     ceil(ln(22.128 / 5.584) / -ln 0.975) = ceil(54.4) = 55 updates: the next hold
     starts 10,700 steps after letting go, and a cycle with the shortest hold is
     11,200. With more steps left than that the hold lets go at its first check
-    (500 steps); with fewer it lasts past the deadline; with room for one such
-    cycle but not two it waits until one is left; an open-ended run never
+    (500 steps); with fewer, but at least half of that, too (the dilation will turn
+    back in time); with less than half it lasts past the deadline; with room for
+    one such cycle but not two it waits until one is left; an open-ended run never
     finishes."""
     cfg, goal, boxes = _circle_with_boxes_20_m_out()
 
@@ -208,13 +212,71 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
         return _closed_loop_hold_steps(c, boxes)
 
     assert released_at(499 + 11200) == 500  # at the check (step 499) exactly a cycle and a hold are left
-    assert released_at(498 + 11200) == 498 + 11200 + 2  # one step fewer: held past the deadline
+    assert released_at(498 + 11200) == 500  # one step fewer: half a cycle fits, so it goes too
+    assert released_at(499 + 5600) == 500  # exactly half a cycle left
+    assert released_at(499 + 5599) == 499 + 5599 + 2  # less than half: held past the deadline
     # Room for one more cycle but not two: held until exactly one is left, at step 3499.
     assert released_at(499 + 11200 + 3000) == 3500
     assert released_at(499 + 2 * 11200) == 500  # room for two: let go at once
     c = Controller(cfg.replace(steps=5000), goal)
     c.open_ended = True
     assert _closed_loop_hold_steps(c, boxes) == 500
+
+
+def _phase_changes(c: Controller, boxes: np.ndarray, start: int, end: int) -> list[tuple[int, str]]:
+    """(observation step, new phase) for each change while the controller sees ``boxes``."""
+
+    class Seen:
+        box_positions = boxes
+        step = start
+
+    changes, phase = [], c.phase
+    while Seen.step < end:
+        c.update(Seen())
+        if c.phase != phase:
+            changes.append((Seen.step, c.phase))
+            phase = c.phase
+        Seen.step += 1
+    return changes
+
+
+def test_chase_dilation_turns_back_in_time_for_the_deadline():
+    """The circle above, measured at step 8,499: at the check (step 499) 8,000 steps
+    are left, less than the 11,200 of a cycle but more than half, so the hold lets
+    go. Update j (step 499 + 100 j) is at 6.128 x 1.025^j m; turning there, the
+    circle is below 5.584 after k = floor(ln(r / 5.584) / -ln 0.975) + 1 updates.
+    It turns at the first update where 100 k + 200 (one update later costs about two)
+    + 500 (the shortest hold) exceeds the steps left: j = 35 is 14.543 m, k = 38,
+    4,500 against 4,500 left (stays); j = 36 is 14.907 m, k = 39, 4,600 against
+    4,400 (turns, at step 4,099). The hold starts 3,900 steps later, at step 7,999,
+    500 before the deadline. Without a deadline it would turn only at 22 m."""
+    cfg, goal, boxes = _circle_with_boxes_20_m_out()
+    c = Controller(cfg.replace(steps=8499), goal)
+    assert _closed_loop_hold_steps(c, boxes) == 500
+    assert _phase_changes(c, boxes, 500, 8499) == [(4099, "contracting"), (7999, HOLDING)]
+    c = Controller(cfg.replace(steps=8499), goal)
+    c.open_ended = True
+    _closed_loop_hold_steps(c, boxes)
+    assert _phase_changes(c, boxes, 500, 8499)[0] == (499 + 52 * 100, "contracting")
+
+
+@pytest.mark.parametrize("case", [dict(shape="circle"), dict(shape="star", switch=0.25),
+                                  dict(shape="square", size_schedule="clamped")])
+def test_the_contraction_bound_is_never_below_the_count(case):
+    """Skipping the copy far from the deadline is safe only if the bound holds: at
+    every update of a long dilation (with switch, the circle switched in too)."""
+    cfg = Config(chase=2.0, hold_steps=100, **case)
+    goal = make_goal(cfg, shape_vertices(cfg.shape))
+    boxes = np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [9.0, 9.0] + np.zeros((20, 2))])
+    c = Controller(cfg, goal)
+    _closed_loop_hold_steps(c, boxes)
+    checked = 0
+    while c.phase == "dilating":
+        if c._until_update == 1:  # the next step is an update: what it would see
+            assert c._contraction_steps_at_most() >= c._steps_back_if_turning_now(limit=10**6)
+            checked += 1
+        c.update(c._observation)
+    assert checked > 10
 
 
 def test_chase_stretches_its_plan_by_the_longest_overrun_seen():
@@ -238,7 +300,9 @@ def test_chase_stretches_its_plan_by_the_longest_overrun_seen():
         return _closed_loop_hold_steps(c, boxes)
 
     assert released_at(499 + 16550) == 500
-    assert released_at(498 + 16550) == 498 + 16550 + 2
+    # Half of the stretched cycle (8,275) decides whether it goes, not half of 11,200.
+    assert released_at(499 + 8275) == 500
+    assert released_at(499 + 8274) == 499 + 8274 + 2
 
 
 @pytest.mark.parametrize("case", [dict(shape="star", switch=0.0), dict(shape="star", switch=0.25),

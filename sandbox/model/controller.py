@@ -113,6 +113,8 @@ class Controller:
         self._predicted: int | None = None
         #: The longest a cycle ran in this run, as a multiple of the copy's prediction (at least 1).
         self._overrun = 1.0
+        #: Turn at the next dilation update whatever the sizes say (set only in a copy; see _ghost).
+        self._force_turn = False
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
         #: outline does not fit is refused here with a ShapeError.
         self.notes = goal_fit_notes(self)
@@ -292,13 +294,62 @@ class Controller:
             return False
         left = self.deadline - step
         if self._predicted is None:
-            self._predicted = self._steps_to_next_hold(limit=left + 1)
+            self._predicted = self._steps_to_next_hold(limit=2 * left + 1)  # enough to tell half a cycle
         # The copy keeps the boxes still, but a dilation drags boxes out and turns later:
         # cycles ran up to 1.9 times the copy's count (with switch; the circle 0.93-1.16).
         # So the count is stretched by the most this run has seen.
-        shortest_hold = max(self.config.hold_steps, self.sculpting.check)
-        cycle = math.ceil(self._predicted * self._overrun) + shortest_hold
+        cycle = math.ceil(self._predicted * self._overrun) + self._shortest_hold
         return sculpt.hold_for_the_end(left, cycle)
+
+    @property
+    def _shortest_hold(self) -> int:
+        """The fewest steps the closed loop holds the smallest outline."""
+        return max(self.config.hold_steps, self.sculpting.check)
+
+    def _turn_for_the_deadline(self) -> bool:
+        """Whether a closed-loop dilation turns now, wherever the farthest box is, so
+        that the contraction is back on the smallest outline, with the shortest hold to
+        spare, when the run is measured. Turning one update later would cost about two
+        updates (one more out, one more back). Without it the last cycle could only be
+        planned from its start, and a dilation that dragged boxes out overran the plan."""
+        if self._force_turn:
+            self._force_turn = False
+            return True
+        if not self._closed_loop or self.deadline is None or self._observation is None:
+            return False
+        left = self.deadline - self._observation.step
+        margin = 2 * self.config.update_every + self._shortest_hold
+        if left < 0 or self._contraction_steps_at_most() + margin <= left:
+            return False  # past the deadline, or far enough from it to skip counting
+        return self._steps_back_if_turning_now(limit=left + 1) + margin > left
+
+    def _contraction_steps_at_most(self) -> int:
+        """An upper bound on the steps from turning now to the next hold: the inradius
+        shrinks by ``scale_rate`` per update from where it is to below the smallest;
+        a circle switched in contracts to the switch threshold, where the polygon
+        frozen a size above it returns (one update more), and each schedule may take
+        one more update to see it is there."""
+        rate = self.config.scale_rate
+        updates = math.log(max(self.inradius, self.min_radius) / self.min_radius) / -math.log(rate)
+        return self.config.update_every * (math.ceil(updates) + 3)
+
+    def _ghost(self) -> "Controller":
+        """A copy of this controller that runs on the boxes as they are now, without a
+        deadline and without drawing, to count its schedule's steps."""
+        ghost = copy.copy(self)
+        ghost.strategies, ghost._pending = dict(self.strategies), dict(self._pending)
+        ghost._observation = _Snapshot(self._observation.step, np.array(self._observation.box_positions))
+        ghost._redraw = lambda: None  # only its sizes and phases matter, not which lights are on
+        ghost.open_ended = True  # it counts a whole cycle, not one cut short for the deadline
+        return ghost
+
+    @staticmethod
+    def _steps_until_hold(ghost: "Controller", limit: int) -> int:
+        steps = 0
+        while ghost.phase != HOLDING and steps < limit:
+            ghost.advance()
+            steps += 1
+        return steps
 
     def _steps_to_next_hold(self, limit: int) -> int:
         """World steps from letting go of this hold until the next one starts (at most
@@ -306,16 +357,17 @@ class Controller:
         now. Exact for the schedule, whatever it is (the program's overshoot, a circle
         switched in that grows farther than the polygon would); boxes that move
         while it runs can still make the real cycle longer or shorter."""
-        ghost = copy.copy(self)
-        ghost.strategies, ghost._pending = dict(self.strategies), dict(self._pending)
-        ghost._observation = _Snapshot(self._observation.step, np.array(self._observation.box_positions))
-        ghost._redraw = lambda: None  # only its sizes and phases matter, not which lights are on
+        ghost = self._ghost()
         ghost._end_hold()
-        steps = 0
-        while ghost.phase != HOLDING and steps < limit:
-            ghost.advance()
-            steps += 1
-        return steps
+        return self._steps_until_hold(ghost, limit)
+
+    def _steps_back_if_turning_now(self, limit: int) -> int:
+        """World steps until the next hold if the dilation turned at this update (at most
+        ``limit``). The contraction does not look at the boxes, so this is exact."""
+        ghost = self._ghost()
+        ghost._force_turn = True
+        ghost._update()
+        return self._steps_until_hold(ghost, limit)
 
     @property
     def _closed_loop(self) -> bool:
@@ -358,7 +410,7 @@ class Controller:
             if self.scale >= self.max_scale:
                 self.scale = self.max_scale
                 self._turn_to_contracting()
-            elif self.inradius >= self._turn_radius():
+            elif self.inradius >= self._turn_radius() or self._turn_for_the_deadline():
                 self._turn_to_contracting()
 
     def _clamped_circle_step(self) -> None:
@@ -370,7 +422,7 @@ class Controller:
             self.circle_radius *= rate
         else:
             self.circle_radius = min(self.circle_radius / rate, self.circle_max_radius)
-            if self.circle_radius >= self.circle_max_radius:
+            if self.circle_radius >= self.circle_max_radius or self._turn_for_the_deadline():
                 self._turn_to_contracting()
 
     def _turn_radius(self) -> float:
@@ -411,8 +463,10 @@ class Controller:
                 self._grow_back()
                 self._program_update()
             return
-        if self.phase == DILATING and self.inradius > self._turn_radius() * (1 + 1e-12):
-            # First size above the largest: not lit; turn and shrink from it.
+        if self.phase == DILATING and (self.inradius > self._turn_radius() * (1 + 1e-12)
+                                       or self._turn_for_the_deadline()):
+            # First size above the largest (or the last that can come back in time):
+            # not lit; turn and shrink from it.
             self._turn_to_contracting()
             self._step_size(rate)
             return
