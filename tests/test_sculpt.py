@@ -109,17 +109,17 @@ def test_hold_stays_while_little_is_out_of_reach_but_not_forever():
 
 
 def test_hold_for_the_end():
-    """A cycle of 1,000 steps: 1,000 fits exactly (go); 1,500 fits one but not two
-    (hold until 1,000 are left); 2,000 fits two (go); 500-999 fit half a cycle or
-    more (go: the dilation turns back in time); 499 not even half (hold to the end);
-    after the end, never."""
-    assert not sculpt.hold_for_the_end(1000, 1000)
-    assert sculpt.hold_for_the_end(1500, 1000)
-    assert not sculpt.hold_for_the_end(2000, 1000)
-    assert not sculpt.hold_for_the_end(999, 1000)
-    assert not sculpt.hold_for_the_end(500, 1000)
-    assert sculpt.hold_for_the_end(499, 1000)
-    assert not sculpt.hold_for_the_end(-1, 1000)
+    """A cycle of 1,000 steps, and 300 the fewest worth a cut-short one: 1,000 fits
+    exactly (go); 1,500 fits one but not two (hold until 1,000 are left); 2,000 fits
+    two (go); 300-999 fit no whole cycle but a cut-short one (go: the dilation turns
+    back in time); 299 not even that (hold to the end); after the end, never."""
+    assert not sculpt.hold_for_the_end(1000, 1000, 300)
+    assert sculpt.hold_for_the_end(1500, 1000, 300)
+    assert not sculpt.hold_for_the_end(2000, 1000, 300)
+    assert not sculpt.hold_for_the_end(999, 1000, 300)
+    assert not sculpt.hold_for_the_end(300, 1000, 300)
+    assert sculpt.hold_for_the_end(299, 1000, 300)
+    assert not sculpt.hold_for_the_end(-1, 1000, 300)
 
 
 # ------------------------------------------------------------------ in the controller
@@ -201,10 +201,10 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     ceil(ln(22.128 / 5.584) / -ln 0.975) = ceil(54.4) = 55 updates: the next hold
     starts 10,700 steps after letting go, and a cycle with the shortest hold is
     11,200. With more steps left than that the hold lets go at its first check
-    (500 steps); with fewer, but at least half of that, too (the dilation will turn
-    back in time); with less than half it lasts past the deadline; with room for
-    one such cycle but not two it waits until one is left; an open-ended run never
-    finishes."""
+    (500 steps); with fewer, but at least the shortest hold and ten updates (1,500),
+    too (the dilation will turn back in time); with less it lasts past the
+    deadline; with room for one such cycle but not two it waits until one is left;
+    an open-ended run never finishes."""
     cfg, goal, boxes = _circle_with_boxes_20_m_out()
 
     def released_at(deadline):
@@ -212,9 +212,9 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
         return _closed_loop_hold_steps(c, boxes)
 
     assert released_at(499 + 11200) == 500  # at the check (step 499) exactly a cycle and a hold are left
-    assert released_at(498 + 11200) == 500  # one step fewer: half a cycle fits, so it goes too
-    assert released_at(499 + 5600) == 500  # exactly half a cycle left
-    assert released_at(499 + 5599) == 499 + 5599 + 2  # less than half: held past the deadline
+    assert released_at(498 + 11200) == 500  # one step fewer: a cut-short cycle fits, so it goes too
+    assert released_at(499 + 1500) == 500  # just enough for the shortest cut-short cycle
+    assert released_at(499 + 1499) == 499 + 1499 + 2  # less: held past the deadline
     # Room for one more cycle but not two: held until exactly one is left, at step 3499.
     assert released_at(499 + 11200 + 3000) == 3500
     assert released_at(499 + 2 * 11200) == 500  # room for two: let go at once
@@ -242,7 +242,7 @@ def _phase_changes(c: Controller, boxes: np.ndarray, start: int, end: int) -> li
 
 def test_chase_dilation_turns_back_in_time_for_the_deadline():
     """The circle above, measured at step 8,499: at the check (step 499) 8,000 steps
-    are left, less than the 11,200 of a cycle but more than half, so the hold lets
+    are left, less than the 11,200 of a cycle but more than 1,500, so the hold lets
     go. Update j (step 499 + 100 j) is at 6.128 x 1.025^j m; turning there, the
     circle is below 5.584 after k = floor(ln(r / 5.584) / -ln 0.975) + 1 updates.
     It turns at the first update where 100 k + 200 (one update later costs about two)
@@ -300,9 +300,8 @@ def test_chase_stretches_its_plan_by_the_longest_overrun_seen():
         return _closed_loop_hold_steps(c, boxes)
 
     assert released_at(499 + 16550) == 500
-    # Half of the stretched cycle (8,275) decides whether it goes, not half of 11,200.
-    assert released_at(499 + 8275) == 500
-    assert released_at(499 + 8274) == 499 + 8274 + 2
+    # Room for one stretched cycle but not two: held until exactly one (16,550) is left.
+    assert released_at(499 + 16550 + 3000) == 3500
 
 
 @pytest.mark.parametrize("case", [dict(shape="star", switch=0.0), dict(shape="star", switch=0.25),

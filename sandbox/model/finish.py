@@ -63,12 +63,19 @@ class EndPlanning:
             return False
         left = self.deadline - step
         if self._predicted is None:
-            self._predicted = self._steps_to_next_hold(limit=2 * left + 1)  # enough to tell half a cycle
+            self._predicted = self._steps_to_next_hold(limit=left + 1)
         # The copy keeps the boxes still, but a dilation drags boxes out and turns later:
         # cycles ran up to 1.9 times the copy's count (with switch; the circle 0.93-1.16).
         # So the count is stretched by the most this run has seen.
         cycle = math.ceil(self._predicted * self._overrun) + self._shortest_hold
-        return sculpt.hold_for_the_end(left, cycle)
+        return sculpt.hold_for_the_end(left, cycle, self._shortest_cycle)
+
+    @property
+    def _shortest_cycle(self) -> int:
+        """The fewest steps left for which a hold still lets go (its dilation turning back
+        in time): the shortest hold and ten updates, five out and five back (on the
+        circle's smallest outline, about 0.7 m out)."""
+        return self._shortest_hold + 10 * self.config.update_every
 
     def _turn_for_the_deadline(self) -> bool:
         """Whether a closed-loop dilation turns now, wherever the farthest box is, so

@@ -22,20 +22,20 @@ an overhead camera would, and does four things the open loop cannot:
    nearly every stray box is within the robots' reach; it lets go only to
    fetch boxes that are out of reach. Each dilation costs boxes: robots
    that worked their way into the pile drive out through it.
-4. **Finishing** (:func:`hold_for_the_end`). A run is measured at its last
-   step, and it should end in a hold: the fraction in the goal is highest
-   there. Every dilation turns back early enough for the contraction to
-   reach the smallest outline, with the shortest hold to spare, before the
-   run is measured (``Controller._turn_for_the_deadline``). When one more
-   cycle out to the farthest stray box and back fits but not two, the hold
-   waits so that the last cycle ends just before the end, with the far
-   boxes swept in. When not even half a cycle fits, the hold lasts to the
-   end. In between it lets go, and the cut-short cycle fetches what a long
-   hold squeezes out: the robots' crowd on the band is up to 2 m deep, and
-   over thousands of steps it pushes stray boxes to its outer edge. The
-   controller counts a cycle by running a copy of itself on the boxes as
-   they are, stretched by the most a real cycle has overrun such a count in
-   this run (a dilation drags boxes out, so the turn comes later).
+4. **Finishing** (:func:`hold_for_the_end`, :mod:`sandbox.model.finish`).
+   A run is measured at its last step, and it should end in a hold: the
+   fraction in the goal is highest there. Every dilation turns back early
+   enough for the contraction to reach the smallest outline, with the
+   shortest hold to spare, before the run is measured. When one more cycle
+   out to the farthest stray box and back fits but not two, the hold waits
+   so that the last cycle ends just before the end, with the far boxes
+   swept in. When no whole cycle fits it still lets go, and the cut-short
+   cycle fetches what a long hold squeezes out: the robots' crowd on the
+   band is up to 2 m deep, and over thousands of steps it pushes stray
+   boxes to its outer edge. The controller counts a cycle by running a
+   copy of itself on the boxes as they are, stretched by the most a real
+   cycle has overrun such a count in this run (a dilation drags boxes out,
+   so the turn comes later).
 
 The numbers in :class:`Sculpting` were chosen by trying a few values on
 seeds 0, 1 and 100-103, never on the evaluation's seeds' results as a
@@ -203,18 +203,18 @@ class Hold:
         return self.left > 0
 
 
-def hold_for_the_end(left: int, cycle: int) -> bool:
+def hold_for_the_end(left: int, cycle: int, least: int) -> bool:
     """Whether a hold that would let go now goes on, ``left`` steps before the run is
     measured, when one more cycle (out, back and the shortest hold) takes ``cycle``
     steps. When one fits but not two, until exactly one does, so that the last cycle
-    sweeps the far boxes in just before the end. When one does not fit but half of one
-    does, it lets go: the dilation turns back in time (see
-    ``Controller._turn_for_the_deadline``), and a shorter cycle still fetches the
-    boxes a long hold squeezes out of the robots' crowd. With less, to the end."""
+    sweeps the far boxes in just before the end. When none fits, it still lets go if
+    ``least`` steps are left: the dilation turns back in time (see
+    ``finish.EndPlanning._turn_for_the_deadline``), and a cut-short cycle fetches the
+    boxes a long hold squeezes out of the robots' crowd. With fewer, to the end."""
     if left < 0:
         return False
     if left < cycle:
-        return 2 * left < cycle
+        return left < least
     return left < 2 * cycle and left > cycle
 
 
