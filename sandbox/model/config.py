@@ -85,8 +85,9 @@ STRATEGIES = (
              "closed loop (senses the boxes, as an overhead camera would): the outline is the goal grown by "
              "the same distance all round; it dilates only until it is this many metres beyond the farthest "
              "stray box; near the goal it presses in where boxes spill out and goes dark where the goal lacks "
-             "boxes, and the smallest outline is held while boxes keep arriving; a run of fixed length times its "
-             "last cycle to end just before its last step (0 = off, open loop; 2.0 when on)"),
+             "boxes, and the smallest outline is held while boxes keep arriving; a run of fixed length ends in a "
+             "hold, its dilations turning back in time and its last cycle timed to end just before its last "
+             "step (0 = off, open loop; 2.0 when on)"),
 )
 STRATEGY_NAMES = tuple(s.name for s in STRATEGIES)
 #: The value a strategy takes when it is switched on without an amount.
