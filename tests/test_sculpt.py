@@ -9,7 +9,7 @@ import pytest
 
 from sandbox.model import geometry, sculpt
 from sandbox.model.config import Config
-from sandbox.model.controller import HOLDING, Controller
+from sandbox.model.controller import DILATING, HOLDING, Controller
 from sandbox.model.goal import make_goal
 from sandbox.shapes import shape_vertices
 
@@ -223,6 +223,11 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     assert _closed_loop_hold_steps(c, boxes) == 500
 
 
+def _boxes_with_20_in_a_corner(goal):
+    """10 boxes at the goal's centre and 20 in a corner of the arena, 9 m out on both axes."""
+    return np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [9.0, 9.0] + np.zeros((20, 2))])
+
+
 def _phase_changes(c: Controller, boxes: np.ndarray, start: int, end: int) -> list[tuple[int, str]]:
     """(observation step, new phase) for each change while the controller sees ``boxes``."""
 
@@ -267,11 +272,11 @@ def test_the_contraction_bound_is_never_below_the_count(case):
     every update of a long dilation (with switch, the circle switched in too)."""
     cfg = Config(chase=2.0, hold_steps=100, **case)
     goal = make_goal(cfg, shape_vertices(cfg.shape))
-    boxes = np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [9.0, 9.0] + np.zeros((20, 2))])
+    boxes = _boxes_with_20_in_a_corner(goal)
     c = Controller(cfg, goal)
     _closed_loop_hold_steps(c, boxes)
     checked = 0
-    while c.phase == "dilating":
+    while c.phase == DILATING:
         if c._until_update == 1:  # the next step is an update: what it would see
             assert c._contraction_steps_at_most() >= c._steps_back_if_turning_now(limit=10**6)
             checked += 1
@@ -312,7 +317,7 @@ def test_the_planned_cycle_is_the_one_the_controller_then_runs(case):
     grows farther than the polygon would: a box 9 m out in a corner of the arena)."""
     cfg = Config(chase=2.0, hold_steps=100, **case)
     goal = make_goal(cfg, shape_vertices(cfg.shape))
-    boxes = np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [9.0, 9.0] + np.zeros((20, 2))])
+    boxes = _boxes_with_20_in_a_corner(goal)
     c = Controller(cfg, goal)
     _closed_loop_hold_steps(c, boxes)
     assert c.phase == "dilating"

@@ -50,6 +50,14 @@ class EndPlanning:
         for it); None for an open-ended run."""
         return None if self.open_ended else self.config.steps
 
+    def _steps_left(self) -> int | None:
+        """Steps from the last observation to the deadline; None when there is nothing
+        to plan for (an open-ended run, nothing observed yet, or the deadline passed)."""
+        if self.deadline is None or self._observation is None:
+            return None
+        left = self.deadline - self._observation.step
+        return left if left >= 0 else None
+
     @property
     def _shortest_hold(self) -> int:
         """The fewest steps the closed loop holds the smallest outline."""
@@ -58,10 +66,9 @@ class EndPlanning:
     def _finish_in_hold(self) -> bool:
         """Whether a hold that would let go now goes on, planning for the step the run is
         measured at (see :func:`sculpt.hold_for_the_end`)."""
-        step = self._observation.step
-        if self.deadline is None or step > self.deadline:
+        left = self._steps_left()
+        if left is None:
             return False
-        left = self.deadline - step
         if self._predicted is None:
             self._predicted = self._steps_to_next_hold(limit=left + 1)
         # The copy keeps the boxes still, but a dilation drags boxes out and turns later:
@@ -86,12 +93,12 @@ class EndPlanning:
         if self._force_turn:
             self._force_turn = False
             return True
-        if not self._closed_loop or self.deadline is None or self._observation is None:
+        left = self._steps_left()
+        if not self._closed_loop or left is None:
             return False
-        left = self.deadline - self._observation.step
         margin = 2 * self.config.update_every + self._shortest_hold
-        if left < 0 or self._contraction_steps_at_most() + margin <= left:
-            return False  # past the deadline, or far enough from it to skip counting
+        if self._contraction_steps_at_most() + margin <= left:
+            return False  # far enough from the deadline to skip counting
         return self._steps_back_if_turning_now(limit=left + 1) + margin > left
 
     def _contraction_steps_at_most(self) -> int:
