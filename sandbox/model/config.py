@@ -140,6 +140,10 @@ class Config:
     box_size_is: str = _param(
         "circumradius", "what box_size measures: 'apothem' (paper text) or 'circumradius' (authors' program)",
         group="bodies", choices=("apothem", "circumradius"), paper="apothem")
+    box_start: str = _param(
+        "scattered", "where the boxes start: 'scattered' (uniformly at random in the construction area, as in "
+        "the paper) or 'packed' (a hexagonal tiling of the goal, filled from the inside out: the goal already "
+        "built, to see what a light program keeps of it)", group="bodies", choices=("scattered", "packed"))
     box_density: float = _param(0.5, "box density", unit="kg/m^2", low=1e-3, high=1e4, group="bodies")
     box_friction: float = _param(1.0, "box friction coefficient", low=0.0, high=10.0, group="bodies")
     box_elasticity: float = _param(0.1, "box restitution", low=0.0, high=1.0, group="bodies")

@@ -81,7 +81,7 @@ class Simulation:
         rng = np.random.default_rng(cfg.seed)
         goal = make_goal(cfg, self.shape_vertices)
         controller = self._new_controller(cfg, goal)  # first: a goal that cannot fit stops here
-        world = World(cfg, rng, progress)
+        world = World(cfg, rng, progress, goal)
         # Built: from here on nothing can fail halfway.
         self.config, self.seed, self.world, self.goal, self.controller = cfg, cfg.seed, world, goal, controller
         self.lights = LightField(cfg)

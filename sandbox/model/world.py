@@ -15,8 +15,9 @@ import pymunk
 import pymunk.batch as batch
 from pymunk._chipmunk_cffi import lib as chipmunk
 
-from sandbox.model import undamped
-from sandbox.model.config import Config
+from sandbox.model import geometry, undamped
+from sandbox.model.config import Config, ConfigError
+from sandbox.model.goal import Goal
 
 # Collision categories: the construction wall only meets boxes.
 ROBOT, BOX, OUTER_WALL, CONSTRUCTION_WALL = 1, 2, 4, 8
@@ -39,6 +40,27 @@ def hexagon(circumradius: float) -> list[tuple[float, float]]:
 def square_corners(centre: float, half: float) -> list[tuple[float, float]]:
     return [(centre - half, centre - half), (centre + half, centre - half),
             (centre + half, centre + half), (centre - half, centre + half)]
+
+
+def packed_in_goal(config: Config, goal: Goal) -> np.ndarray:
+    """``config.boxes`` centres on a hexagonal tiling (each box's flats facing its six neighbours
+    at angle 0, skins 1 mm apart), filled from deepest inside the goal outward, within the construction
+    area: the goal built as densely as the boxes tile, its overflow a thin rim around it."""
+    cfg = config
+    pitch = 2.0 * (cfg.box_apothem + cfg.box_skin) + 0.001
+    c, half = cfg.centre, cfg.construction_size / 2.0 - cfg.box_circumradius - cfg.box_skin - 0.01
+    # Neighbours lie across the flats of a hexagon with a vertex at angle 0: at 30, 90, 150... degrees.
+    a, b = pitch * np.array([math.cos(math.pi / 6), math.sin(math.pi / 6)]), pitch * np.array([0.0, 1.0])
+    reach = int(math.ceil(2 * half / (pitch * math.cos(math.pi / 6)))) + 1
+    i, j = (k.reshape(-1, 1) for k in np.meshgrid(np.arange(-reach, reach + 1), np.arange(-reach, reach + 1)))
+    points = goal.centre + i * a + j * b
+    points = points[np.all(np.abs(points - c) <= half, axis=1)]
+    if len(points) < cfg.boxes:
+        raise ConfigError(f"box_start 'packed': {cfg.boxes:,} boxes do not tile the construction area "
+                          f"({len(points):,} places)")
+    depth = np.where(goal.contains(points), -geometry.distance_to_outline(points, goal.outline()),
+                     goal.distance(points))
+    return points[np.argsort(depth, kind="stable")[:cfg.boxes]]
 
 
 def sample_separated(rng: np.random.Generator, n: int, low: float, high: float, min_gap: float,
@@ -76,9 +98,14 @@ def sample_separated(rng: np.random.Generator, n: int, low: float, high: float, 
 class World:
     """The physics world and bulk access to its bodies' state."""
 
-    def __init__(self, config: Config, rng: np.random.Generator, progress: Callable[[float], None] | None = None):
-        """``progress(fraction)`` hears how far the placement of bodies has got (it may raise to stop)."""
+    def __init__(self, config: Config, rng: np.random.Generator, progress: Callable[[float], None] | None = None,
+                 goal: Goal | None = None):
+        """``progress(fraction)`` hears how far the placement of bodies has got (it may raise to stop).
+        ``goal`` is where ``config.box_start == 'packed'`` tiles the boxes (required then)."""
+        if config.box_start == "packed" and goal is None:
+            raise ValueError("box_start 'packed' needs the goal to pack the boxes in")
         self.config = config
+        self._goal = goal
         self.n_robots, self.n_boxes = config.robots, config.boxes
         total = max(1, self.n_robots + self.n_boxes)
         self._progress = (lambda placed: progress(placed / total)) if progress else None
@@ -172,6 +199,9 @@ class World:
         positions = sample_separated(rng, self.n_boxes, c - half + margin, c + half - margin, 2 * cfg.box_apothem,
                                      progress=placed)
         angles = rng.uniform(0.0, math.pi / 3, self.n_boxes)
+        if cfg.box_start == "packed":
+            # Drawn above all the same, so a seed's robots and command phases do not depend on the start.
+            positions, angles = packed_in_goal(cfg, self._goal), np.zeros(self.n_boxes)
         vertices = hexagon(cfg.box_circumradius)
         self.box_bodies = self._add_bodies(positions, angles,
                                            lambda body: pymunk.Poly(body, vertices, radius=cfg.box_skin),
