@@ -404,6 +404,21 @@ def test_profile_switch_shows_its_values_and_applies_on_reset(app, page):
     wait_until(lambda: runner.latest.world_config.profile == "authors-code", what="the program's model again")
 
 
+def test_boxes_can_start_packed_in_the_goal(app, page):
+    runner = app.runner
+    if not page.get_by_label("box start", exact=True).is_visible():  # an earlier test may have left it open
+        open_folder(page, "Population and physics")
+    choose(page, "box start", "packed")
+    wait_until(lambda: runner.latest.config.box_start == "packed", what="the box start setting")
+    assert runner.latest.world_config.box_start == "scattered"  # not before a reset
+    click_button(page, "Reset (same seed)")
+    wait_until(lambda: runner.latest.world_config.box_start == "packed", what="the reset to pack the boxes")
+    assert runner.latest.box_in_goal.mean() > 0.8  # the goal starts built
+    choose(page, "box start", "scattered")
+    click_button(page, "Reset (same seed)")
+    wait_until(lambda: runner.latest.world_config.box_start == "scattered", what="the scattered start again")
+
+
 def test_light_program_from_the_page(app, page, tmp_path):
     example = Path(__file__).resolve().parent.parent / "examples" / "shrinking_ring.py"
     failing = tmp_path / "failing.py"
