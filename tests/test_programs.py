@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import json
 from pathlib import Path
 
@@ -259,8 +260,26 @@ def test_report_against_another_set(tmp_path):
     assert "## Beside open loop" in text and "| circle |" in text
     rows = (tmp_path / "closed-report" / "versus.csv").read_text().splitlines()
     assert rows[0].startswith("case,") and rows[1].startswith("circle,")
+    # The other set's light energy is what its trials recorded, closed loop or not.
+    recorded = [json.loads(p.read_text())["light_energy"] for p in (tmp_path / "closed" / "trials").rglob("*.json")]
+    beside_itself = build_report(tmp_path / "open", tmp_path / "x", against=tmp_path / "closed-report")
+    versus = next(csv.DictReader((tmp_path / "x" / "versus.csv").open()))
+    assert float(versus["light_energy_against"]) == pytest.approx(np.mean(recorded))
+    assert beside_itself.is_file()
     with pytest.raises(Exception, match="no final.csv"):
         build_report(tmp_path / "closed", tmp_path / "x", against=tmp_path / "nowhere")
+
+
+def test_an_older_final_csv_without_light_energy():
+    """Open loop: computed from the controller alone; closed loop: not known."""
+    from sandbox.experiments.versus import open_loop_energy, their_light_energy
+
+    config = Config(robots=10, boxes=15, update_every=10, hold_steps=3, steps=400)
+    row = {"case": "circle", "robots": "10", "boxes": "15", "update_every": "10", "hold_steps": "3", "steps": "400"}
+    assert their_light_energy([row]) == pytest.approx(open_loop_energy(config))
+    assert np.isnan(their_light_energy([{**row, "chase": "2.0"}]))
+    assert np.isnan(their_light_energy([{**row, "controller": "my_ring.py:Ring", "light_energy": ""}]))
+    assert their_light_energy([{**row, "light_energy": "5"}, {**row, "light_energy": "7"}]) == 6.0
 
 
 def test_the_paper_controller_written_as_a_program_gives_the_same_run():

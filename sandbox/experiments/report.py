@@ -102,13 +102,14 @@ def _write_final_csv(by_case: dict[str, list[dict]], path: Path) -> None:
     with path.open("w", newline="") as fh:
         writer = csv.writer(fh)
         writer.writerow(["case", "seed", "final_step", *METRICS, "boxes_escaped", "seconds", "cpu_seconds", "host",
-                         *names])
+                         "controller", "senses", "light_energy", *names])
         for case, trials in by_case.items():
             for t in trials:
                 s = t["samples"]
                 writer.writerow([case, t["seed"], int(s["step"][-1]), *(plain(s[m][-1]) for m in METRICS),
                                  int(s["boxes_escaped"][-1]), t.get("seconds", ""), t.get("cpu_seconds", ""),
-                                 t.get("host", ""),
+                                 t.get("host", ""), t.get("controller", ""), "+".join(t.get("senses", ())),
+                                 t.get("light_energy", ""),
                                  *(t["config"].get(n, "") for n in names)])
 
 
@@ -284,7 +285,7 @@ def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: l
             "", "## Files", "",
             "- `summary.csv`: Tables II and III; `ks_tests.csv`: Tables IV and V",
             "- `results.csv`: every sample of every trial; `final.csv`: one row per trial with its final "
-            "metrics and full configuration",
+            "metrics, its controller, what it sensed, its light energy and full configuration",
             "- `trials/<case>/seed-<seed>.csv|json` (in the sweep folder): the raw per-trial records", ""]
     return "\n".join(out)
 

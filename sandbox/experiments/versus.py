@@ -3,10 +3,11 @@ per case, both metrics with standard errors, their KS tests, and the light
 energy each controller spent.
 
 OTHER is a report folder (its ``final.csv``, one row per trial, as every
-report writes). The light energy of an open-loop controller (one that
-senses nothing) does not depend on the robots or the boxes, so it is
-computed exactly from the controller alone when the earlier trials did not
-record it.
+report writes). Its light energy is what its trials recorded. Reports
+written before final.csv had that column lack it: the paper's open loop
+(no *chase*) lights what it lights whatever the robots and boxes do, so its
+energy is computed exactly from the controller alone; a closed loop's
+cannot be, and shows as n/a.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import numpy as np
 from sandbox.experiments import stats
 from sandbox.experiments.trials import SweepError
 from sandbox.model.config import Config, coerce, param_names
+from sandbox.model.programs import PAPER_CONTROLLER
 
 METRICS = ("fraction_in_goal", "mean_outside_distance")
 
@@ -58,6 +60,23 @@ def _config_of(row: dict) -> Config:
     return Config(**{key: coerce(key, text) for key, text in row.items() if key in known and text not in (None, "")})
 
 
+def their_light_energy(rows: list[dict]) -> float:
+    """Mean light energy of a case's trials in a final.csv: as recorded, or, for
+    an older file without the column, computed when they ran the paper's open
+    loop (else NaN)."""
+    recorded = [row.get("light_energy") or "" for row in rows]
+    if all(recorded):
+        return float(np.mean([float(value) for value in recorded]))
+    config = _config_of(rows[0])
+    if config.chase > 0 or rows[0].get("controller", "") not in ("", PAPER_CONTROLLER):
+        return float("nan")
+    return open_loop_energy(config)
+
+
+def _millions(energy: float) -> str:
+    return "n/a" if np.isnan(energy) else f"{energy / 1e6:.2f}"
+
+
 def _mean_se(values: np.ndarray, digits: int) -> str:
     se = values.std(ddof=1) / np.sqrt(len(values)) if len(values) > 1 else float("nan")
     return f"{stats.fmt(values.mean(), digits)} ± {stats.fmt(se, digits)}"
@@ -82,10 +101,10 @@ def versus_section(by_case: dict[str, list[dict]], against: str | Path, label: s
             digits = 3 if metric == "fraction_in_goal" else 2
             cells += [_mean_se(theirs, digits), _mean_se(ours, digits), stats.fmt_p(p)]
         energy = np.array([float(t["light_energy"]) for t in trials if "light_energy" in t])
-        theirs_energy = open_loop_energy(_config_of(other[case][0]))
+        theirs_energy = their_light_energy(other[case])
         row.update({"light_energy_mean": energy.mean() if len(energy) else float("nan"),
                     "light_energy_against": theirs_energy})
-        cells += [f"{theirs_energy / 1e6:.2f}", f"{energy.mean() / 1e6:.2f}" if len(energy) else "n/a"]
+        cells += [_millions(theirs_energy), _millions(energy.mean()) if len(energy) else "n/a"]
         rows.append(row)
         table.append(cells)
     if not table:
@@ -96,7 +115,8 @@ def versus_section(by_case: dict[str, list[dict]], against: str | Path, label: s
              "Final fraction of boxes in the goal and mean distance of the stray boxes (mean ± standard error), "
              "with two-sample KS tests (`scipy.stats.ks_2samp`, two-sided) between the two sets of trials. "
              "Light energy: the sum of all intensities over all steps, in millions (a light fully on for one step "
-             "is 1); the open loop's is computed from its controller alone.", "",
+             "is 1), as the trials recorded it (for an older report without it, the open loop's is computed from "
+             "its controller alone).", "",
              "| " + " | ".join(header) + " |", "|" + " --- |" * len(header)]
     lines += ["| " + " | ".join(cells) + " |" for cells in table]
     return lines, rows
