@@ -53,3 +53,23 @@ def test_bad_starts_are_refused_with_a_reason():
     fat = Config(box_start="packed", box_skin=0.6)  # 1.63 m apart: 500 do not tile 16 m
     with pytest.raises(ConfigError, match="do not tile the construction area"):
         Simulation(fat, seed=0)
+
+
+def test_the_app_keeps_its_world_when_a_packed_start_cannot_be_built():
+    import threading
+
+    from sandbox.app.runner import Runner
+
+    runner = Runner(Config(robots=10, boxes=20), shape=None, playing=False)
+    runner.start()
+    try:
+        outcome, done = {}, threading.Event()
+        runner.update_config({"box_start": "packed", "box_skin": 0.6, "boxes": 400})
+        runner.reset(on_done=lambda r: (outcome.setdefault("done", r), done.set()),
+                     on_error=lambda e: (outcome.setdefault("error", e), done.set()))
+        assert done.wait(60)
+        assert isinstance(outcome.get("error"), ConfigError)
+        assert "do not tile the construction area" in str(outcome["error"])
+        assert runner.sim.config.box_start == "scattered" and len(runner.sim.box_positions) == 20
+    finally:
+        runner.stop()
