@@ -63,6 +63,11 @@ STRATEGIES = """\
   the goal still lacks boxes, so the pile flows there; and it holds the
   smallest outline as long as boxes keep arriving. More boxes end in the
   goal, with less light.
+- **A goal already built**: set *box start* to *packed* (under
+  *Population and physics*) and reset. The boxes start tiled in the goal,
+  and you see what a strategy keeps of a finished shape rather than how
+  well it gathers one: chase keeps about 86 % of a star, but gathers only
+  82 % from scattered boxes, which jam looser than a tiling.
 - **Light program** (its own folder) hands the lights to a Python class of
   your own: each update it is told the step and the goal (and the boxes or
   robots, if it asks to sense them) and returns one intensity per light.
