@@ -67,7 +67,7 @@ STRATEGIES = """\
   *Population and physics*) and reset. The boxes start tiled in the goal,
   and you see what a strategy keeps of a finished shape rather than how
   well it gathers one: chase keeps about 86 % of a star, but gathers only
-  82 % from scattered boxes, which jam looser than a tiling.
+  82 % from scattered boxes, which jam more loosely than a tiling.
 - **Light program** (its own folder) hands the lights to a Python class of
   your own: each update it is told the step and the goal (and the boxes or
   robots, if it asks to sense them) and returns one intensity per light.
