@@ -105,14 +105,13 @@ class World:
         if config.box_start == "packed" and goal is None:
             raise ValueError("box_start 'packed' needs the goal to pack the boxes in")
         self.config = config
-        self._goal = goal
         self.n_robots, self.n_boxes = config.robots, config.boxes
         total = max(1, self.n_robots + self.n_boxes)
         self._progress = (lambda placed: progress(placed / total)) if progress else None
         self.space = self._make_space()
         self._add_walls()
         self._add_robots(rng)
-        self._add_boxes(rng)
+        self._add_boxes(rng, goal)
         # Damping is applied by the space to every body. With the 'continuous'
         # motor a robot's commanded velocity is divided by the per-step damping
         # factor to arrive unchanged (see push_velocities); with 'set-once'
@@ -191,7 +190,7 @@ class World:
                                              cfg.robot_density, cfg.robot_friction, cfg.robot_elasticity,
                                              robot_filter)
 
-    def _add_boxes(self, rng: np.random.Generator) -> None:
+    def _add_boxes(self, rng: np.random.Generator, goal: Goal | None) -> None:
         cfg = self.config
         c, half = cfg.centre, cfg.construction_size / 2.0
         margin = cfg.box_circumradius + 0.01  # clear of the wall's inner face
@@ -201,7 +200,7 @@ class World:
         angles = rng.uniform(0.0, math.pi / 3, self.n_boxes)
         if cfg.box_start == "packed":
             # Drawn above all the same, so a seed's robots and command phases do not depend on the start.
-            positions, angles = packed_in_goal(cfg, self._goal), np.zeros(self.n_boxes)
+            positions, angles = packed_in_goal(cfg, goal), np.zeros(self.n_boxes)
         vertices = hexagon(cfg.box_circumradius)
         self.box_bodies = self._add_bodies(positions, angles,
                                            lambda body: pymunk.Poly(body, vertices, radius=cfg.box_skin),
