@@ -11,6 +11,7 @@ imports a GUI library. Not thread-safe: drive it from one thread.
 
 from __future__ import annotations
 
+import hashlib
 import time
 from typing import Any, Callable
 
@@ -365,6 +366,17 @@ class Simulation:
         self._sync()
         self.history.append(self.measure())
         self.timings["metrics"] += time.perf_counter() - t0
+
+    def state_digest(self) -> str:
+        """A short fingerprint of everything that evolves: bodies (positions, angles, velocities),
+        charges, held commands, the lit pattern and the step. Same seed and settings, same digest;
+        golden tests keep it from moving unnoticed."""
+        self._sync()
+        digest = hashlib.sha256()
+        for array in (self.world.state, self._charge, self._command, self.lights.intensities):
+            digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
+        digest.update(str(self.steps_done).encode())
+        return digest.hexdigest()[:16]
 
     def has_nan(self) -> bool:
         return not (np.isfinite(self.world.state).all() and np.isfinite(self._charge).all())
