@@ -77,9 +77,26 @@ def config_from_args(args: argparse.Namespace) -> Config:
 
 
 def add_controller_argument(p: argparse.ArgumentParser) -> None:
+    from sandbox.model.watchdog import DEFAULT_LIMIT
+
     p.add_argument("--controller", metavar="PATH.py:CLASS", default=None,
                    help="a light program of your own instead of the paper's controller: a class with "
                         "update(observation) returning one intensity per light (see README, 'Light programs')")
+    p.add_argument("--program-time-limit", metavar="SECONDS", type=float, default=DEFAULT_LIMIT,
+                   help=f"how long a light program's import, reset or update may take before it is stopped "
+                        f"(default {DEFAULT_LIMIT:g})")
+
+
+def program_time_limit(args: argparse.Namespace) -> float:
+    """The --program-time-limit, checked."""
+    limit = getattr(args, "program_time_limit", None)
+    from sandbox.model.watchdog import DEFAULT_LIMIT
+
+    if limit is None:
+        return DEFAULT_LIMIT
+    if not 0.05 <= limit <= 3600:
+        raise UserError(f"--program-time-limit must be between 0.05 and 3600 seconds, got {limit:g}")
+    return float(limit)
 
 
 def controller_from_args(args: argparse.Namespace) -> tuple[str | None, Any]:
@@ -97,6 +114,6 @@ def controller_from_args(args: argparse.Namespace) -> tuple[str | None, Any]:
     if sep and path.endswith(".py"):
         spec = f"{Path(path).resolve()}:{name}"
     try:
-        return spec, load_program(spec)
+        return spec, load_program(spec, time_limit=program_time_limit(args))
     except ProgramError as exc:
         raise UserError(str(exc)) from None

@@ -1,6 +1,7 @@
 """The parameter declaration, config files and cases."""
 
 import json
+import time
 
 import pytest
 
@@ -133,5 +134,39 @@ def test_result_files_from_before_profiles_are_read_as_paper_text(tmp_path):
     for name in ("profile", "assembly_centre", "photocells", "motor"):  # keys the old files did not have
         old.pop(name)
     js = tmp_path / "old.json"
-    js.write_text(json.dumps({"config": old}))
+    js.write_text(json.dumps({"config": old, "seed": 0, "steps": 100, "samples": []}))
     assert load_config_file(js) == Config(profile="paper-text")
+
+
+def test_a_config_table_in_a_config_file_is_a_group_like_any_other(tmp_path):
+    """Only a result file's [config] is read as a record; in a config file it is a group of values, the
+    profile stays the default and an unknown name is an error."""
+    f = tmp_path / "c.toml"
+    f.write_text("[config]\nlight_falloff = 2.0\n")
+    assert load_config_file(f) == Config(light_falloff=2.0)
+    assert load_config_file(f).profile == Config().profile
+    f.write_text("robots = 120\n[config]\nboxes = 300\n")
+    assert (load_config_file(f).robots, load_config_file(f).boxes) == (120, 300)  # neither replaces the other
+    f.write_text("[config]\nrobots = 120\nnope = 1\n")
+    with pytest.raises(ConfigError, match="unknown parameter.*nope"):
+        load_config_file(f)
+
+
+@pytest.mark.parametrize("name, content, message", [
+    ("deep.json", "[" * 100_000 + "]" * 100_000, "nested too deeply"),
+    ("deep2.json", '{"a":' * 100_000 + "1" + "}" * 100_000, "nested too deeply"),
+    ("tables.toml", "[a.b.c.d]\nrobots = 1\n", "nested more than 3 deep"),
+    ("big.toml", "# " + "x" * 1_100_000 + "\n", "larger than 1 MB"),
+])
+def test_a_config_file_that_is_not_one_is_refused_in_one_line(tmp_path, name, content, message):
+    f = tmp_path / name
+    f.write_text(content)
+    with pytest.raises(ConfigError, match=message):
+        load_config_file(f)
+
+
+def test_a_config_path_that_is_not_a_file_is_refused_before_reading():
+    started = time.monotonic()
+    with pytest.raises(ConfigError, match="not a regular file"):
+        load_config_file("/dev/zero")
+    assert time.monotonic() - started < 1.0

@@ -21,6 +21,7 @@ recording use) has the same API; the app takes either.
 from __future__ import annotations
 
 import itertools
+import logging
 import multiprocessing
 import os
 import queue
@@ -34,11 +35,21 @@ import numpy as np
 
 from sandbox.app.runner import Command, Runner, publish, wait_for
 from sandbox.app.snapshot import Snapshot
+from sandbox.model import watchdog
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
 
 #: How long the parent waits for a new child's first snapshot (imports, numba cache, world building).
 START_TIMEOUT = 120.0
+#: After a crash the child is restarted after this pause, doubled for each crash within CRASH_WINDOW seconds.
+RESTART_PAUSE = 1.0
+CRASH_WINDOW = 60.0
+#: This many crashes within CRASH_WINDOW and the app stops restarting the simulation.
+CRASHES_BEFORE_GIVING_UP = 5
+#: A child's exit code when a light program would not stop (it said why just before).
+STUCK_EXIT = 75
+
+log = logging.getLogger("sandbox.app.process")
 
 
 class SimulationCrashed(RuntimeError):
@@ -49,19 +60,29 @@ class ProcessRunner:
     """A :class:`Runner` in a child process (see the module docstring)."""
 
     def __init__(self, config: Config, *, shape: Any = "from-config", seed: int | None = None,
-                 fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, chart_every: int = 100):
+                 fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, chart_every: int = 100,
+                 program_time_limit: float = watchdog.DEFAULT_LIMIT):
         self.fps = float(fps)
         self.steps_per_frame = int(steps_per_frame)
         self.playing = bool(playing)
         self.chart_every = int(chart_every)
+        self.program_time_limit = float(program_time_limit)
         self.selected: int | None = None
         self._want_field = False
         self.errors: list[BaseException] = []
         self.restarts = 0
+        #: Why the simulation cannot run any more (too many crashes in a row), or None.
+        self.failed: str | None = None
+        #: Seconds before the first restart after a crash (doubled for each crash within CRASH_WINDOW),
+        #: and how many crashes within CRASH_WINDOW make it give up.
+        self.restart_pause, self.crashes_before_giving_up = RESTART_PAUSE, CRASHES_BEFORE_GIVING_UP
+        self._crash_times: deque = deque(maxlen=64)
+        self._last_words: str | None = None  # what a dying child said last (a program that would not stop)
         self._listeners: list[Callable[[Snapshot], None]] = []
         self._crash_listeners: list[Callable[[str], None]] = []
         self._progress_listeners: list[Callable[[float | None], None]] = []
         self._callbacks: dict[int, tuple[Callable | None, Callable | None]] = {}
+        self._callbacks_lock = threading.Lock()  # written by viser's threads, read by the receiver
         self._ids = itertools.count()
         self._series: list[Sample] = []
         self._series_lock = threading.Lock()
@@ -75,15 +96,17 @@ class ProcessRunner:
         #: The goal as last given (a name, or vertices as drawn): a restarted child gets it back unchanged,
         #: since the program's largest outline depends on the size a shape was drawn at.
         self._shape = shape
-        self._program: str | None = None  # a light program's path:Class; a restarted child gets it back
         self._launch(config, shape, seed)
 
     # ------------------------------------------------------------ process
     def _launch(self, config: Config, shape: Any, seed: int | None) -> None:
+        """Start a child with these settings and wait for its first frame. A child never gets a
+        light program back: whatever ran before a crash may have caused it."""
         self._commands = self._context.Queue()
         receive, send = self._context.Pipe(duplex=False)
         settings = dict(config=config, shape=shape, seed=seed, fps=self.fps, steps_per_frame=self.steps_per_frame,
-                        playing=self.playing, chart_every=self.chart_every)
+                        playing=self.playing, chart_every=self.chart_every,
+                        program_time_limit=self.program_time_limit)
         self.process = self._context.Process(target=_child_main, args=(settings, self._commands, send),
                                              name="phototaxis-simulation", daemon=True)
         self.process.start()
@@ -92,17 +115,29 @@ class ProcessRunner:
         with self._series_lock:
             self._series = []
         message = self._read(timeout=START_TIMEOUT)
+        while message is not None and message[0] != "frame":  # its last words, say
+            self._take_guarded(message)
+            message = self._read(timeout=START_TIMEOUT)
         if message is None:
-            self.process.kill()
-            raise SimulationCrashed("the simulation process did not start")
+            self._end_child(kill=True)
+            raise SimulationCrashed(self._last_words or "the simulation process did not start")
         self._take(message)
         for name, value in (("selected", self.selected), ("want_field", self._want_field)):
             if value is not None and value is not False:
                 self._control(name, value)
-        if self._program:
-            self._runner_call("set_program", None, None, self._program)
         if self._started:
             self._control("start")
+
+    def _end_child(self, kill: bool = False, timeout: float = 5.0) -> None:
+        """Reap the child (killing it first if asked) and close its pipe and queue."""
+        if kill and self.process.is_alive():
+            self.process.kill()
+        self.process.join(timeout)
+        for close in (self._receive.close, self._commands.close, self._commands.cancel_join_thread):
+            try:
+                close()
+            except (OSError, ValueError):
+                pass
 
     def _read(self, timeout: float) -> Any:
         try:
@@ -126,19 +161,40 @@ class ProcessRunner:
             self._publish(snap)
         elif kind == "done":
             _, ident, result = message
-            on_done, _ = self._callbacks.pop(ident, (None, None))
+            on_done, _ = self._pop_callbacks(ident)
             if on_done:
-                on_done(result)
+                self._deliver(on_done, result)
         elif kind == "progress":
             for listener in list(self._progress_listeners):
-                listener(message[1])
+                self._deliver(listener, message[1])
         elif kind == "error":
             _, ident, exc = message
-            _, on_error = self._callbacks.pop(ident, (None, None))
+            _, on_error = self._pop_callbacks(ident)
             if on_error:
-                on_error(exc)
+                self._deliver(on_error, exc)
             else:
                 self.errors.append(exc)
+        elif kind == "last words":
+            self._last_words = message[1]
+
+    def _take_guarded(self, message: Any) -> None:
+        try:
+            self._take(message)
+        except Exception as exc:  # noqa: BLE001 - this thread alone reads frames and notices crashes
+            self.errors.append(exc)
+            log.exception("a message from the simulation process could not be handled")
+
+    def _deliver(self, callback: Callable[[Any], None], value: Any) -> None:
+        """Call one listener or callback; one that raises is logged, and the others still hear."""
+        try:
+            callback(value)
+        except Exception as exc:  # noqa: BLE001 - see _take_guarded
+            self.errors.append(exc)
+            log.exception("a listener of the simulation failed")
+
+    def _pop_callbacks(self, ident: int) -> tuple[Callable | None, Callable | None]:
+        with self._callbacks_lock:
+            return self._callbacks.pop(ident, (None, None))
 
     def _publish(self, snap: Snapshot) -> None:
         publish(self, snap)
@@ -147,30 +203,54 @@ class ProcessRunner:
         while not self._stop.is_set():
             message = self._read(timeout=0.5)
             if message is not None:
-                self._take(message)
-            elif not self.process.is_alive() and not self._stop.is_set():
-                self._recover()
+                self._take_guarded(message)
+            elif not self.process.is_alive() and not self._stop.is_set() and self.failed is None:
+                try:
+                    self._recover()
+                except Exception as exc:  # noqa: BLE001 - never let this thread die
+                    self.errors.append(exc)
+                    log.exception("recovering the simulation process failed")
 
     def _recover(self) -> None:
-        """The child died: tell the listeners, fail what it was doing, start a new one."""
+        """The child died: fail what it was doing, end any progress shown, reap it, tell the
+        listeners, and start a new one with the paper's controller after a growing pause; after
+        too many crashes in a minute, give up and say so."""
         code = self.process.exitcode
-        why = f"the simulation process stopped (exit code {code}); restarted from the last settings"
-        for _, on_error in self._callbacks.values():
+        while (message := self._read(timeout=0)) is not None:  # what it managed to say before dying
+            self._take_guarded(message)
+        cause = self._last_words or f"the simulation process stopped (exit code {code})"
+        self._last_words = None
+        with self._callbacks_lock:
+            pending, self._callbacks = list(self._callbacks.values()), {}
+        for _, on_error in pending:
             if on_error:
-                on_error(SimulationCrashed(why))
-        self._callbacks.clear()
-        for listener in list(self._crash_listeners):
-            try:
-                listener(why)
-            except Exception as exc:
-                self.errors.append(exc)
+                self._deliver(on_error, SimulationCrashed(cause))
+        for listener in list(self._progress_listeners):
+            self._deliver(listener, None)
+        self._end_child()
+        now = time.monotonic()
+        self._crash_times.append(now)
+        recent = [t for t in self._crash_times if now - t <= CRASH_WINDOW]
+        if len(recent) >= self.crashes_before_giving_up:
+            self.failed = (f"the simulation cannot start: it stopped {len(recent)} times within a minute "
+                           f"(last: {cause})")
+            self._tell_crash(self.failed)
+            return
+        pause = self.restart_pause * 2 ** (len(recent) - 1)
+        self._tell_crash(f"{cause}; restarting in {pause:g} s from the last settings, with the paper's controller")
+        if self._stop.wait(pause):
+            return
         snap = self.latest
         self.restarts += 1
         try:
             self._launch(snap.config, self._shape, snap.seed)
-        except Exception as exc:  # could not start again: keep the last picture, say so
+        except Exception as exc:  # could not start again: keep the last picture; the loop tries again
             self.errors.append(exc)
-            time.sleep(1.0)
+            log.warning("the simulation process did not restart: %s", exc)
+
+    def _tell_crash(self, why: str) -> None:
+        for listener in list(self._crash_listeners):
+            self._deliver(listener, why)
 
     # ------------------------------------------------------------ control
     def start(self) -> "ProcessRunner":
@@ -187,9 +267,7 @@ class ProcessRunner:
         except (OSError, ValueError):
             pass
         self.process.join(timeout)
-        if self.process.is_alive():
-            self.process.kill()
-            self.process.join(timeout)
+        self._end_child(kill=True, timeout=timeout)
         if getattr(self, "_thread", None):
             self._thread.join(timeout)
 
@@ -197,16 +275,23 @@ class ProcessRunner:
         self._crash_listeners.append(listener)
 
     def _control(self, *message: Any) -> None:
-        self._commands.put(("control", *message))
+        self._send(("control", *message))
+
+    def _send(self, message: tuple) -> bool:
+        """Queue a message for the child; False when there is none to take it (between a crash and
+        the restart, or after giving up)."""
+        try:
+            self._commands.put(message)
+            return True
+        except (OSError, ValueError, AssertionError):
+            return False
 
     def post(self, command: Command, *, on_done: Callable[[Any], None] | None = None,
              on_error: Callable[[BaseException], None] | None = None) -> None:
         """Run ``command(sim)`` in the simulation process; ``command`` must be
         picklable (a module-level function or a ``functools.partial`` of one).
         The callbacks run here, on the receiving thread; keep them short."""
-        ident = next(self._ids)
-        self._callbacks[ident] = (on_done, on_error)
-        self._commands.put(("command", ident, command))
+        self._queue_call(("command", command), on_done, on_error)
 
     def update_config(self, changes: dict[str, Any], *, on_done: Callable[[Any], None] | None = None,
                       on_error: Callable[[BaseException], None] | None = None) -> None:
@@ -266,18 +351,22 @@ class ProcessRunner:
 
     def set_program(self, spec: str | None, *, on_done: Callable[[Any], None] | None = None,
                     on_error: Callable[[BaseException], None] | None = None) -> None:
-        def used(name: Any) -> None:
-            self._program = spec
-            if on_done:
-                on_done(name)
-
-        self._runner_call("set_program", used, on_error, spec)
+        self._runner_call("set_program", on_done, on_error, spec)
 
     def _runner_call(self, method: str, on_done: Callable | None, on_error: Callable | None, *args: Any) -> None:
         """Call one of the child's Runner methods that report back (reset, set_shape, update_config)."""
+        self._queue_call(("runner_call", method, args), on_done, on_error)
+
+    def _queue_call(self, message: tuple, on_done: Callable | None, on_error: Callable | None) -> None:
+        """Send a call that reports back; if no child can take it, its on_error hears why at once."""
         ident = next(self._ids)
-        self._callbacks[ident] = (on_done, on_error)
-        self._commands.put(("runner_call", ident, method, args))
+        with self._callbacks_lock:
+            self._callbacks[ident] = (on_done, on_error)
+        if self.failed is None and self._send((message[0], ident, *message[1:])):
+            return
+        self._pop_callbacks(ident)
+        if on_error:
+            self._deliver(on_error, SimulationCrashed(self.failed or "the simulation is restarting; try again"))
 
     # -------------------------------------------------------------- state
     @property
@@ -329,6 +418,11 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
         return (lambda result: send_message(("done", ident, _picklable(result))),
                 lambda exc: send_message(("error", ident, _picklable_error(exc))))
 
+    def stuck(why: str) -> None:  # a light program would not stop: say so, then end (no thread can unwind it)
+        send_message(("last words", f"{why}; the app restarts the simulation with the paper's controller"))
+        os._exit(STUCK_EXIT)
+
+    watchdog.on_stuck = stuck
     on_frame(runner.latest)
     runner.subscribe(on_frame)
     runner.on_progress(lambda fraction: send_message(("progress", fraction)))

@@ -11,6 +11,7 @@ the frame rate, dropping stale ones, so a slow browser never slows physics.
 
 from __future__ import annotations
 
+import logging
 import queue
 import threading
 import time
@@ -20,6 +21,7 @@ from typing import Any, Callable
 import numpy as np
 
 from sandbox.app.snapshot import RobotView, Snapshot
+from sandbox.model import watchdog
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
 from sandbox.model.simulation import Simulation
@@ -31,6 +33,8 @@ Command = Callable[[Simulation], Any]
 FASTEST = 100
 FASTEST_CHUNK = 10
 PAPER_PROGRAM = "the paper's controller"
+
+log = logging.getLogger("sandbox.app.runner")
 
 
 
@@ -71,8 +75,12 @@ class Runner:
     """
 
     def __init__(self, config: Config, *, shape: Any = "from-config", seed: int | None = None,
-                 fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, chart_every: int = 100):
-        self.sim = Simulation(config, seed=seed, shape=shape, open_ended=True)  # a live run has no last step
+                 fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, chart_every: int = 100,
+                 program_time_limit: float = watchdog.DEFAULT_LIMIT):
+        #: Seconds a light program's import, reset or update may take (then the paper's controller takes over).
+        self.program_time_limit = float(program_time_limit)
+        # A live run has no last step.
+        self.sim = Simulation(config, seed=seed, shape=shape, open_ended=True, program_time_limit=program_time_limit)
         self.fps = float(fps)
         self.steps_per_frame = int(steps_per_frame)
         self.playing = bool(playing)
@@ -272,14 +280,22 @@ class Runner:
                 return
             try:
                 result = command(self.sim)
-            except Exception as exc:  # reported to whoever posted it
+            except BaseException as exc:  # reported to whoever posted it; nothing a command raises stops the loop
                 if on_error:
-                    on_error(exc)
+                    self._deliver(on_error, exc)
                 else:
                     self.errors.append(exc)
                 continue
             if on_done:
-                on_done(result)
+                self._deliver(on_done, result)
+
+    def _deliver(self, callback: Callable[[Any], None], value: Any) -> None:
+        """Call a poster's callback; one that raises is logged, never the simulation's problem."""
+        try:
+            callback(value)
+        except Exception as exc:  # noqa: BLE001 - the loop must go on
+            self.errors.append(exc)
+            log.exception("a callback of the simulation's commands failed")
 
     # ------------------------------------------------------- light programs
     def set_program(self, spec: str | None, *, on_done: Callable[[Any], None] | None = None,
@@ -291,7 +307,7 @@ class Runner:
         def do(sim: Simulation) -> str:
             from sandbox.model.programs import load_program
 
-            sim.use_program(load_program(spec) if spec else None)
+            sim.use_program(load_program(spec, time_limit=self.program_time_limit) if spec else None)
             self.program_name = spec or PAPER_PROGRAM
             return self.program_name
 
@@ -316,15 +332,12 @@ class Runner:
         interval = 1.0 / self.fps
         next_frame = time.perf_counter()
         while not self._stop.is_set():
-            self._run_commands()
-            if self.playing:
-                if self.steps_per_frame >= FASTEST:
-                    self._step(deadline=next_frame + interval)  # as many steps as fit in one frame
-                else:
-                    self._step(self.steps_per_frame)
-                self._record_series()
-            self._step_times.append((time.perf_counter(), self.sim.steps_done))
-            self._snapshot()
+            try:
+                self._frame_of_steps(next_frame + interval)
+            except Exception as exc:  # noqa: BLE001 - a bug: pause and say so rather than freeze the page
+                self.errors.append(exc)
+                log.exception("the simulation loop failed; paused")
+                self.playing = False
             next_frame += interval
             now = time.perf_counter()
             if next_frame < now - interval:  # fell behind: do not try to catch up
@@ -336,6 +349,18 @@ class Runner:
             if delay > 0:
                 self._wake.wait(delay)
                 self._wake.clear()
+
+    def _frame_of_steps(self, deadline: float) -> None:
+        """One frame: the waiting commands, the steps (if playing), the series and a snapshot."""
+        self._run_commands()
+        if self.playing:
+            if self.steps_per_frame >= FASTEST:
+                self._step(deadline=deadline)  # as many steps as fit in one frame
+            else:
+                self._step(self.steps_per_frame)
+            self._record_series()
+        self._step_times.append((time.perf_counter(), self.sim.steps_done))
+        self._snapshot()
 
     def _step_for(self, deadline: float) -> None:
         """Step in small chunks until ``deadline`` (at least one chunk)."""

@@ -10,6 +10,7 @@ Every connected browser sees the same simulation and the same panel.
 from __future__ import annotations
 
 import argparse
+import os
 import contextlib
 import io
 import signal
@@ -18,15 +19,17 @@ import threading
 import time
 from typing import Any
 
-import viser
-
+from sandbox.app.access import WATCH, Access, is_loopback_host, is_shared
+from sandbox.app.gate import start_server
 from sandbox.app.panel import Panel
 from sandbox.app.process import ProcessRunner
 from sandbox.app.runner import Runner, wait_for
 from sandbox.app.scene import SceneView, configure_scene, frame_arena
 from sandbox.app.snapshot import Snapshot
-from sandbox.cli import UserError, add_config_arguments, add_controller_argument, config_from_args, controller_from_args
+from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, config_from_args,
+                         controller_from_args, program_time_limit)
 from sandbox.model.config import Config
+from sandbox.model.watchdog import DEFAULT_LIMIT
 from sandbox.shapes import shape_vertices
 
 TITLE = "Phototaxis sandbox"
@@ -40,24 +43,33 @@ class App:
     def __init__(self, config: Config, *, host: str = "127.0.0.1", port: int = 8080, shape: Any = "from-config",
                  fps: float = 30.0, steps_per_frame: int = 25, playing: bool = True, verbose: bool = False,
                  process: bool = True, keep_running: bool = False, idle_pause_seconds: float = IDLE_PAUSE_SECONDS,
-                 controller: str | None = None, allow_programs: bool | None = None):
+                 controller: str | None = None, allow_programs: bool = False, access: Access | None = None,
+                 program_time_limit: float = DEFAULT_LIMIT):
         if isinstance(shape, str) and shape == "from-config":
             shape = shape_vertices(config.shape)  # raises ShapeError before any server starts
         self.config = config
+        #: Who may connect and what each page may do (sandbox.app.access); shared beyond this machine,
+        #: control needs the token in :attr:`url`.
+        self.access = access or Access.for_server(host, allow_programs=allow_programs)
         kind = ProcessRunner if process else Runner
-        self.runner = kind(config, shape=shape, fps=fps, steps_per_frame=steps_per_frame, playing=playing)
-        with contextlib.redirect_stdout(io.StringIO()) if not verbose else contextlib.nullcontext():
-            self.server = viser.ViserServer(host=host, port=port, label=TITLE, verbose=verbose)
+        self.runner = kind(config, shape=shape, fps=fps, steps_per_frame=steps_per_frame, playing=playing,
+                           program_time_limit=program_time_limit)
+        try:
+            self.server, self.gate = start_server(self.access, host=host, port=port, label=TITLE, verbose=verbose)
+        except BaseException:
+            self.runner.stop()  # do not leave the simulation process behind
+            raise
         try:
             self._configure_page()
             self.view = SceneView(self.server.scene, self.runner.latest)
-            # Loading a program runs a Python file on this machine: from the page, only for a page served
-            # to this machine alone, unless allowed outright.
-            if allow_programs is None:
-                allow_programs = host in ("127.0.0.1", "localhost", "::1")
-            self.panel = Panel(self.server, self.runner, self.view, allow_programs=allow_programs)
+            # Loading a program runs a Python file on this machine: the page offers it only where a
+            # connection may do it (served to this machine, or --allow-programs); the gate decides per page.
+            offered = self.access.allow_programs or not is_shared(host)
+            self.panel = Panel(self.server, self.runner, self.view, allow_programs=offered,
+                               may_load_programs=self.gate.may_load_programs)
         except BaseException:
             self.server.stop()  # do not leave a half-built server listening
+            self.runner.stop()
             raise
         self.frames_drawn = 0
         self._frame_lock = threading.Lock()
@@ -93,6 +105,10 @@ class App:
 
     def _on_connect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
+        failed = getattr(self.runner, "failed", None)
+        if failed:
+            client.add_notification("The simulation cannot start", failed[0].upper() + failed[1:] + ".",
+                                    color="red", auto_close_seconds=None)
         if self.auto_paused:
             self.auto_paused = False
             self.runner.set_playing(True)
@@ -119,9 +135,11 @@ class App:
                 self.runner.set_playing(False)
 
     def _on_crash(self, why: str) -> None:
+        given_up = self.runner.failed is not None
+        title = "The simulation cannot start" if given_up else "The simulation stopped"
         for client in self.server.get_clients().values():
-            client.add_notification("The simulation crashed", why[0].upper() + why[1:] + ".", color="red",
-                                    auto_close_seconds=20.0)
+            client.add_notification(title, why[0].upper() + why[1:] + ".", color="red",
+                                    auto_close_seconds=None if given_up else 20.0)
 
     # -------------------------------------------------------------- life
     @property
@@ -130,11 +148,12 @@ class App:
 
     @property
     def url(self) -> str:
+        """The address to open, with the token when one is needed (as ``jupyter`` prints it)."""
         host = self.server.get_host()
-        shown = "localhost" if host in ("127.0.0.1", "localhost") else host
-        if host == "0.0.0.0":
+        shown = "localhost" if is_loopback_host(host) else host
+        if host in ("0.0.0.0", "::", ""):
             shown = socket.gethostname()
-        return f"http://{shown}:{self.port}/"
+        return self.access.url(shown)
 
     def start(self) -> "App":
         self.runner.start()
@@ -177,8 +196,22 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--fps", type=float, default=30.0, help="frame rate the page is updated at (default 30)")
     add_controller_argument(p)
     p.add_argument("--allow-programs", action="store_true",
-                   help="let the page load light programs (Python files on this machine) even when served "
-                        "beyond it (--host 0.0.0.0); on 127.0.0.1 it always may")
+                   help="let any controlling page load light programs (Python files on this machine), not only "
+                        "a page opened on this machine itself")
+    sharing = p.add_argument_group("sharing (see docs/security.md)")
+    sharing.add_argument("--token", metavar="SECRET", default=None,
+                         help="the secret a page needs to control the sandbox (shown in the printed URL); "
+                              "served beyond this machine a new one is made unless given (environment: "
+                              "PHOTOTAXIS_TOKEN)")
+    sharing.add_argument("--viewers", choices=("watch", "none"), default=WATCH,
+                         help="what a page without the token may do on a shared server: watch (default) or "
+                              "nothing (refused)")
+    sharing.add_argument("--allow-host", metavar="NAME", action="append", default=[],
+                         help="also answer requests for this host name (repeatable; '*' for any, behind a "
+                              "reverse proxy); localhost and the listening address always work")
+    sharing.add_argument("--allow-origin", metavar="URL", action="append", default=[],
+                         help="also accept websockets from pages of this origin, e.g. https://example.org "
+                              "(repeatable); the page's own origin always works")
     p.add_argument("--keep-running", action="store_true",
                    help=f"keep simulating with no browser connected (by default it pauses after "
                         f"{IDLE_PAUSE_SECONDS:.0f} s without one and goes on when one connects)")
@@ -196,14 +229,26 @@ def serve_command(args: argparse.Namespace) -> int:
         raise UserError("--steps-per-frame must be between 1 and 100")
     if not 1 <= args.fps <= 240:
         raise UserError("--fps must be between 1 and 240")
+    token = args.token if args.token is not None else os.environ.get("PHOTOTAXIS_TOKEN") or None
+    if token is not None and (len(token) < 8 or not token.isprintable() or " " in token):
+        raise UserError("--token must be at least 8 printable characters without spaces")
+    try:
+        access = Access.for_server(args.host, token=token, viewers=args.viewers, allow_programs=args.allow_programs,
+                                   allow_hosts=args.allow_host, allow_origins=args.allow_origin)
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
     try:
         app = App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
                   playing=not args.paused, keep_running=args.keep_running, controller=controller_from_args(args)[0],
-                  allow_programs=True if args.allow_programs else None)
+                  access=access, program_time_limit=program_time_limit(args))
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
     app.start()
     print(f"Phototaxis sandbox running at {app.url}  (Ctrl+C to stop)", flush=True)
+    if access.token and is_shared(args.host):
+        watchers = "may watch" if access.viewers == WATCH else "are refused"
+        print(f"  shared beyond this machine: pages without the token {watchers}; only pages with it control",
+              flush=True)
 
     def stop_on_term(signum: int, frame: Any) -> None:
         raise KeyboardInterrupt

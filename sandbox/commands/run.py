@@ -12,8 +12,10 @@ from typing import IO, Any
 
 from tqdm import tqdm
 
-from sandbox.cli import UserError, add_config_arguments, add_controller_argument, config_from_args, controller_from_args
+from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, config_from_args,
+                         controller_from_args, program_time_limit)
 from sandbox.model.config import CASES, STRATEGY_NAMES, Config
+from sandbox.model import watchdog
 from sandbox.model.metrics import Sample, SampleWriter
 from sandbox.model.programs import ProgramError, paper_controller_name
 from sandbox.model.simulation import Simulation
@@ -56,11 +58,11 @@ def open_trace(path: str | None) -> tuple[IO[str] | None, Any]:
     return handle, SampleWriter(handle)
 
 
-def run_trial(config: Config, *, progress: bool = False, on_sample=None,
-              program: Any = None) -> tuple[Simulation, Sample, float]:
+def run_trial(config: Config, *, progress: bool = False, on_sample=None, program: Any = None,
+              program_time_limit: float = watchdog.DEFAULT_LIMIT) -> tuple[Simulation, Sample, float]:
     """Run ``config.steps`` steps in chunks of ``metrics_every``; returns the
     simulation, its final sample and the wall time in seconds."""
-    sim = Simulation(config, program=program)
+    sim = Simulation(config, program=program, program_time_limit=program_time_limit)
     if on_sample:
         on_sample(sim.history[0])
     chunk = config.metrics_every
@@ -89,6 +91,7 @@ def run_trial(config: Config, *, progress: bool = False, on_sample=None,
 
 def run_command(args: argparse.Namespace) -> int:
 
+    watchdog.on_stuck = watchdog.exit_on_stuck("phototaxis run")
     config = config_from_args(args)
     spec, program = controller_from_args(args)
     handle, writer = open_trace(args.trace)
@@ -98,7 +101,8 @@ def run_command(args: argparse.Namespace) -> int:
                 writer.write(sample)
                 handle.flush()
 
-        sim, final, wall = run_trial(config, progress=not args.no_progress, on_sample=write, program=program)
+        sim, final, wall = run_trial(config, progress=not args.no_progress, on_sample=write, program=program,
+                                     program_time_limit=program_time_limit(args))
     except ProgramError as exc:
         raise UserError(str(exc)) from None
     finally:

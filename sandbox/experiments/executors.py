@@ -97,7 +97,7 @@ def run_trials(trials: list[Trial], store: ResultStore, executor: Callable[[], c
             def submit(t: Trial) -> None:
                 attempts[t] = attempts.get(t, 0) + 1
                 running[pool[0].submit(run_sweep_trial, t.config, t.seed, t.config["steps"], t.shape,
-                                           t.controller)] = t
+                                           t.controller, t.program_time_limit)] = t
 
             for t in todo:
                 submit(t)
@@ -113,6 +113,9 @@ def run_trials(trials: list[Trial], store: ResultStore, executor: Callable[[], c
                     except Exception as exc:  # noqa: BLE001 - a trial must never kill the sweep
                         broken |= type(exc).__name__ == "BrokenProcessPool"
                         message = (f"{type(exc).__name__}: {exc}".strip().splitlines() or ["error"])[0][:300]
+                        if type(exc).__name__ == "ProgramError":  # the user's light program: retrying cannot help
+                            raise SweepError(f"trial {t.name}: {exc}; the sweep stops (finished trials are "
+                                             f"kept)") from None
                         if attempts[t] < ATTEMPTS:
                             say(f"trial {t.name} failed ({message}); retrying")
                             again.append(t)

@@ -193,10 +193,11 @@ def check_table_of_tables(data: Any, where: str) -> dict:
     return data
 
 
-def make_trials(cases: list[Case], trials: int, seed_start: int, controller: str | None = None) -> list[Trial]:
+def make_trials(cases: list[Case], trials: int, seed_start: int, controller: str | None = None,
+                program_time_limit: float | None = None) -> list[Trial]:
     out = []
     for case in cases:
         for seed in range(seed_start, seed_start + trials):
             config = case.config.replace(seed=seed).to_dict()
-            out.append(Trial(case.label, seed, config, case.shape, controller))
+            out.append(Trial(case.label, seed, config, case.shape, controller, program_time_limit))
     return out

@@ -18,12 +18,14 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sandbox.cli import UserError, add_config_arguments, add_controller_argument, controller_from_args
+from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, controller_from_args,
+                         program_time_limit)
 from sandbox.experiments.executors import dask_executor, local_executor, run_trials
 from sandbox.experiments.plan import Case, grid_cases, make_trials, paper_cases
 from sandbox.experiments.report import build_report
 from sandbox.experiments.storage import SWEEP_FILE, ResultStore, load_meta
-from sandbox.experiments.trials import SweepError
+from sandbox.experiments.trials import SweepError, check_program
+from sandbox.model import watchdog
 from sandbox.model.config import CASES, Config, params, read_config_values
 
 
@@ -116,6 +118,7 @@ def _term_as_interrupt():
 
 def sweep_command(args: argparse.Namespace) -> int:
 
+    watchdog.on_stuck = watchdog.exit_on_stuck("phototaxis sweep")
     try:
         return _sweep(args)
     except SweepError as exc:
@@ -139,7 +142,9 @@ def _sweep(args: argparse.Namespace) -> int:
     store = ResultStore(out)
     store.check_writable()
     write_meta(out, cases, compare, _command_line(args), args.trials, seed_start)
-    trials = make_trials(cases, args.trials, seed_start, controller_from_args(args)[0])
+    trials = make_trials(cases, args.trials, seed_start, controller_from_args(args)[0], program_time_limit(args))
+    if trials and trials[0].controller:
+        check_program(trials[0])  # a program that fails at once says so here, not after the workers start
 
     if args.scheduler:
         executor = lambda: dask_executor(args.scheduler)  # noqa: E731

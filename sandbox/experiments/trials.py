@@ -23,7 +23,8 @@ class SweepError(Exception):
     """A problem with a sweep a user can fix (shown as one line)."""
 
 
-def run_sweep_trial(config: dict, seed: int, steps: int, shape: list | None, controller: str | None = None) -> dict:
+def run_sweep_trial(config: dict, seed: int, steps: int, shape: list | None, controller: str | None = None,
+                    program_time_limit: float | None = None) -> dict:
     """Run one trial and return its samples, configuration and final layout.
 
     ``config`` is a full configuration as from ``Config.to_dict()``; ``shape``
@@ -65,6 +66,24 @@ def run_sweep_trial(config: dict, seed: int, steps: int, shape: list | None, con
     }
 
 
+def check_program(trial: "Trial") -> None:
+    """Start the trial's light program on its world and let it light the first update, here and
+    now: a program that fails or overruns at once is a one-line SweepError before any worker starts."""
+    from sandbox.model import watchdog
+    from sandbox.model.programs import ProgramError, load_program
+    from sandbox.model.simulation import Simulation
+
+    limit = watchdog.DEFAULT_LIMIT if trial.program_time_limit is None else trial.program_time_limit
+    cfg = Config(**trial.config)
+    try:
+        program = load_program(trial.controller, time_limit=limit)
+        sim = Simulation(cfg, shape=None if trial.shape is None else np.asarray(trial.shape, dtype=float),
+                         program=program, program_time_limit=limit)
+        sim.step(1)
+    except ProgramError as exc:
+        raise SweepError(f"trial {trial.name}: {exc}") from None
+
+
 @dataclass(frozen=True)
 class Trial:
     case: str
@@ -72,6 +91,7 @@ class Trial:
     config: dict = field(compare=False, hash=False)  # full config dict, seed and steps included
     shape: list | None = field(default=None, compare=False, hash=False)
     controller: str | None = field(default=None, compare=False, hash=False)  # a light program's path:Class
+    program_time_limit: float | None = field(default=None, compare=False, hash=False)
 
     @property
     def name(self) -> str:

@@ -492,16 +492,20 @@ def load_config_file(path: str | Path, base: Config | None = None) -> Config:
         raise ConfigError(f"config file {path}: {exc}") from None
 
 
+#: A config file larger than this is refused before it is parsed (no real one comes near).
+MAX_CONFIG_BYTES = 1_000_000
+#: Tables may group values (``[robots]``), and groups hold groups at most this deep.
+MAX_CONFIG_DEPTH = 3
+#: The keys that make a file with a ``config`` table a result record (a trial's JSON, ``run --json``).
+_RESULT_KEYS = frozenset({"samples", "final", "fraction_in_goal"})
+
+
 def read_config_values(path: str | Path) -> dict[str, Any]:
     """The ``name = value`` pairs of a TOML or JSON config file, checked
-    (every name known, every value acceptable) but not applied."""
+    (every name known, every value acceptable) but not applied. A result file
+    (a trial's JSON, ``run --json``) is read as the configuration it records."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"cannot read config file {path}: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise ConfigError(f"config file {path} is not UTF-8 text") from None
+    text = _read_config_text(path)
     try:
         if path.suffix.lower() == ".json":
             data = json.loads(text)
@@ -509,27 +513,49 @@ def read_config_values(path: str | Path) -> dict[str, Any]:
             data = tomllib.loads(text)
     except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
         raise ConfigError(f"config file {path} is not valid {path.suffix.lstrip('.').upper() or 'TOML'}: {exc}") from None
+    except RecursionError:
+        raise ConfigError(f"config file {path} is nested too deeply to be a config file") from None
     if not isinstance(data, dict):
         raise ConfigError(f"config file {path} must hold a table of name = value pairs")
-    flat = _flatten(data)
-    # A result file stores the configuration under "config": accept it as is.
-    if "config" in data and isinstance(data["config"], dict):
-        flat = record_values(data["config"])
     try:
+        flat = record_values(data["config"]) if _is_result_record(data) else _flatten(data)
         Config().replace(**flat)
     except ConfigError as exc:
         raise ConfigError(f"config file {path}: {exc}") from None
     return flat
 
 
+def _read_config_text(path: Path) -> str:
+    """The file's text, refused before parsing when it is not a regular file or too large."""
+    try:
+        if not path.is_file():
+            raise ConfigError(f"config file {path} is not a regular file" if path.exists()
+                              else f"cannot read config file {path}: no such file")
+        with path.open("rb") as handle:
+            data = handle.read(MAX_CONFIG_BYTES + 1)
+    except OSError as exc:
+        raise ConfigError(f"cannot read config file {path}: {exc.strerror or exc}") from None
+    if len(data) > MAX_CONFIG_BYTES:
+        raise ConfigError(f"config file {path} is larger than {MAX_CONFIG_BYTES // 1_000_000} MB; "
+                          f"a config file is a few lines of name = value")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(f"config file {path} is not UTF-8 text") from None
+
+
+def _is_result_record(data: dict[str, Any]) -> bool:
+    return isinstance(data.get("config"), dict) and bool(_RESULT_KEYS & set(data))
+
+
 def record_values(values: dict[str, Any]) -> dict[str, Any]:
     """The values of a configuration stored in a result file. Files written
     before profiles existed hold the model that is now ``paper-text`` and do
-    not say so: they are read with that profile."""
+    not say so: they are read with that profile. An unknown name is an error."""
     values = _flatten(values)
     if "profile" not in values and "light_falloff" in values:
         values = {**values, "profile": PAPER_TEXT}
-    return {k: v for k, v in values.items() if k in _param_table()}
+    return values
 
 
 def config_from_record(values: dict[str, Any]) -> Config:
@@ -537,13 +563,17 @@ def config_from_record(values: dict[str, Any]) -> Config:
     return Config().replace(**record_values(values))
 
 
-def _flatten(data: dict[str, Any]) -> dict[str, Any]:
+def _flatten(data: dict[str, Any], depth: int = 1) -> dict[str, Any]:
+    """Groups' values as one table (``[robots] count`` is ``count``); too deep a nest is an error."""
+    if depth > MAX_CONFIG_DEPTH:
+        raise ConfigError(f"tables nested more than {MAX_CONFIG_DEPTH} deep; a config file is name = value pairs, "
+                          f"optionally grouped in [tables]")
     flat: dict[str, Any] = {}
     for key, value in data.items():
         if isinstance(value, dict):
-            flat.update(_flatten(value))
+            flat.update(_flatten(value, depth + 1))
         else:
-            flat[key.replace("-", "_")] = value
+            flat[str(key).replace("-", "_")] = value
     return flat
 
 

@@ -26,6 +26,7 @@ or non-finite value stops the run with a :class:`ProgramError` that says so.
 from __future__ import annotations
 
 import importlib.util
+import inspect
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,6 +34,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from sandbox.model import watchdog
 from sandbox.model.config import Config
 
 SENSES = frozenset({"boxes", "robots"})
@@ -104,12 +106,34 @@ class LightProgram:
 
 def senses_of(program: Any) -> frozenset:
     """The program's declared senses, checked."""
-    senses = frozenset(getattr(program, "senses", frozenset()) or ())
+    declared = getattr(program, "senses", frozenset()) or ()
+    if isinstance(declared, str) or not isinstance(declared, (set, frozenset, list, tuple)):
+        raise ProgramError(f"{type(program).__name__}.senses must be a set such as {{'boxes'}}, not {declared!r}")
+    senses = frozenset(declared)
     unknown = senses - SENSES
     if unknown:
         raise ProgramError(f"{type(program).__name__}.senses: unknown {sorted(unknown)}; "
                            f"choose from {sorted(SENSES)}")
     return senses
+
+
+def every_of(program: Any, default: int) -> int:
+    """World steps between two calls of the program: its ``every`` (checked), else ``default``."""
+    every = getattr(program, "every", None)
+    if every is None or every == 0:
+        return max(1, int(default))
+    if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 0:
+        raise ProgramError(f"{type(program).__name__}.every must be a whole number of world steps "
+                           f"(0 or None: every update_every steps), not {every!r}")
+    return int(every)
+
+
+def source_of(program: Any) -> str | None:
+    """The file the program's class was written in, if it has one (to say where it overran)."""
+    try:
+        return inspect.getsourcefile(type(program))
+    except (TypeError, OSError):
+        return None
 
 
 def check_pattern(pattern: Any, shape: tuple[int, int], name: str) -> np.ndarray:
@@ -126,36 +150,54 @@ def check_pattern(pattern: Any, shape: tuple[int, int], name: str) -> np.ndarray
     return array.reshape(shape)
 
 
-def load_program(spec: str) -> Any:
+def load_program(spec: str, *, time_limit: float = watchdog.DEFAULT_LIMIT) -> Any:
     """A light program from ``path/to/module.py:ClassName`` (or ``package.module:ClassName``),
-    instantiated without arguments; a ProgramError in one line if it cannot be."""
+    instantiated without arguments; a ProgramError in one line if it cannot be. Importing the
+    module runs its code: that and the class's construction each have ``time_limit`` seconds, and
+    nothing they raise (SystemExit included) gets past this function."""
     path, sep, class_name = str(spec).rpartition(":")
     if not sep or not path or not class_name:
         raise ProgramError(f"--controller {spec!r}: expected path/to/module.py:ClassName")
     try:
-        if path.endswith(".py"):
-            file = Path(path)
-            if not file.is_file():
-                raise ProgramError(f"--controller {spec!r}: no such file {path}")
-            module_name = f"phototaxis_program_{abs(hash(str(file.resolve())))}"
-            module_spec = importlib.util.spec_from_file_location(module_name, file)
-            module = importlib.util.module_from_spec(module_spec)
-            sys.modules[module_name] = module  # so the class pickles to sweep's workers by reference
-            module_spec.loader.exec_module(module)
-        else:
-            module = importlib.import_module(path)
+        module = watchdog.limited(_import, path, spec, limit=time_limit, what=f"importing {path}",
+                                  source=path if path.endswith(".py") else None)
     except ProgramError:
         raise
-    except Exception as exc:  # a user's file: any error in it is a one-line message
-        raise ProgramError(f"--controller {spec!r}: cannot load it: {type(exc).__name__}: {exc}") from None
+    except BaseException as exc:  # a user's file: anything it does is a one-line message, never an exit
+        raise ProgramError(f"--controller {spec!r}: cannot load it: {_one_line(exc)}") from None
     cls = getattr(module, class_name, None)
     if cls is None:
         raise ProgramError(f"--controller {spec!r}: {path} has no {class_name}")
     try:
-        program = cls()
-    except Exception as exc:
-        raise ProgramError(f"--controller {spec!r}: {class_name}() failed: {type(exc).__name__}: {exc}") from None
+        program = watchdog.limited(cls, limit=time_limit, what=f"{class_name}()",
+                                   source=path if path.endswith(".py") else None)
+    except BaseException as exc:
+        raise ProgramError(f"--controller {spec!r}: {class_name}() failed: {_one_line(exc)}") from None
     if not callable(getattr(program, "update", None)):
         raise ProgramError(f"--controller {spec!r}: {class_name} has no update(observation) method")
     senses_of(program)
+    every_of(program, 1)
     return program
+
+
+def _import(path: str, spec: str) -> Any:
+    if not path.endswith(".py"):
+        return importlib.import_module(path)
+    file = Path(path)
+    if not file.is_file():
+        raise ProgramError(f"--controller {spec!r}: no such file {path}")
+    module_name = f"phototaxis_program_{abs(hash(str(file.resolve())))}"
+    module_spec = importlib.util.spec_from_file_location(module_name, file)
+    module = importlib.util.module_from_spec(module_spec)
+    sys.modules[module_name] = module  # so the class pickles to sweep's workers by reference
+    try:
+        module_spec.loader.exec_module(module)
+    except BaseException:
+        sys.modules.pop(module_name, None)
+        raise
+    return module
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0][:300]}" if text else type(exc).__name__

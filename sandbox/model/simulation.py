@@ -17,12 +17,12 @@ from typing import Any, Callable
 
 import numpy as np
 
-from sandbox.model import kernels, metrics, robots
+from sandbox.model import kernels, metrics, robots, watchdog
 from sandbox.model.config import STRATEGY_NAMES, Config, param
 from sandbox.model.controller import Controller
 from sandbox.model.goal import Goal, make_goal
 from sandbox.model.lights import LightField, light_centres
-from sandbox.model.programs import Observation, ProgramError, check_pattern, senses_of
+from sandbox.model.programs import Observation, ProgramError, check_pattern, every_of, senses_of, source_of
 from sandbox.model.world import World
 from sandbox.shapes import ShapeError, shape_vertices
 
@@ -56,8 +56,11 @@ class Simulation:
     """
 
     def __init__(self, config: Config | None = None, *, seed: int | None = None,
-                 shape: np.ndarray | None | str = "from-config", program: Any = None, open_ended: bool = False):
+                 shape: np.ndarray | None | str = "from-config", program: Any = None, open_ended: bool = False,
+                 program_time_limit: float = watchdog.DEFAULT_LIMIT):
         self.config = config or Config()
+        #: Seconds a user's light program may take for one reset or update (then: ProgramError).
+        self.program_time_limit = program_time_limit
         #: Whether the run goes on past ``config.steps`` (the live app): then no controller
         #: plans for the run's end.
         self.open_ended = open_ended
@@ -207,17 +210,24 @@ class Simulation:
 
     def _program_period(self) -> int:
         """World steps between two calls of the program: its ``every``, else ``update_every``."""
-        return max(1, int(getattr(self.program, "every", None) or self.config.update_every))
+        return every_of(self.program, self.config.update_every)
 
     def _call_program(self, method: Callable, *args: Any) -> Any:
-        """A user's program's method; whatever goes wrong in it is a one-line ProgramError."""
+        """A user's program's method, within its time limit; whatever goes wrong in it (an exception,
+        an overrun, even SystemExit) is a one-line ProgramError."""
+        name = f"{type(self.program).__name__}.{method.__name__}"
         try:
-            return method(*args)
+            return watchdog.limited(method, *args, limit=self.program_time_limit, what=name,
+                                    source=source_of(self.program))
         except ProgramError:
             raise
-        except Exception as exc:
-            name = f"{type(self.program).__name__}.{method.__name__}"
-            raise ProgramError(f"{name} failed at step {self.steps_done}: {type(exc).__name__}: {exc}") from exc
+        except watchdog.ProgramTimeout as exc:
+            raise ProgramError(f"{exc}{self._when(method)}") from None
+        except BaseException as exc:
+            raise ProgramError(f"{name} failed{self._when(method)}: {type(exc).__name__}: {exc}") from exc
+
+    def _when(self, method: Callable) -> str:
+        return f" at step {self.steps_done}" if getattr(method, "__name__", "") == "update" else ""
 
     def set_pattern(self, pattern: Any) -> None:
         """Light this pattern now (one intensity per light, [ix, iy]); the light program may change it at

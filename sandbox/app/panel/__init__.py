@@ -28,7 +28,8 @@ class Panel:
     """Builds the GUI on ``server`` for ``runner`` and keeps its read-outs current.
     ``view`` is the scene (it shows drawn points and the heat map)."""
 
-    def __init__(self, server: Any, runner: Any, view: Any, *, allow_programs: bool = True):
+    def __init__(self, server: Any, runner: Any, view: Any, *, allow_programs: bool = True,
+                 may_load_programs: Any = None):
         gui = server.gui
         self.runner = runner
         self._last_refresh = 0.0
@@ -38,7 +39,8 @@ class Panel:
                              after_reset=self._after_reset)
         self.shape = ShapeFolder(gui, runner, show_draw_points=view.set_draw_points, on_change=self.metrics.mark)
         self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark)
-        self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark)
+        self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
+                                     may_load=may_load_programs)
         self.inspector = InspectorFolder(gui, runner, server)
         self.record = RecordFolder(gui, server)
         self.folders = (self.run, self.shape, self.strategies, self.program, self.metrics, self.inspector,

@@ -4,8 +4,10 @@
 A program that cannot be loaded is refused with one line and the running one
 stays; one that fails while running (an exception, a pattern of the wrong
 shape) hands the lights back to the paper's controller and every viewer is
-told why. Loading runs a Python file on the server, so on a server shared
-beyond this machine the folder only works with ``serve --allow-programs``.
+told why. Loading runs a Python file on the server, so the server decides
+who may: a page opened on the server's own machine, or any controlling page
+with ``serve --allow-programs`` (:mod:`sandbox.app.access`). Going back to
+the paper's controller is always allowed to a controlling page.
 """
 
 from __future__ import annotations
@@ -20,9 +22,11 @@ from sandbox.app.snapshot import Snapshot
 
 
 class ProgramFolder:
-    def __init__(self, gui: Any, runner: Any, server: Any, *, allowed: bool, on_change: Any):
+    def __init__(self, gui: Any, runner: Any, server: Any, *, allowed: bool, on_change: Any, may_load: Any = None):
         self.gui, self.runner, self.server = gui, runner, server
         self.allowed, self._on_change = allowed, on_change
+        #: may_load(client): whether that page may load a program (the server's gate decides, per page).
+        self._may_load = may_load or (lambda client: allowed)
         self._errors_seen = 0
         self._shown: str | None = None
 
@@ -49,6 +53,11 @@ class ProgramFolder:
             self.load(None, event.client)
 
     def load(self, spec: str | None, client: Any) -> None:
+        if spec is not None and not (self.allowed and self._may_load(client)):
+            # Checked here, whatever the page shows: a program is a Python file run on this machine.
+            notify_error(client, "Program not used", "Loading light programs is not allowed from this page: "
+                         "open the sandbox on the server's own machine, or start it with serve --allow-programs.")
+            return
         if spec is not None:
             path, sep, name = spec.rpartition(":")
             if not sep or not path.endswith(".py") or not name:

@@ -1,0 +1,233 @@
+"""The sandbox's viser server with a gate: :func:`start_server`.
+
+viser 1.1.1 answers any request: it checks neither ``Origin`` nor ``Host``,
+lets any client set any property of any control (``disabled`` is drawn by
+the page, never enforced), buffers uploads without a limit and broadcasts
+their acknowledgements into the backlog every new viewer replays. It has no
+hook for any of this, so this module reaches into its websocket server, in
+three documented places, all of them private to viser 1.1.1
+(:data:`WRITTEN_FOR`; a test pins the version, and :func:`start_server`
+refuses to start on a viser without them):
+
+1. **The opening handshake.** viser hands websockets a ``process_request``
+   (it serves the page with it). Inside viser's infra module only, the name
+   ``websockets`` is replaced by a view whose ``asyncio.server.serve`` wraps
+   that function with :meth:`Gate.process_request`, which applies
+   :mod:`sandbox.app.access` to every HTTP request and websocket upgrade, and
+   caps message sizes. While a server is being built and until its gate is
+   attached, every request is refused (the gate fails closed).
+2. **Each connection's grant.** An infra-level connect callback (it runs
+   before the connection's first message is read) takes the grant the
+   handshake decided for that raw connection.
+3. **Incoming messages.** The server's (and each connection's) dispatch of
+   incoming messages goes through :class:`sandbox.app.inbox.Inbox` first,
+   which refuses what the grant does not allow and handles uploads itself.
+
+The page is not a boundary: everything a control can trigger is checked here
+or in the callback, whatever the page shows.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import http
+import io
+import logging
+import threading
+import weakref
+from typing import Any, Callable
+
+import viser
+import viser.infra._infra as viser_infra
+import websockets
+
+from sandbox.app.access import Access, Grant
+from sandbox.app.inbox import Inbox
+
+#: The viser release whose internals this module wraps (pinned in pyproject.toml and by a test).
+WRITTEN_FOR = "1.1.1"
+#: Largest websocket message a client may send: an upload part is 512 KiB (viser's client).
+CONTROL_MESSAGE_BYTES = 1024 * 1024
+#: A watching page sends nothing but its camera.
+WATCH_MESSAGE_BYTES = 64 * 1024
+#: Frames websockets may hold unread per connection (its default is 16).
+MAX_QUEUE = 1
+#: Open connections at once, watching pages included.
+MAX_CONNECTIONS = 64
+
+log = logging.getLogger("sandbox.app.gate")
+
+
+class GateError(RuntimeError):
+    """The installed viser lacks what the gate wraps: refuse to serve without it."""
+
+
+class Gate:
+    """One server's access rules applied to its handshakes, connections and messages."""
+
+    def __init__(self, access: Access):
+        self.access = access
+        self.ready = False  # until attached, every request is refused
+        self.server: viser.ViserServer | None = None
+        self.inbox: Inbox | None = None
+        self._handshaken: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # raw connection -> Grant
+        self._grants: dict[int, Grant] = {}
+        self._lock = threading.Lock()
+
+    # ------------------------------------------------------------ handshake
+    def process_request(self, viser_answer: Callable | None) -> Callable:
+        """websockets' ``process_request``: the gate's answer, else viser's (the page's files)."""
+
+        def answer(connection: Any, request: Any) -> Any:
+            upgrade = request.headers.get("Upgrade", "").lower() == "websocket"
+            if not self.ready:
+                return connection.respond(http.HTTPStatus.SERVICE_UNAVAILABLE, "starting; try again\n")
+            if upgrade and len(self._grants) + len(self._handshaken) >= MAX_CONNECTIONS:
+                return connection.respond(http.HTTPStatus.SERVICE_UNAVAILABLE, "too many connections\n")
+            peer = _peer(connection)
+            decision = self.access.decide(request.headers, request.path, peer, websocket=upgrade)
+            if decision.refused:
+                log.warning("refused %s %s from %s: %s", "websocket" if upgrade else "request",
+                            request.path.split("?")[0], peer, decision.reason)
+                return connection.respond(decision.status, decision.reason + "\n")
+            if upgrade:
+                self._handshaken[connection] = decision.grant
+                limit = CONTROL_MESSAGE_BYTES if decision.grant.controls else WATCH_MESSAGE_BYTES
+                connection.protocol.max_message_size = limit
+                return None
+            if decision.store_token:  # keep the token in a cookie and take it out of the address bar
+                response = connection.respond(http.HTTPStatus.FOUND, "")
+                response.headers["Location"] = request.path.split("?")[0] or "/"
+                response.headers["Set-Cookie"] = self.access.set_cookie_header()
+                response.headers["Cache-Control"] = "no-store"
+                return response
+            return viser_answer(connection, request) if viser_answer else None
+
+        return answer
+
+    # ----------------------------------------------------------- connections
+    def attach(self, server: viser.ViserServer, inbox: Inbox) -> None:
+        """Hook the built server's connections and dispatch, then open the gate."""
+        self.server, self.inbox = server, inbox
+        self.access.port = server.get_port()
+        infra = server._websock_server
+        infra.on_client_connect(self._on_connect)
+        infra.on_client_disconnect(self._on_disconnect)
+        dispatch = infra._handle_incoming_message
+
+        async def guarded(client_id: int, message: Any) -> None:
+            if inbox.admit(client_id, self.grant(client_id), message):
+                await dispatch(client_id, message)
+
+        infra._handle_incoming_message = guarded
+        self.ready = True
+
+    def grant(self, client_id: int) -> Grant | None:
+        with self._lock:
+            return self._grants.get(client_id)
+
+    def may_load_programs(self, client: Any) -> bool:
+        grant = self.grant(getattr(client, "client_id", -1))
+        return grant is not None and grant.controls and grant.programs
+
+    async def _on_connect(self, connection: Any) -> None:
+        raw = self.server._websock_server._live_connections.get(connection.client_id)
+        grant = self._handshaken.pop(raw, None) if raw is not None else None
+        with self._lock:
+            if grant is not None:
+                self._grants[connection.client_id] = grant
+        if grant is None:  # not through our handshake: nothing it sends is heard
+            log.warning("connection %s has no grant; closing it", connection.client_id)
+            if raw is not None:
+                await raw.close(1008, "refused")
+            return
+        dispatch = connection._handle_incoming_message
+        inbox = self.inbox
+
+        async def guarded(client_id: int, message: Any) -> None:  # this connection's own handlers (camera)
+            if inbox.admit_local(grant, message):
+                await dispatch(client_id, message)
+
+        connection._handle_incoming_message = guarded
+
+    async def _on_disconnect(self, connection: Any) -> None:
+        with self._lock:
+            self._grants.pop(connection.client_id, None)
+        if self.inbox is not None:
+            self.inbox.forget(connection.client_id)
+
+
+# --------------------------------------------------------------- building
+_building = threading.Lock()
+_gate_being_built: Gate | None = None
+_serve = websockets.asyncio.server.serve
+
+
+def _gated_serve(*args: Any, **kwargs: Any) -> Any:
+    """websockets' ``serve`` as viser's infra module sees it: the gate goes in front of viser's answer."""
+    gate = _gate_being_built
+    if gate is None:  # a viser server not built by start_server: refuse everything rather than serve it open
+        gate = Gate(Access())
+    kwargs["process_request"] = gate.process_request(kwargs.get("process_request"))
+    kwargs["max_size"] = CONTROL_MESSAGE_BYTES
+    kwargs["max_queue"] = MAX_QUEUE
+    return _serve(*args, **kwargs)
+
+
+class _View:
+    """A module seen through ``overrides`` (every other attribute is the module's own)."""
+
+    def __init__(self, module: Any, overrides: dict[str, Any]):
+        self._module, self._overrides = module, overrides
+
+    def __getattr__(self, name: str) -> Any:
+        return self._overrides[name] if name in self._overrides else getattr(self._module, name)
+
+
+def _install() -> None:
+    """Give viser's infra module a ``websockets`` whose ``asyncio.server.serve`` is gated (once)."""
+    if isinstance(viser_infra.websockets, _View):
+        return
+    server_view = _View(websockets.asyncio.server, {"serve": _gated_serve})
+    asyncio_view = _View(websockets.asyncio, {"server": server_view})
+    viser_infra.websockets = _View(websockets, {"asyncio": asyncio_view})
+
+
+def check_viser() -> None:
+    """Refuse to serve on a viser whose internals the gate does not know."""
+    infra = viser_infra.WebsockServer
+    missing = [name for name in ("_handle_incoming_message", "on_client_connect", "on_client_disconnect")
+               if not hasattr(infra, name)]
+    if not hasattr(viser_infra, "websockets") or missing:
+        raise GateError(f"sandbox.app.gate was written for viser {WRITTEN_FOR} and cannot guard viser "
+                        f"{viser.__version__} (missing {missing or ['websockets']}); install viser=={WRITTEN_FOR}")
+
+
+def start_server(access: Access, *, host: str, port: int, label: str, verbose: bool = False,
+                 inbox: Callable[[Gate], Inbox] | None = None) -> tuple[viser.ViserServer, Gate]:
+    """A viser server behind a gate for ``access``; ``inbox(gate)`` builds the message checks."""
+    global _gate_being_built
+    check_viser()
+    _install()
+    gate = Gate(access)
+    with _building:
+        _gate_being_built = gate
+        try:
+            with contextlib.redirect_stdout(io.StringIO()) if not verbose else contextlib.nullcontext():
+                server = viser.ViserServer(host=host, port=port, label=label, verbose=verbose)
+        finally:
+            _gate_being_built = None
+    try:
+        gate.attach(server, inbox(gate) if inbox else Inbox(server, gate))
+    except BaseException:
+        server.stop()
+        raise
+    return server, gate
+
+
+def _peer(connection: Any) -> str:
+    try:
+        address = connection.remote_address
+    except Exception:  # noqa: BLE001 - a half-open socket has none
+        return ""
+    return str(address[0]) if address else ""

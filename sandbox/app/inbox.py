@@ -1,0 +1,345 @@
+"""Every message a page sends, checked before viser acts on it: :class:`Inbox`.
+
+viser applies whatever a client sends: a ``GuiUpdateMessage`` may set any
+attribute of a control's state (its value, but also ``disabled``, its
+callbacks...), to a disabled or hidden control, with a value outside its
+options or range. :meth:`Inbox.admit` lets a message through only when the
+connection's grant allows it and, for a control, when it is a new value, in
+range, for a control that is shown and enabled. Refusals are logged (a few
+per connection, then counted) and a watching page is told once that it only
+watches.
+
+Uploads are handled here, not by viser: an upload starts only if its
+announced size is within the limit, its parts are counted as they arrive and
+the transfer is dropped the moment they pass it, one transfer per page at a
+time, and the acknowledgements go to the uploading page alone (viser
+broadcasts them into the backlog every new page replays).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+from dataclasses import dataclass, field
+from typing import Any
+
+from viser import _messages as messages
+from viser._gui_handles import (
+    GuiButtonGroupHandle,
+    GuiButtonHandle,
+    GuiCheckboxHandle,
+    GuiDropdownHandle,
+    GuiNumberHandle,
+    GuiSliderHandle,
+    GuiTextHandle,
+    GuiUploadButtonHandle,
+)
+
+from sandbox.app.access import Grant
+
+log = logging.getLogger("sandbox.app.inbox")
+
+#: Largest file a page may upload: a polygon file (sandbox.shapes.formats.MAX_BYTES).
+UPLOAD_LIMIT = 1_000_000
+#: viser's client sends a file in parts of this size.
+UPLOAD_PART = 512 * 1024
+#: Longest text a text field takes.
+TEXT_LIMIT = 4096
+#: Refusals logged in full per connection; later ones are counted.
+LOGGED_PER_CLIENT = 5
+
+#: What a watching page may send: its own camera.
+WATCH_MESSAGES = (messages.ViewerCameraMessage,)
+#: Never taken from any page: a public share link would bypass the token, and forms are not used.
+NEVER = (messages.ShareUrlRequest, messages.ShareUrlDisconnect, messages.GuiFormSubmitMessage,
+         messages.GuiFormDirtyMessage)
+
+
+_UPLOADS = (messages.FileTransferStartUpload, messages.FileTransferPart)
+
+
+class Refused(Exception):
+    """Why a message is not acted on (logged, not shown to the page unless it says so)."""
+
+
+class BadValue(Refused):
+    """A value a person could have typed (out of range, not an option): the page is told, and shown
+    the value that stands."""
+
+
+@dataclass
+class _Transfer:
+    client_id: int
+    component: str
+    filename: str
+    mime_type: str
+    size: int
+    part_count: int
+    parts: dict[int, bytes] = field(default_factory=dict)
+    received: int = 0
+
+
+class Inbox:
+    """The checks of one server's incoming messages (see the module docstring)."""
+
+    def __init__(self, server: Any, gate: Any, *, upload_limit: int = UPLOAD_LIMIT):
+        self.server, self.gate = server, gate
+        self.upload_limit = int(upload_limit)
+        self._transfers: dict[str, _Transfer] = {}
+        self._refusals: dict[int, int] = {}
+        self._told_watching: set[int] = set()
+        self._lock = threading.Lock()
+
+    # ---------------------------------------------------------------- entry
+    def admit(self, client_id: int, grant: Grant | None, message: Any) -> bool:
+        """True when viser may act on ``message``; uploads are handled here (False)."""
+        try:
+            if isinstance(message, _UPLOADS):
+                self._check_sender(client_id, grant, message)
+                self._upload(client_id, message)
+                return False
+            self._check(client_id, grant, message)
+            return True
+        except BadValue as why:
+            text, handle = why.args
+            self._tell(client_id, "Value not used", text)
+            self._send(client_id, messages.GuiUpdateMessage(handle._impl.uuid, {"value": handle._impl.value}))
+            self._refused(client_id, message, text)
+            return False
+        except Refused as why:
+            self._refused(client_id, message, str(why))
+            return False
+
+    def admit_local(self, grant: Grant | None, message: Any) -> bool:
+        """The same message, on its way to the connection's own handlers (its camera): only the grant
+        matters here, since :meth:`admit` sees, counts and checks every message at the server first."""
+        if grant is None or isinstance(message, NEVER + _UPLOADS):
+            return False
+        return grant.controls or isinstance(message, WATCH_MESSAGES)
+
+    def forget(self, client_id: int) -> None:
+        """A page left: drop its upload and its counts."""
+        with self._lock:
+            for uuid in [u for u, t in self._transfers.items() if t.client_id == client_id]:
+                del self._transfers[uuid]
+            self._refusals.pop(client_id, None)
+            self._told_watching.discard(client_id)
+
+    # --------------------------------------------------------------- checks
+    def _check_sender(self, client_id: int, grant: Grant | None, message: Any) -> None:
+        if grant is None:
+            raise Refused("the connection has no grant")
+        if isinstance(message, NEVER):
+            raise Refused(f"{type(message).__name__} is never accepted")
+        if not grant.controls and not isinstance(message, WATCH_MESSAGES):
+            self._tell_watching(client_id)
+            raise Refused("a watching page may not control the sandbox")
+
+    def _check(self, client_id: int, grant: Grant | None, message: Any) -> None:
+        self._check_sender(client_id, grant, message)
+        if isinstance(message, messages.GuiUpdateMessage):
+            self._check_update(message)
+        elif isinstance(message, messages.GuiButtonHoldMessage):
+            self._control(message.uuid, GuiButtonHandle)
+
+    def _control(self, uuid: str, kind: type | tuple) -> Any:
+        """The shown, enabled control ``uuid`` of the given kind, or Refused."""
+        handle = self.server.gui._gui_input_handle_from_uuid.get(uuid)
+        if handle is None or handle._impl.removed:
+            raise Refused(f"no control {uuid!r}")
+        if not isinstance(handle, kind):
+            raise Refused(f"{_label(handle)} is a {type(handle).__name__}")
+        props = handle._impl.props
+        if getattr(props, "disabled", False):
+            raise Refused(f"{_label(handle)} is disabled")
+        if not getattr(props, "visible", True):
+            raise Refused(f"{_label(handle)} is hidden")
+        return handle
+
+    def _check_update(self, message: Any) -> None:
+        updates = message.updates
+        if not isinstance(updates, dict) or set(updates) != {"value"}:
+            raise Refused(f"a page may change a control's value only, not {sorted(map(str, updates))}")
+        handle = self._control(message.uuid, _VALUE_CHECKS)
+        for kind, check in _VALUE_CHECKS_BY_KIND:
+            if isinstance(handle, kind):
+                problem = check(handle, updates["value"])
+                if problem:
+                    raise BadValue(f"{handle._impl.props.label or 'value'}: {problem}", handle)
+                return
+
+    # -------------------------------------------------------------- uploads
+    def _upload(self, client_id: int, message: Any) -> None:
+        if isinstance(message, messages.FileTransferStartUpload):
+            self._start_upload(client_id, message)
+        else:
+            self._upload_part(client_id, message)
+
+    def _start_upload(self, client_id: int, message: Any) -> None:
+        self.forget_upload_of(client_id)  # one transfer per page: a new one replaces it
+        size, parts = _whole(message.size_bytes), _whole(message.part_count)
+        try:
+            self._control(message.source_component_uuid, GuiUploadButtonHandle)
+            if size is None or parts is None or size < 0 or parts != math.ceil(size / UPLOAD_PART):
+                raise Refused(f"an upload of {message.size_bytes!r} bytes cannot come in {message.part_count!r} parts")
+            if size > self.upload_limit:
+                raise Refused(f"{_megabytes(size)} is larger than the {_megabytes(self.upload_limit)} limit")
+        except Refused as why:
+            self._end_upload_in_page(client_id, message, size=max(0, size or 0))
+            self._tell(client_id, "File not uploaded", f"{_safe_name(message.filename)}: {why}.")
+            raise
+        transfer = _Transfer(client_id, message.source_component_uuid, str(message.filename)[:255],
+                             str(message.mime_type)[:255], size, parts)
+        with self._lock:
+            self._transfers[message.transfer_uuid] = transfer
+        if parts == 0:
+            self._finish(message.transfer_uuid, transfer)
+
+    def _upload_part(self, client_id: int, message: Any) -> None:
+        content = bytes(message.content)
+        with self._lock:
+            transfer = self._transfers.get(message.transfer_uuid)
+            if transfer is None or transfer.client_id != client_id:
+                raise Refused("a part of no upload in progress")
+            index = _whole(message.part_index)
+            if index is None or index in transfer.parts or not 0 <= index < transfer.part_count:
+                raise Refused(f"part {message.part_index!r} of {transfer.part_count} again or out of range")
+            over = transfer.received + len(content) > transfer.size
+            if over:  # drop the whole transfer: what it holds is freed now
+                del self._transfers[message.transfer_uuid]
+            else:
+                transfer.parts[index] = content
+                transfer.received += len(content)
+            complete = not over and len(transfer.parts) == transfer.part_count
+            if complete:
+                del self._transfers[message.transfer_uuid]
+        if over:
+            self._tell(client_id, "File not uploaded", f"{_safe_name(transfer.filename)}: more bytes arrived "
+                                                      f"than the {transfer.size} announced.")
+            raise Refused("an upload sent more than it announced")
+        self._send(client_id, messages.FileTransferPartAck(
+            source_component_uuid=transfer.component, transfer_uuid=message.transfer_uuid,
+            transferred_bytes=transfer.received, total_bytes=transfer.size))
+        if complete:
+            self._finish(message.transfer_uuid, transfer)
+
+    def forget_upload_of(self, client_id: int) -> None:
+        with self._lock:
+            for uuid in [u for u, t in self._transfers.items() if t.client_id == client_id]:
+                del self._transfers[uuid]
+
+    def _finish(self, transfer_uuid: str, transfer: _Transfer) -> None:
+        """Hand the whole file to the upload button's callbacks, as viser would."""
+        gui = self.server.gui
+        gui._current_file_upload_states[transfer_uuid] = {
+            "client_id": transfer.client_id, "filename": transfer.filename, "mime_type": transfer.mime_type,
+            "part_count": transfer.part_count, "parts": transfer.parts, "total_bytes": transfer.size,
+            "transferred_bytes": transfer.received, "lock": threading.Lock()}
+        gui._finish_file_upload(transfer.client_id, transfer_uuid, transfer.component)
+
+    def _end_upload_in_page(self, client_id: int, message: Any, size: int) -> None:
+        """Close the page's own 'Uploading...' notice and free its button (viser's client waits for
+        an acknowledgement of every byte)."""
+        self._send(client_id, messages.FileTransferPartAck(
+            source_component_uuid=message.source_component_uuid, transfer_uuid=message.transfer_uuid,
+            transferred_bytes=size, total_bytes=size))
+        self._send(client_id, messages.RemoveNotificationMessage(uuid=f"upload-{message.transfer_uuid}"))
+
+    # ----------------------------------------------------------- telling
+    def _client(self, client_id: int) -> Any:
+        return self.server.get_clients().get(client_id)
+
+    def _send(self, client_id: int, message: Any) -> None:
+        client = self._client(client_id)
+        if client is not None:
+            client._websock_connection.queue_message(message)  # this page only, never the backlog
+
+    def _tell(self, client_id: int, title: str, body: str) -> None:
+        client = self._client(client_id)
+        if client is not None:
+            client.add_notification(title, body, color="red", auto_close_seconds=10.0)
+
+    def _tell_watching(self, client_id: int) -> None:
+        with self._lock:
+            if client_id in self._told_watching:
+                return
+            self._told_watching.add(client_id)
+        client = self._client(client_id)
+        if client is not None:
+            client.add_notification("Watching only", "This page watches the sandbox. To control it, open the "
+                                    "link with its token (the one printed when the server started).",
+                                    color="yellow", auto_close_seconds=12.0)
+
+    def _refused(self, client_id: int, message: Any, why: str) -> None:
+        with self._lock:
+            count = self._refusals[client_id] = self._refusals.get(client_id, 0) + 1
+        if count <= LOGGED_PER_CLIENT:
+            log.warning("refused %s from connection %s: %s", type(message).__name__, client_id, why)
+        elif count % 1000 == 0:
+            log.warning("refused %d messages from connection %s so far", count, client_id)
+
+
+# ------------------------------------------------------------------ values
+def _label(handle: Any) -> str:
+    return f"control {getattr(handle._impl.props, 'label', None) or handle._impl.uuid!r}"
+
+
+def _number(value: Any) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        return None
+    return float(value)
+
+
+def _check_button(handle: Any, value: Any) -> str | None:
+    return None if value is True else f"a click is True, not {value!r}"
+
+
+def _check_checkbox(handle: Any, value: Any) -> str | None:
+    return None if isinstance(value, bool) else f"{value!r} is not True or False"
+
+
+def _check_choice(handle: Any, value: Any) -> str | None:
+    options = handle._impl.props.options
+    return None if isinstance(value, str) and value in options else f"{str(value)[:40]!r} is not one of its options"
+
+
+def _check_range(handle: Any, value: Any) -> str | None:
+    number = _number(value)
+    if number is None:
+        return f"{str(value)[:40]!r} is not a finite number"
+    low, high = getattr(handle._impl.props, "min", None), getattr(handle._impl.props, "max", None)
+    if (low is not None and number < low) or (high is not None and number > high):
+        shown = "" if low is None else _plain(low), "" if high is None else _plain(high)
+        return f"{_plain(number)} is outside the allowed range [{shown[0]}, {shown[1]}]"
+    return None
+
+
+def _plain(number: float) -> str:
+    return str(int(number)) if float(number).is_integer() and abs(number) < 1e15 else f"{number:g}"
+
+
+def _check_text(handle: Any, value: Any) -> str | None:
+    if not isinstance(value, str):
+        return f"{type(value).__name__} is not text"
+    return None if len(value) <= TEXT_LIMIT else f"{len(value)} characters is more than {TEXT_LIMIT}"
+
+
+_VALUE_CHECKS_BY_KIND = ((GuiButtonHandle, _check_button), (GuiCheckboxHandle, _check_checkbox),
+                         (GuiDropdownHandle, _check_choice), (GuiButtonGroupHandle, _check_choice),
+                         (GuiSliderHandle, _check_range), (GuiNumberHandle, _check_range),
+                         (GuiTextHandle, _check_text))
+#: The controls a page may set; any other kind is refused.
+_VALUE_CHECKS = tuple(kind for kind, _ in _VALUE_CHECKS_BY_KIND)
+
+
+def _whole(value: Any) -> int | None:
+    return value if isinstance(value, int) and not isinstance(value, bool) else None
+
+
+def _megabytes(n: int) -> str:
+    return f"{n / 1_000_000:.1f} MB" if n >= 100_000 else f"{n} bytes"
+
+
+def _safe_name(name: Any) -> str:
+    return str(name).replace("\n", " ")[:80] or "the file"
