@@ -12,6 +12,10 @@ is truncated after ``config.steps`` world steps and never terminates
 earlier. It follows Gymnasium's ``reset`` / ``step`` signatures without
 depending on it: observations are dicts of numpy arrays (``step``,
 ``box_positions``, ``robot_positions``, ``robot_charges``, ``intensities``).
+
+For RL libraries, :mod:`sandbox.rl` wraps it as a real Gymnasium environment
+(spaces, seeding, ``gymnasium.make("phototaxis/LightField-v0")``, a
+low-dimensional action); see docs/gymnasium.md.
 """
 
 from __future__ import annotations

@@ -1,0 +1,146 @@
+"""The low-dimensional action: the paper's controller's own knobs, turned into a light pattern.
+
+The paper's controller (:mod:`sandbox.model.controller`) lights every light
+within ``band`` of an outline: the goal (or a circle) scaled about the
+assembly centre, reshaped by its strategies. It changes the scale on a fixed
+schedule. Here an agent turns the same knobs itself at every update:
+
+==============  =====================================================================
+``size``        0 = the smallest outline (one robot diameter around the goal), 1 = the
+                largest; linear in scale, as the controller's ``progress``
+``flare``       0..1 = flare amount 0 .. :data:`FLARE_HIGH` (twice the amount the
+                strategy takes when switched on)
+``circle``      at least 0.5: light a circle of the goal's area times the scale instead
+                of the polygon (the paper text's reading of *switch to circle*)
+``no_corners``  0..1 = fraction 0 .. 0.95 of the band's lights nearest convex corners
+                that stay dark
+==============  =====================================================================
+
+Every knob is in [0, 1], the range RL libraries expect. On a circle goal only
+``size`` changes anything: there are no corners to flare or darken.
+
+This module builds on the public functions the controller is built from
+(:mod:`~sandbox.model.outlines`, :mod:`~sandbox.model.geometry`) and never
+drives a controller, so it needs no hook in it. A test pins its pattern to the
+controller's own at the controller's first size.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sandbox.model import geometry, outlines
+from sandbox.model.config import STRATEGIES, STRATEGY_DEFAULTS, Config
+from sandbox.model.controller import no_corners_count
+from sandbox.model.goal import Goal
+from sandbox.model.lights import light_centres
+
+KNOBS = ("size", "flare", "circle", "no_corners")
+#: The flare amount at flare knob 1: twice the strategy's amount when switched on (1.75).
+FLARE_HIGH = 2.0 * STRATEGY_DEFAULTS["flare"]
+#: The largest no-corners fraction (at 1 the whole band would be dark).
+NO_CORNERS_HIGH = next(s.high for s in STRATEGIES if s.name == "no_corners")
+#: Flare amounts are rounded to the panel slider's step, so the outlines of
+#: the amounts an agent tries can be kept (a few dozen at most).
+FLARE_STEP = next(s.step for s in STRATEGIES if s.name == "flare")
+
+
+@dataclass(frozen=True)
+class Knobs:
+    """One setting of the outline, in the strategies' own units."""
+
+    size: float = 1.0
+    flare: float = 0.0
+    circle: bool = False
+    no_corners: float = 0.0
+
+    @classmethod
+    def from_action(cls, action: np.ndarray) -> "Knobs":
+        """The knobs for an action of four values in [0, 1] (clipped there), in :data:`KNOBS` order."""
+        size, flare, circle, no_corners = np.clip(np.asarray(action, dtype=float).reshape(len(KNOBS)), 0.0, 1.0)
+        return cls(float(size), float(flare) * FLARE_HIGH, bool(circle >= 0.5), float(no_corners) * NO_CORNERS_HIGH)
+
+
+@dataclass(frozen=True)
+class Sizes:
+    """An outline at scale 1 (None: the goal's equal-area circle) and its smallest and largest scales."""
+
+    shape: outlines.OutlineShape | None
+    smallest: float
+    largest: float
+
+    def scale(self, size: float) -> float:
+        return self.smallest + size * (self.largest - self.smallest)
+
+
+def outline_sizes(config: Config, goal: Goal, flare: float) -> Sizes:
+    """The outline and its size limits for a flare amount, as the controller's ``_set_limits`` computes them."""
+    if goal.is_circle:
+        smallest = (goal.radius + 2.0 * config.robot_radius) / goal.radius
+        return Sizes(None, smallest, max(outlines.max_circle_scale(config, goal.radius), smallest))
+    shape = outlines.outline_shape(goal.vertices - goal.centre, goal.area, goal.file_area, flare, config.flare_mode)
+    smallest = outlines.min_polygon_scale(config, shape, goal.radius)
+    return Sizes(shape, smallest, max(outlines.max_polygon_scale(config, shape, goal.area), smallest))
+
+
+def circle_band(centres: np.ndarray, centre: np.ndarray, radius: float, band: float) -> np.ndarray:
+    """Which lights lie within ``band`` of the circle (a boolean per light)."""
+    return np.abs(np.hypot(*(centres - centre).T) - radius) <= band + 1e-9
+
+
+def polygon_band(centres: np.ndarray, outline: np.ndarray, band: float) -> np.ndarray:
+    """Which lights lie within ``band`` of the closed outline."""
+    return geometry.distance_to_outline(centres, outline) <= band + 1e-9
+
+
+def darken_corners(on: np.ndarray, centres: np.ndarray, corners: np.ndarray, fraction: float,
+                   config: Config) -> np.ndarray:
+    """The no-corners strategy: switch off the band's lights nearest the convex corners.
+
+    The same rule as the controller's (how many by ``config.no_corners_count``,
+    ties by light index as the authors' program breaks them), so the agent's
+    band is the one the paper's controller would light."""
+    lit = np.flatnonzero(on)
+    off = no_corners_count(fraction, len(lit), config.no_corners_count)
+    if off == 0 or not len(corners):
+        return on
+    if config.no_corners_count == "at-least":
+        n = config.lights_per_side
+        lit = lit[np.argsort((lit % n) * n + lit // n, kind="stable")]
+    d = np.hypot(*(centres[lit, None, :] - corners[None, :, :]).transpose(2, 0, 1)).min(axis=1)
+    on = on.copy()
+    on[lit[np.argsort(np.round(d, 9), kind="stable")[:off]]] = False
+    return on
+
+
+class OutlinePainter:
+    """Turns :class:`Knobs` into the light pattern for one configuration and goal."""
+
+    def __init__(self, config: Config, goal: Goal):
+        self.config, self.goal = config, goal
+        self.centres = light_centres(config).reshape(-1, 2)
+        self._sizes: dict[float, Sizes] = {}
+
+    def sizes(self, flare: float) -> Sizes:
+        """The outline's sizes for a flare amount (rounded to :data:`FLARE_STEP`), computed once."""
+        key = round(round(flare / FLARE_STEP) * FLARE_STEP, 6)
+        if key not in self._sizes:
+            self._sizes[key] = outline_sizes(self.config, self.goal, key)
+        return self._sizes[key]
+
+    def pattern(self, knobs: Knobs) -> np.ndarray:
+        """The intensities, (n, n) indexed [ix, iy]: ``light_intensity`` on the band, 0 elsewhere."""
+        cfg, goal = self.config, self.goal
+        sizes = self.sizes(knobs.flare)
+        scale = sizes.scale(knobs.size)
+        if sizes.shape is None or knobs.circle:
+            on = circle_band(self.centres, goal.centre, goal.radius * scale, cfg.band)
+        else:
+            outline = goal.centre + scale * sizes.shape.vertices
+            on = polygon_band(self.centres, outline, cfg.band)
+            if knobs.no_corners > 0:
+                on = darken_corners(on, self.centres, outline[sizes.shape.corners], knobs.no_corners, cfg)
+        n = cfg.lights_per_side
+        return (on * cfg.light_intensity).reshape(n, n)
