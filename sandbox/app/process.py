@@ -33,7 +33,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from sandbox.app.runner import Command, Runner, publish, wait_for
+from sandbox.app.contract import FramePublisher
+from sandbox.app.runner import Command, Runner, wait_for
 from sandbox.app.snapshot import Snapshot
 from sandbox.model import watchdog
 from sandbox.model.config import Config
@@ -56,8 +57,8 @@ class SimulationCrashed(RuntimeError):
     """The simulation process ended without being asked to."""
 
 
-class ProcessRunner:
-    """A :class:`Runner` in a child process (see the module docstring)."""
+class ProcessRunner(FramePublisher):
+    """A :class:`Runner` in a child process (see the module docstring); a :class:`SimulationRunner`."""
 
     def __init__(self, config: Config, *, shape: Any = "from-config", seed: int | None = None,
                  fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, chart_every: int = 100,
@@ -67,9 +68,9 @@ class ProcessRunner:
         self.playing = bool(playing)
         self.chart_every = int(chart_every)
         self.program_time_limit = float(program_time_limit)
+        FramePublisher.__init__(self)
         self.selected: int | None = None
         self._want_field = False
-        self.errors: list[BaseException] = []
         self.restarts = 0
         #: Why the simulation cannot run any more (too many crashes in a row), or None.
         self.failed: str | None = None
@@ -78,20 +79,18 @@ class ProcessRunner:
         self.restart_pause, self.crashes_before_giving_up = RESTART_PAUSE, CRASHES_BEFORE_GIVING_UP
         self._crash_times: deque = deque(maxlen=64)
         self._last_words: str | None = None  # what a dying child said last (a program that would not stop)
-        self._listeners: list[Callable[[Snapshot], None]] = []
         self._crash_listeners: list[Callable[[str], None]] = []
         self._progress_listeners: list[Callable[[float | None], None]] = []
         self._callbacks: dict[int, tuple[Callable | None, Callable | None]] = {}
         self._callbacks_lock = threading.Lock()  # written by viser's threads, read by the receiver
         self._ids = itertools.count()
         self._series: list[Sample] = []
+        self._series_world: int | None = None  # the world key of the samples in _series
         self._series_lock = threading.Lock()
         self._latest: Snapshot | None = None
         self._latest_ready = threading.Condition()
         self._stop = threading.Event()
         self._started = False
-        self.frames_published = 0
-        self.publish_times: deque = deque(maxlen=120)
         self._context = multiprocessing.get_context("spawn")  # fresh interpreter, same on every OS
         #: The goal as last given (a name, or vertices as drawn): a restarted child gets it back unchanged,
         #: since the program's largest outline depends on the size a shape was drawn at.
@@ -113,7 +112,7 @@ class ProcessRunner:
         send.close()  # the child holds the sending end
         self._receive = receive
         with self._series_lock:
-            self._series = []
+            self._series, self._series_world = [], None
         message = self._read(timeout=START_TIMEOUT)
         while message is not None and message[0] != "frame":  # its last words, say
             self._take_guarded(message)
@@ -150,10 +149,10 @@ class ProcessRunner:
     def _take(self, message: tuple) -> None:
         kind = message[0]
         if kind == "frame":
-            _, snap, samples, series_length = message
+            _, snap, samples, world = message
             with self._series_lock:
-                if series_length < len(self._series) + len(samples):  # the child started a new series (reset)
-                    self._series = self._series[: max(0, series_length - len(samples))]
+                if world != self._series_world:  # a new world: its samples start a new series
+                    self._series, self._series_world = [], world
                 self._series.extend(samples)
             with self._latest_ready:
                 self._latest = snap
@@ -184,20 +183,9 @@ class ProcessRunner:
             self.errors.append(exc)
             log.exception("a message from the simulation process could not be handled")
 
-    def _deliver(self, callback: Callable[[Any], None], value: Any) -> None:
-        """Call one listener or callback; one that raises is logged, and the others still hear."""
-        try:
-            callback(value)
-        except Exception as exc:  # noqa: BLE001 - see _take_guarded
-            self.errors.append(exc)
-            log.exception("a listener of the simulation failed")
-
     def _pop_callbacks(self, ident: int) -> tuple[Callable | None, Callable | None]:
         with self._callbacks_lock:
             return self._callbacks.pop(ident, (None, None))
-
-    def _publish(self, snap: Snapshot) -> None:
-        publish(self, snap)
 
     def _receive_loop(self) -> None:
         while not self._stop.is_set():
@@ -301,9 +289,6 @@ class ProcessRunner:
     def call(self, command: Command, timeout: float = 10.0) -> Any:
         return wait_for(self.post, command, timeout)
 
-    def subscribe(self, listener: Callable[[Snapshot], None]) -> None:
-        self._listeners.append(listener)
-
     def set_playing(self, playing: bool) -> None:
         self.playing = bool(playing)
         self._control("playing", self.playing)
@@ -387,18 +372,13 @@ class ProcessRunner:
     def steps_per_second(self) -> float:
         return self.latest.steps_per_second
 
-    def frames_per_second(self) -> float:
-        if len(self.publish_times) < 2:
-            return 0.0
-        span = self.publish_times[-1] - self.publish_times[0]
-        return (len(self.publish_times) - 1) / span if span > 0 else 0.0
 
 
 # ------------------------------------------------------------------ child
 def _child_main(settings: dict, commands: Any, send: Any) -> None:
     """The simulation process: an ordinary Runner, driven by the queue."""
     runner = Runner(**settings)
-    sent = {"series": 0}
+    sent = {"world": None, "count": 0}
     lock = threading.Lock()
 
     def send_message(message: tuple) -> None:
@@ -406,13 +386,13 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
             try:
                 send.send(message)
             except (BrokenPipeError, EOFError, OSError):
-                runner._stop.set()  # the parent is gone
+                runner.stop(timeout=0)  # the parent is gone
 
-    def on_frame(snap: Snapshot) -> None:
-        series = runner.series()
-        start = sent["series"] if sent["series"] <= len(series) else 0
-        sent["series"] = len(series)
-        send_message(("frame", snap, series[start:], len(series)))
+    def on_frame(snap: Snapshot) -> None:  # with the samples the parent has not had, of this world
+        world, series = runner.series_of_world()
+        start = sent["count"] if sent["world"] == world else 0
+        sent.update(world=world, count=len(series))
+        send_message(("frame", snap, series[start:], world))
 
     def reply(ident: int):
         return (lambda result: send_message(("done", ident, _picklable(result))),
@@ -431,7 +411,7 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
         try:
             message = commands.get(timeout=1.0)
         except queue.Empty:
-            if os.getppid() != parent or runner._stop.is_set():  # orphaned, or the parent stopped listening
+            if os.getppid() != parent or runner.stopped:  # orphaned, or the parent stopped listening
                 break
             continue
         kind = message[0]
@@ -462,7 +442,7 @@ def _apply_control(runner: Runner, name: str, *args: Any) -> None:
         runner.select(args[0])
     elif name == "want_field":
         runner.want_field = args[0]
-        runner._wake.set()
+        runner.wake()
     elif name == "step":
         runner.step_once(args[0])
     elif name == "cancel":

@@ -20,6 +20,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from sandbox.app.contract import FramePublisher
 from sandbox.app.snapshot import RobotView, Snapshot
 from sandbox.model import watchdog
 from sandbox.model.config import Config
@@ -39,17 +40,6 @@ log = logging.getLogger("sandbox.app.runner")
 
 
 
-def publish(runner: Any, snap: Snapshot) -> None:
-    """Hand a frame to a runner's listeners (a broken one must not stop the others) and count it."""
-    for listener in list(runner._listeners):
-        try:
-            listener(snap)
-        except Exception as exc:
-            runner.errors.append(exc)
-    runner.frames_published += 1
-    runner.publish_times.append(time.perf_counter())
-
-
 def wait_for(post: Callable, command: Command, timeout: float) -> Any:
     """``post`` the command, wait for its result and return it (or raise its exception)."""
     done = threading.Event()
@@ -67,8 +57,8 @@ class BuildCancelled(Exception):
     """Building a new world was stopped by the user."""
 
 
-class Runner:
-    """Owns the simulation and runs it in its own thread.
+class Runner(FramePublisher):
+    """Owns the simulation and runs it in its own thread (a :class:`SimulationRunner`).
 
     ``fps`` is the frame rate the loop paces itself to; ``steps_per_frame`` the
     speed. Listeners receive snapshots on the publisher thread.
@@ -94,8 +84,8 @@ class Runner:
         #: Changes that need a new world, kept until the next reset (the simulation holds only the
         #: configuration its world was built with).
         self.pending: dict[str, Any] = {}
+        FramePublisher.__init__(self)
         self._commands: queue.SimpleQueue = queue.SimpleQueue()
-        self._listeners: list[Callable[[Snapshot], None]] = []
         self._stop = threading.Event()
         self._wake = threading.Event()
         self._new_frame = threading.Condition()
@@ -107,10 +97,7 @@ class Runner:
         self._step_times: deque = deque(maxlen=120)  # (wall time, steps_done)
         self._series_lock = threading.Lock()
         self._series: list[Sample] = []
-        self.frames_published = 0
-        self.publish_times: deque = deque(maxlen=120)
         self._threads: list[threading.Thread] = []
-        self.errors: list[BaseException] = []
         self._cancel = threading.Event()
         self._progress_listeners: list[Callable[[float | None], None]] = []
         self._record_series(force=True)
@@ -157,9 +144,6 @@ class Runner:
         self._record_series()
         self._snapshot()
         return self.latest
-
-    def subscribe(self, listener: Callable[[Snapshot], None]) -> None:
-        self._listeners.append(listener)
 
     def set_playing(self, playing: bool) -> None:
         self.playing = bool(playing)
@@ -209,10 +193,10 @@ class Runner:
             finally:
                 self._report_progress(None)
             self.pending = {}
-            self._world_key += 1
             self._goal_key += 1
             self._step_times.clear()  # speeds are measured within one world
-            with self._series_lock:
+            with self._series_lock:  # a new world and its new series, together (see series_of_world)
+                self._world_key += 1
                 self._series = []
             self._record_series(force=True)
 
@@ -259,17 +243,24 @@ class Runner:
         with self._series_lock:
             return list(self._series)
 
+    def series_of_world(self) -> tuple[int, list[Sample]]:
+        """The running world's key and its samples, read together: a reset changes both at once."""
+        with self._series_lock:
+            return self._world_key, list(self._series)
+
+    @property
+    def stopped(self) -> bool:
+        return self._stop.is_set()
+
+    def wake(self) -> None:
+        """Run the loop now (a paused runner otherwise waits a frame's time)."""
+        self._wake.set()
+
     def steps_per_second(self) -> float:
         if len(self._step_times) < 2:
             return 0.0
         (t0, s0), (t1, s1) = self._step_times[0], self._step_times[-1]
         return (s1 - s0) / (t1 - t0) if t1 > t0 else 0.0
-
-    def frames_per_second(self) -> float:
-        if len(self.publish_times) < 2:
-            return 0.0
-        span = self.publish_times[-1] - self.publish_times[0]
-        return (len(self.publish_times) - 1) / span if span > 0 else 0.0
 
     # -------------------------------------------------------------- loops
     def _run_commands(self) -> None:
@@ -288,14 +279,6 @@ class Runner:
                 continue
             if on_done:
                 self._deliver(on_done, result)
-
-    def _deliver(self, callback: Callable[[Any], None], value: Any) -> None:
-        """Call a poster's callback; one that raises is logged, never the simulation's problem."""
-        try:
-            callback(value)
-        except Exception as exc:  # noqa: BLE001 - the loop must go on
-            self.errors.append(exc)
-            log.exception("a callback of the simulation's commands failed")
 
     # ------------------------------------------------------- light programs
     def set_program(self, spec: str | None, *, on_done: Callable[[Any], None] | None = None,
@@ -378,7 +361,7 @@ class Runner:
                     self._new_frame.wait(0.5)
                 snap = self._latest
             self._published = snap.frame
-            publish(self, snap)
+            self._publish(snap)
 
     # ---------------------------------------------------------- snapshots
     def _record_series(self, force: bool = False) -> None:
@@ -454,6 +437,7 @@ class Runner:
             robot=robot,
             program=self.program_name,
             program_error=self.program_error,
+            world_key=self._world_key,
         )
         with self._new_frame:
             self._latest = snap

@@ -63,6 +63,8 @@ class Snapshot:
     program: str = "the paper's controller"
     #: (count, message) of the last light program that failed while running (the paper's took over).
     program_error: tuple[int, str] | None = None
+    #: Changes with every new world (a reset): charts never join two worlds' samples.
+    world_key: int = 0
 
 
 def case_name(shape: str, strategies: dict) -> str:

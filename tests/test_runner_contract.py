@@ -1,0 +1,48 @@
+"""Both runners follow one contract (sandbox.app.contract), and a chart never joins two worlds."""
+
+from __future__ import annotations
+
+import inspect
+
+import pytest
+
+from sandbox.app.contract import FramePublisher, SimulationRunner
+from sandbox.app.process import ProcessRunner
+from sandbox.app.runner import Runner
+from sandbox.model.config import Config
+
+SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
+MEMBERS = [name for name, value in vars(SimulationRunner).items()
+           if not name.startswith("_") and (callable(value) or isinstance(value, property))]
+
+
+@pytest.mark.parametrize("kind", [Runner, ProcessRunner])
+@pytest.mark.parametrize("name", MEMBERS)
+def test_each_runner_has_the_contracts_methods_with_its_signatures(kind, name):
+    promised, offered = getattr(SimulationRunner, name), getattr(kind, name, None)
+    assert offered is not None, f"{kind.__name__} lacks {name}"
+    if isinstance(promised, property):
+        assert isinstance(offered, property)
+        return
+    want = [(p.name, p.kind, p.default) for p in inspect.signature(promised).parameters.values()]
+    got = [(p.name, p.kind, p.default) for p in inspect.signature(offered).parameters.values()]
+    assert got == want, f"{kind.__name__}.{name}{inspect.signature(offered)} differs from the contract"
+
+
+def test_both_runners_publish_through_the_same_publisher():
+    assert issubclass(Runner, FramePublisher) and issubclass(ProcessRunner, FramePublisher)
+    runner = Runner(SMALL, shape=None)
+    assert isinstance(runner, SimulationRunner)
+
+
+def test_after_a_reset_the_series_holds_the_new_world_only():
+    runner = Runner(SMALL, shape=None, chart_every=10)
+    runner.advance(200)
+    world, series = runner.series_of_world()
+    assert series[-1].step == 200
+    runner.reset()
+    for _ in range(3):
+        runner.advance(10)
+    new_world, series = runner.series_of_world()
+    assert new_world == world + 1 and runner.latest.world_key == new_world
+    assert [s.step for s in series] == [0, 10, 20, 30]
