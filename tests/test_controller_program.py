@@ -214,7 +214,7 @@ def test_first_cycle_length_of_the_circle():
 
 
 def test_a_strategy_that_would_change_nothing_says_so():
-    from sandbox.model.controller import strategy_effect_note
+    from sandbox.model.notes import strategy_effect_note
 
     square, star = shape_vertices("square"), shape_vertices("star")
     # 90 x 1.0 = 90 is not above the square's 90-degree corners; 90 x 1.1 = 99 is.

@@ -43,34 +43,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model import geometry, outlines, sculpt
+from sandbox.model import geometry, sculpt
 from sandbox.model.config import STRATEGY_NAMES, Config
 from sandbox.model.finish import EndPlanning
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal, make_goal
 from sandbox.model.lights import light_centres
+from sandbox.model.notes import goal_fit_notes
+from sandbox.model.outlines import ScaledSizing
 from sandbox.model.phases import CONTRACTING, DILATING, HOLDING
-from sandbox.shapes.errors import ShapeError
 
 _SENSES_BOXES, _SENSES_NOTHING = frozenset({"boxes"}), frozenset()
 #: After holding, the authors' program grows a circle back by this much (its ``delta``, m).
 PROGRAM_CIRCLE_REGROWTH = 0.6
-
-
-def goal_fit_notes(controller: "Controller") -> list[str]:
-    """Refuse a goal whose smallest outline does not fit the arena (ShapeError);
-    return a note when only its largest does not."""
-    small = controller.outline_at(controller.min_scale)
-    box = outlines.overreach(controller.config, small)
-    if box is not None:
-        raise ShapeError(f"the goal does not fit the arena: its smallest outline spans {outlines.describe_box(box)} "
-                         f"in a {controller.config.arena_size:g} m arena (use a rounder shape, fewer boxes or a "
-                         "bigger arena)")
-    big = controller.outline_at(controller.max_scale)
-    box = outlines.overreach(controller.config, big)
-    if box is None:
-        return []
-    return [f"the goal's largest outline spans {outlines.describe_box(box)}, past the "
-            f"{controller.config.arena_size:g} m arena's walls: the lights there do not exist"]
 
 
 class Controller(EndPlanning):
@@ -110,7 +94,7 @@ class Controller(EndPlanning):
         self._force_turn = False
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
         #: outline does not fit is refused here with a ShapeError.
-        self.notes = goal_fit_notes(self)
+        self.notes = goal_fit_notes(config, self.sizing)
         if self._program:
             self._program_update()
         else:
@@ -122,44 +106,39 @@ class Controller(EndPlanning):
 
     # -- sizes ------------------------------------------------------------
     def _set_limits(self) -> None:
-        """The outline at scale 1 for the current strategies, and its smallest and largest scales."""
-        cfg, goal = self.config, self.goal
-        if goal.is_circle:
-            self.shape = None
-            self.min_scale = (goal.radius + 2.0 * cfg.robot_radius) / goal.radius
-            largest = outlines.max_circle_scale(cfg, goal.radius)
-        else:
-            self.shape = outlines.outline_shape(goal.vertices - goal.centre, goal.area, goal.file_area,
-                                                self.strategies["flare"], cfg.flare_mode)
-            self.min_scale = outlines.min_polygon_scale(cfg, self.shape, goal.radius)
-            largest = outlines.max_polygon_scale(cfg, self.shape, goal.area)
-        self.max_scale = max(largest, self.min_scale)
+        """The outline family for the current strategies."""
+        self.sizing = ScaledSizing.of(self.config, self.goal, self.strategies["flare"])
 
-    def outline_at(self, scale: float) -> np.ndarray:
-        """The polygon outline (or the circle, as a polygon) at ``scale``."""
-        goal = self.goal
-        if self.shape is None:
-            return geometry.regular_polygon(goal.radius * scale, CIRCLE_DRAW_VERTICES, goal.centre)
-        return goal.centre + scale * self.shape.vertices
+    @property
+    def shape(self):
+        return self.sizing.shape
+
+    @property
+    def min_scale(self) -> float:
+        return self.sizing.smallest
+
+    @property
+    def max_scale(self) -> float:
+        return self.sizing.largest
 
     @property
     def min_radius(self) -> float:
         """The smallest outline's inradius (its radius for a circle)."""
-        return self.min_scale * (self.goal.radius if self.shape is None else self.shape.inradius)
+        return self.sizing.radius(self.sizing.smallest)
 
     @property
     def inradius(self) -> float:
         """The lit outline's inradius (its radius for a circle)."""
         if self.circle_radius is not None:
             return self.circle_radius
-        return self.scale * (self.goal.radius if self.shape is None else self.shape.inradius)
+        return self.sizing.radius(self.scale)
 
     @property
     def max_radius(self) -> float:
         """The largest inradius (radius for a circle) the lit outline may have now."""
         if self.circle_radius is not None:
             return self.circle_max_radius
-        return self.max_scale * (self.goal.radius if self.shape is None else self.shape.inradius)
+        return self.sizing.radius(self.sizing.largest)
 
     @property
     def circle_max_radius(self) -> float:
@@ -347,7 +326,7 @@ class Controller(EndPlanning):
         elif self.circle_radius is not None or self.shape is None:
             need = float(np.hypot(*(stray - self.goal.centre).T).max()) + margin
         else:  # the outline is the goal grown by (inradius - its inradius at scale 1): see _redraw_closed_loop
-            need = self.shape.inradius + float(self.goal.distance(stray).max()) + margin
+            need = self.sizing.radius_beyond(float(self.goal.distance(stray).max())) + margin
         return min(largest, max(need, self.min_radius + margin))
 
     def _turn_to_contracting(self) -> None:
@@ -397,7 +376,7 @@ class Controller(EndPlanning):
     def _grow_back(self) -> None:
         """After the hold: back to at least the smallest size (a circle goal by the program's 0.6 m)."""
         if self.goal.is_circle:
-            self.scale += PROGRAM_CIRCLE_REGROWTH / self.goal.radius
+            self.scale = self.sizing.widen(self.scale, PROGRAM_CIRCLE_REGROWTH)
             return
         grow = 2.0 - self.config.scale_rate
         while self.inradius < self.min_radius:
@@ -417,8 +396,8 @@ class Controller(EndPlanning):
             dist = np.abs(np.hypot(*(self._centres - goal.centre).T) - radius)
             on = dist <= cfg.band + 1e-9
         else:
-            self.outline = goal.centre + self.scale * self.shape.vertices
-            self.corners = self.outline[self.shape.corners]
+            self.outline = self.sizing.polygon(self.scale)
+            self.corners = self.sizing.corners(self.scale)
             on = geometry.distance_to_outline(self._centres, self.outline) <= cfg.band + 1e-9
             if self.strategies["no_corners"] > 0 and len(self.corners):
                 on = self._darken_corners(on)
@@ -429,7 +408,7 @@ class Controller(EndPlanning):
         the goal from what the boxes show (see :mod:`sandbox.model.sculpt`)."""
         cfg, goal = self.config, self.goal
         polygon = goal.outline()
-        distance = self.inradius - (goal.radius if self.shape is None else self.shape.inradius)
+        distance = self.sizing.distance(self.scale)
         observation = self._observation
         if observation is None:
             shaped = sculpt.Sculpted(sculpt.offset_outline(polygon, distance), np.empty((0, 2)))
@@ -486,31 +465,3 @@ def first_cycle_steps(config: Config, vertices: np.ndarray | None, limit: int = 
         ctrl.advance()
         steps += 1
     return steps
-
-
-def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | None, chase: float = 0.0) -> str:
-    """Why a strategy at this amount will change nothing on this goal ('' when it will).
-
-    A circle goal has no corners to flare or darken and is already a circle;
-    flare moves a convex corner of angle a only when 90 x amount > a, so on a
-    square it starts above 1 and on the star's 52.5-degree tips above 0.58.
-    With chase on, the lit outline is the goal grown, so flare changes only
-    how far it grows."""
-    if amount <= 0:
-        return ""
-    if name == "flare" and chase > 0 and goal_vertices is not None:
-        return ("With chase on, the band follows the goal grown by the same distance all round, not a flared "
-                "outline: flare changes only the largest size it grows to.")
-    if goal_vertices is None:
-        return {"flare": "Flare does nothing on a circle goal: it has no corners to push out.",
-                "switch": "Switch to circle does nothing on a circle goal: it is a circle already.",
-                "no_corners": "No corners does nothing on a circle goal: it has no corners."}.get(name, "")
-    if name == "flare":
-        angles = geometry.interior_angles(np.asarray(goal_vertices, dtype=float))
-        convex = angles[angles < 180.0]
-        if len(convex) and not (90.0 * amount > convex).any():
-            sharpest = float(convex.min())
-            return (f"Flare {amount:g} does nothing on this goal: flare moves a corner only when 90 x amount "
-                    f"exceeds its angle, and the sharpest corner is {sharpest:.0f} degrees "
-                    f"(flare acts above {sharpest / 90.0:.2f}).")
-    return ""
