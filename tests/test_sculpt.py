@@ -7,9 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from sandbox.model import geometry, sculpt
+from sandbox.model import geometry
+from sandbox.model.chase import ChaseController, sculpt
 from sandbox.model.config import Config
-from sandbox.model.controller import DILATING, HOLDING, Controller
+from sandbox.model.controller import Controller
+from sandbox.model.phases import DILATING, HOLDING
 from sandbox.model.goal import make_goal
 from sandbox.shapes import shape_vertices
 
@@ -129,7 +131,7 @@ def test_chase_lights_the_goal_grown_by_a_robot_diameter_at_the_smallest_size():
     robot diameter (0.5 m) from the goal."""
     star = shape_vertices("star")
     open_loop = Controller(Config(), make_goal(Config(), star))
-    closed = Controller(Config(chase=2.0), make_goal(Config(chase=2.0), star))
+    closed = ChaseController(Config(chase=2.0), make_goal(Config(chase=2.0), star))
     for c in (open_loop, closed):
         c.scale = c.min_scale
         c._redraw()
@@ -142,7 +144,7 @@ def test_chase_turns_beyond_the_farthest_stray_box_star():
     """Star goal: a stray box 3 m from the goal; the outline is the goal grown by
     (inradius - the outline's inradius at scale 1), so turn at inradius h + 3 + 2."""
     cfg = Config(chase=2.0)
-    c = Controller(cfg, make_goal(cfg, shape_vertices("star")))
+    c = ChaseController(cfg, make_goal(cfg, shape_vertices("star")))
     h = c.shape.inradius
     tip = c.goal.vertices[np.argmax(np.hypot(*(c.goal.vertices - c.goal.centre).T))]
     outward = (tip - c.goal.centre) / np.hypot(*(tip - c.goal.centre))
@@ -154,7 +156,7 @@ def test_chase_turns_beyond_the_farthest_stray_box_star():
     assert c._turn_radius() == pytest.approx(h + 3.0 + 2.0)
 
 
-def _closed_loop_hold_steps(c: Controller, boxes: np.ndarray, limit: int = 30000) -> int:
+def _closed_loop_hold_steps(c: ChaseController, boxes: np.ndarray, limit: int = 30000) -> int:
     """Steps the controller holds its smallest outline while it sees ``boxes``
     (the observation's step counts from 0 at the hold's start)."""
 
@@ -173,7 +175,7 @@ def _closed_loop_hold_steps(c: Controller, boxes: np.ndarray, limit: int = 30000
 
 def test_chase_hold_lets_go_only_for_boxes_out_of_reach():
     cfg = Config(chase=2.0, hold_steps=100)
-    c = Controller(cfg, make_goal(cfg, None))
+    c = ChaseController(cfg, make_goal(cfg, None))
     centre = c.goal.centre
     in_goal = np.tile(centre, (10, 1))
     far = centre + [20.0, 0.0] + np.zeros((20, 2))
@@ -208,7 +210,7 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     cfg, goal, boxes = _circle_with_boxes_20_m_out()
 
     def released_at(deadline):
-        c = Controller(cfg.replace(steps=deadline), goal)
+        c = ChaseController(cfg.replace(steps=deadline), goal)
         return _closed_loop_hold_steps(c, boxes)
 
     assert released_at(499 + 11200) == 500  # at the check (step 499) exactly a cycle and a hold are left
@@ -218,7 +220,7 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     # Room for one more cycle but not two: held until exactly one is left, at step 3499.
     assert released_at(499 + 11200 + 3000) == 3500
     assert released_at(499 + 2 * 11200) == 500  # room for two: let go at once
-    c = Controller(cfg.replace(steps=5000), goal)
+    c = ChaseController(cfg.replace(steps=5000), goal)
     c.open_ended = True
     assert _closed_loop_hold_steps(c, boxes) == 500
 
@@ -228,7 +230,7 @@ def _boxes_with_20_in_a_corner(goal):
     return np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [9.0, 9.0] + np.zeros((20, 2))])
 
 
-def _phase_changes(c: Controller, boxes: np.ndarray, start: int, end: int) -> list[tuple[int, str]]:
+def _phase_changes(c: ChaseController, boxes: np.ndarray, start: int, end: int) -> list[tuple[int, str]]:
     """(observation step, new phase) for each change while the controller sees ``boxes``."""
 
     class Seen:
@@ -256,10 +258,10 @@ def test_chase_dilation_turns_back_in_time_for_the_deadline():
     4,400 (turns, at step 4,099). The hold starts 3,900 steps later, at step 7,999,
     500 before the deadline. Without a deadline it would turn only at 22 m."""
     cfg, goal, boxes = _circle_with_boxes_20_m_out()
-    c = Controller(cfg.replace(steps=8499), goal)
+    c = ChaseController(cfg.replace(steps=8499), goal)
     assert _closed_loop_hold_steps(c, boxes) == 500
     assert _phase_changes(c, boxes, 500, 8499) == [(4099, "contracting"), (7999, HOLDING)]
-    c = Controller(cfg.replace(steps=8499), goal)
+    c = ChaseController(cfg.replace(steps=8499), goal)
     c.open_ended = True
     _closed_loop_hold_steps(c, boxes)
     assert _phase_changes(c, boxes, 500, 8499)[0] == (499 + 52 * 100, "contracting")
@@ -273,7 +275,7 @@ def test_the_contraction_bound_is_never_below_the_count(case):
     cfg = Config(chase=2.0, hold_steps=100, **case)
     goal = make_goal(cfg, shape_vertices(cfg.shape))
     boxes = _boxes_with_20_in_a_corner(goal)
-    c = Controller(cfg, goal)
+    c = ChaseController(cfg, goal)
     _closed_loop_hold_steps(c, boxes)
     checked = 0
     while c.phase == DILATING:
@@ -290,7 +292,7 @@ def test_chase_stretches_its_plan_by_the_longest_overrun_seen():
     cfg, goal, boxes = _circle_with_boxes_20_m_out()
 
     def released_at(deadline):
-        c = Controller(cfg.replace(steps=deadline), goal)
+        c = ChaseController(cfg.replace(steps=deadline), goal)
 
         class Seen:
             box_positions = boxes
@@ -318,7 +320,7 @@ def test_the_planned_cycle_is_the_one_the_controller_then_runs(case):
     cfg = Config(chase=2.0, hold_steps=100, **case)
     goal = make_goal(cfg, shape_vertices(cfg.shape))
     boxes = _boxes_with_20_in_a_corner(goal)
-    c = Controller(cfg, goal)
+    c = ChaseController(cfg, goal)
     _closed_loop_hold_steps(c, boxes)
     assert c.phase == "dilating"
     c.phase, c._hold = HOLDING, sculpt.Hold(cfg.hold_steps, 0)  # back to the moment before letting go
@@ -352,9 +354,9 @@ def test_with_chase_no_corners_darkens_only_while_dilating():
     star-switch-nocorners case fell from 0.772 to 0.745 in the goal); dilating, half
     the lit band (the 'at-least' rule: the fewest k with k / n >= 0.5) stays dark."""
     star = shape_vertices("star")
-    plain = Controller(Config(chase=2.0), make_goal(Config(chase=2.0), star))
+    plain = ChaseController(Config(chase=2.0), make_goal(Config(chase=2.0), star))
     cfg = Config(chase=2.0, no_corners=0.5)
-    c = Controller(cfg, make_goal(cfg, star))
+    c = ChaseController(cfg, make_goal(cfg, star))
     for ctrl in (plain, c):
         ctrl.scale = 2.0
         ctrl._redraw()

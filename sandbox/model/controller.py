@@ -43,25 +43,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model import geometry, sculpt
+from sandbox.model import geometry
 from sandbox.model.config import STRATEGY_NAMES, Config
-from sandbox.model.finish import EndPlanning
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal, make_goal
 from sandbox.model.lights import light_centres
 from sandbox.model.notes import goal_fit_notes
 from sandbox.model.outlines import ScaledSizing
 from sandbox.model.phases import CONTRACTING, DILATING, HOLDING
 
-_SENSES_BOXES, _SENSES_NOTHING = frozenset({"boxes"}), frozenset()
 #: After holding, the authors' program grows a circle back by this much (its ``delta``, m).
 PROGRAM_CIRCLE_REGROWTH = 0.6
 
 
-class Controller(EndPlanning):
+class Controller:
     """State machine driving the light pattern. Call :meth:`advance` once per world step."""
-
-    #: How the closed loop (chase) shapes the band near the goal and holds it.
-    sculpting: sculpt.Sculpting = sculpt.SCULPTING
 
     def __init__(self, config: Config, goal: Goal):
         self.config = config
@@ -78,20 +73,9 @@ class Controller(EndPlanning):
         self.updates = 0
         self._until_update = config.update_every
         self._hold_left = 0
-        self._hold: sculpt.Hold | None = None  # the closed loop's hold (chase), else None
         self.outline = np.empty((0, 2))
         self.corners = np.empty((0, 2))
         self.intensities = np.zeros((config.lights_per_side,) * 2)
-        self._observation = None  # what the last update saw (closed loop only)
-        #: Whether the run goes on past ``config.steps`` (the live app's): then there is no deadline.
-        self.open_ended = False
-        self._released_at: int | None = None  # the step the last hold let go at (closed loop)
-        #: Steps the copy counted from letting go of this hold to the next (planned once per hold).
-        self._predicted: int | None = None
-        #: The longest a cycle ran in this run, as a multiple of the copy's prediction (at least 1).
-        self._overrun = 1.0
-        #: Turn at the next dilation update whatever the sizes say (set only in a copy; see _ghost).
-        self._force_turn = False
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
         #: outline does not fit is refused here with a ShapeError.
         self.notes = goal_fit_notes(config, self.sizing)
@@ -194,76 +178,44 @@ class Controller(EndPlanning):
     #: Called every world step: the controller keeps its own update clock.
     every = 1
 
-    @property
-    def senses(self) -> frozenset:
-        """Open loop: nothing. With *chase*, the boxes' positions."""
-        return _SENSES_BOXES if self._closed_loop or self._pending.get("chase", 0) > 0 else _SENSES_NOTHING
+    #: The open loop looks at nothing.
+    senses: frozenset = frozenset()
 
     def reset(self, config: Config, goal: Goal) -> None:
         """Nothing to do: the simulation builds a new Controller for a new world."""
 
     def update(self, observation) -> np.ndarray | None:
         """One world step: the new pattern when it changed, else None."""
-        self._observation = observation
         return self.intensities if self.advance() else None
 
     # -- time -------------------------------------------------------------
     def advance(self) -> bool:
         """One world step. Returns whether the light pattern may have changed."""
         if self.phase == HOLDING:
-            if self._hold is not None and self._observation is not None:
-                return self._closed_loop_hold()
-            self._hold_left -= 1
-            if self._hold_left > 0:
-                return False
-            return self._end_hold()
+            return self._hold_step()
         self._until_update -= 1
         if self._until_update > 0:
             return False
         return self._update()
 
+    # -- the hold (hooks: a strategy may hold on) ---------------------------
+    def _start_hold(self) -> None:
+        """At the smallest size: hold for ``hold_steps`` (none: dilate at once)."""
+        self.phase = HOLDING if self.config.hold_steps > 0 else DILATING
+        self._hold_left = self.config.hold_steps
+
+    def _hold_step(self) -> bool:
+        """One world step of holding; returns whether the pattern may have changed."""
+        self._hold_left -= 1
+        if self._hold_left > 0:
+            return False
+        return self._end_hold()
+
     def _end_hold(self) -> bool:
-        self._hold = None
-        if self._observation is not None:
-            self._released_at = self._observation.step
         self.phase = DILATING
         if self._program:
             self._grow_back()
         return self._update()
-
-    def _start_hold(self) -> None:
-        """At the smallest size: hold for ``hold_steps`` (none: dilate at once);
-        the closed loop holds as long as :class:`sculpt.Hold` says."""
-        self.phase = HOLDING if self.config.hold_steps > 0 else DILATING
-        self._hold_left = self.config.hold_steps
-        if self.phase == HOLDING and self._closed_loop and self._observation is not None:
-            self._hold = sculpt.Hold(self.config.hold_steps, self._boxes_in_goal(), self.sculpting)
-            if self._released_at is not None and self._predicted:
-                ran = self._observation.step - self._released_at
-                self._overrun = max(self._overrun, ran / self._predicted)
-            self._predicted = None
-
-    def _closed_loop_hold(self) -> bool:
-        """One step of the closed loop's hold: the band is re-sculpted every update."""
-        if self._hold.tick(self._boxes_in_goal, self._boxes_out_of_reach) or self._finish_in_hold():
-            if self._hold.clock % self.config.update_every == 0:
-                self._redraw()
-                return True
-            return False
-        return self._end_hold()
-
-    @property
-    def _closed_loop(self) -> bool:
-        return self.strategies["chase"] > 0
-
-    def _boxes_in_goal(self) -> int:
-        return int(self.goal.contains(self._observation.box_positions).sum())
-
-    def _boxes_out_of_reach(self) -> int:
-        """Boxes beyond the reach of robots on the smallest outline (one robot
-        diameter from the goal): farther than three robot radii from it."""
-        distance = self.goal.distance(self._observation.box_positions)
-        return int((distance > 3.0 * self.config.robot_radius).sum())
 
     def _update(self) -> bool:
         self._until_update = self.config.update_every
@@ -293,7 +245,7 @@ class Controller(EndPlanning):
             if self.scale >= self.max_scale:
                 self.scale = self.max_scale
                 self._turn_to_contracting()
-            elif self.inradius >= self._turn_radius() or self._turn_for_the_deadline():
+            elif self.inradius >= self._turn_radius() or self._turns_early():
                 self._turn_to_contracting()
 
     def _clamped_circle_step(self) -> None:
@@ -305,29 +257,18 @@ class Controller(EndPlanning):
             self.circle_radius *= rate
         else:
             self.circle_radius = min(self.circle_radius / rate, self.circle_max_radius)
-            if self.circle_radius >= self.circle_max_radius or self._turn_for_the_deadline():
+            if self.circle_radius >= self.circle_max_radius or self._turns_early():
                 self._turn_to_contracting()
 
     def _turn_radius(self) -> float:
-        """The inradius (radius for a circle) at which dilation turns: the
-        largest, or with *chase* (closed loop) as soon as the outline is
-        ``chase`` metres beyond the farthest box outside the goal, and at least
-        ``chase`` metres beyond the smallest outline, so the robots always
-        back off and push again."""
-        largest = self.max_radius
-        margin = self.strategies["chase"]
-        observation = self._observation
-        if margin <= 0 or observation is None:
-            return largest
-        boxes = observation.box_positions
-        stray = boxes[~self.goal.contains(boxes)]
-        if not len(stray):
-            need = 0.0
-        elif self.circle_radius is not None or self.shape is None:
-            need = float(np.hypot(*(stray - self.goal.centre).T).max()) + margin
-        else:  # the outline is the goal grown by (inradius - its inradius at scale 1): see _redraw_closed_loop
-            need = self.sizing.radius_beyond(float(self.goal.distance(stray).max())) + margin
-        return min(largest, max(need, self.min_radius + margin))
+        """The inradius (radius for a circle) at which dilation turns: the largest.
+        Hook: chase turns as soon as the outline is beyond the farthest stray box."""
+        return self.max_radius
+
+    def _turns_early(self) -> bool:
+        """Whether a dilation turns at this update whatever its size: never. Hook:
+        chase turns in time for the step its run is measured at."""
+        return False
 
     def _turn_to_contracting(self) -> None:
         self.phase = CONTRACTING
@@ -347,7 +288,7 @@ class Controller(EndPlanning):
                 self._program_update()
             return
         if self.phase == DILATING and (self.inradius > self._turn_radius() * (1 + 1e-12)
-                                       or self._turn_for_the_deadline()):
+                                       or self._turns_early()):
             # First size above the largest (or the last that can come back in time):
             # not lit; turn and shrink from it.
             self._turn_to_contracting()
@@ -386,9 +327,6 @@ class Controller(EndPlanning):
     def _redraw(self) -> None:
         """Recompute the outline and which lights are on."""
         cfg, goal = self.config, self.goal
-        if self._closed_loop and self.circle_radius is None and (goal.is_circle or not self.is_circle):
-            self._redraw_closed_loop()
-            return
         if self.is_circle:
             radius = self.circle_radius if self.circle_radius is not None else goal.radius * self.scale
             self.outline = geometry.regular_polygon(radius, CIRCLE_DRAW_VERTICES, goal.centre)
@@ -401,30 +339,6 @@ class Controller(EndPlanning):
             on = geometry.distance_to_outline(self._centres, self.outline) <= cfg.band + 1e-9
             if self.strategies["no_corners"] > 0 and len(self.corners):
                 on = self._darken_corners(on)
-        self.intensities = (on * cfg.light_intensity).reshape(self.intensities.shape)
-
-    def _redraw_closed_loop(self) -> None:
-        """*Chase*: the goal grown by the distance the scale gives, sculpted near
-        the goal from what the boxes show (see :mod:`sandbox.model.sculpt`)."""
-        cfg, goal = self.config, self.goal
-        polygon = goal.outline()
-        distance = self.sizing.distance(self.scale)
-        observation = self._observation
-        if observation is None:
-            shaped = sculpt.Sculpted(sculpt.offset_outline(polygon, distance), np.empty((0, 2)))
-        else:
-            boxes = observation.box_positions
-            shaped = sculpt.sculpt(polygon, distance, boxes, goal.contains(boxes), cfg.box_area, self.sculpting)
-        self.outline = shaped.outline
-        if goal.is_circle:
-            self.corners = np.empty((0, 2))
-        else:
-            convex = geometry.interior_angles(polygon) < 180.0
-            self.corners = sculpt.corner_points(polygon, convex, distance)
-        on = geometry.distance_to_outline(self._centres, self.outline) <= cfg.band + 1e-9
-        if self.strategies["no_corners"] > 0 and len(self.corners) and self.phase == DILATING:
-            on = self._darken_corners(on)
-        on = sculpt.darken_near(on, self._centres, shaped.dark, self.sculpting.dark)
         self.intensities = (on * cfg.light_intensity).reshape(self.intensities.shape)
 
     def _darken_corners(self, on: np.ndarray) -> np.ndarray:

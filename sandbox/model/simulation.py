@@ -18,6 +18,7 @@ from typing import Any, Callable
 import numpy as np
 
 from sandbox.model import kernels, metrics, robots
+from sandbox.model.chase import ChaseController
 from sandbox.model.config import STRATEGY_NAMES, Config, param
 from sandbox.model.controller import Controller
 from sandbox.model.goal import Goal, make_goal
@@ -30,7 +31,7 @@ from sandbox.shapes import ShapeError, shape_vertices
 def _controller(config: Config, goal: Goal) -> Controller:
     """The controller for a goal, or a ShapeError naming the goal if it cannot fit the arena."""
     try:
-        return Controller(config, goal)
+        return ChaseController(config, goal)  # the paper's, with chase to switch on live
     except ShapeError as exc:
         raise ShapeError(f"{config.shape}: {exc}") from None
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sandbox.model import sculpt
+from sandbox.model.chase import sculpt
 from sandbox.model.phases import HOLDING
 
 
