@@ -121,7 +121,7 @@ def test_chase_turns_beyond_the_farthest_stray_box_circle():
     class Seen:
         box_positions = np.array([centre, centre + [10.0, 0.0], centre + [0.0, -7.0]])
 
-    c._observation = Seen()
+    c.seen = Seen()
     assert c._turn_radius() == pytest.approx(12.0)
     Seen.box_positions = np.array([centre])  # no stray box
     assert c._turn_radius() == pytest.approx(c.min_radius + 2.0)
@@ -140,7 +140,7 @@ def test_chase_turns_beyond_the_farthest_stray_box_square():
     class Seen:
         box_positions = np.array([c.goal.centre + [2 * h, 0.0]])
 
-    c._observation = Seen()
+    c.seen = Seen()
     assert c._turn_radius() == pytest.approx(2 * h + 2.0)
     assert c.senses == frozenset({"boxes"})
 

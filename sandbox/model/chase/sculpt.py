@@ -1,46 +1,5 @@
-"""The closed loop's outline near the goal: the *chase* strategy's geometry.
-
-The open-loop controller scales the goal about its centre. Near the goal
-that leaves the band far beyond a star's tips (scaling by (r + 0.5) / r
-moves a tip out by 0.5 R / r, over a metre) while it touches the notches,
-so the tips stay empty. And it never knows where boxes spill out or where
-the goal still lacks them. With *chase* the controller sees the boxes, as
-an overhead camera would, and does four things the open loop cannot:
-
-1. **Offsets, not scales.** The outline is the goal grown by a distance
-   ``t`` (round corners), so near the goal the band is the same distance
-   from every part of it. The controller's scale still sets the size: ``t``
-   is the lit inradius minus the outline's inradius at scale 1, so the
-   smallest outline is one robot diameter from the goal all round.
-2. **Sculpting.** Within ``Sculpting.start`` of the goal, every point of
-   the band looks at the goal edge nearest it. Where boxes spill out there,
-   the band moves in by ``press`` (robots push them back); where the goal
-   lacks boxes and none spill, the band's lights go dark, so the robots
-   leave and the pressed pile can flow in.
-3. **Patience** (:class:`Hold`). The smallest outline is held, re-sculpted
-   every update, while boxes keep arriving in the goal, and for as long as
-   nearly every stray box is within the robots' reach; it lets go only to
-   fetch boxes that are out of reach. Each dilation costs boxes: robots
-   that worked their way into the pile drive out through it.
-4. **Finishing** (:func:`hold_for_the_end`, :mod:`sandbox.model.finish`).
-   A run is measured at its last step, and it should end in a hold: the
-   fraction in the goal is highest there. Every dilation turns back early
-   enough for the contraction to reach the smallest outline, with the
-   shortest hold to spare, before the run is measured. When one more cycle
-   out to the farthest stray box and back fits but not two, the hold waits
-   so that the last cycle ends just before the end, with the far boxes
-   swept in. When no whole cycle fits it still lets go, and the cut-short
-   cycle fetches what a long hold squeezes out: the robots' crowd on the
-   band is up to 2 m deep, and over thousands of steps it pushes stray
-   boxes to its outer edge. The controller counts a cycle by running a
-   copy of itself on the boxes as they are, stretched by the most a real
-   cycle has overrun such a count in this run (a dilation drags boxes out,
-   so the turn comes later).
-
-The numbers in :class:`Sculpting` were chosen by trying a few values on
-seeds 0, 1 and 100-103, never on the evaluation's seeds' results as a
-target (the trials are in ``static/closed-loop/README.md``).
-"""
+"""Chase's outline near the goal: the goal grown, pressed in where boxes spill
+out and dark where the goal lacks them (see :mod:`sandbox.model.chase`)."""
 
 from __future__ import annotations
 
@@ -50,42 +9,8 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
+from sandbox.model.chase.tuning import SCULPTING, Sculpting
 
-@dataclass(frozen=True)
-class Sculpting:
-    """How the closed loop shapes the band near the goal (lengths in metres)."""
-
-    #: Sculpt only while the outline is at most this far from the goal.
-    start: float = 1.5
-    #: Radius of the neighbourhood of a goal edge point in which boxes are counted.
-    near: float = 1.0
-    #: How far the band moves toward the goal where boxes spill out...
-    press: float = 0.45
-    #: ...but never nearer the goal edge than this (a robot's centre; its radius is 0.25).
-    closest: float = 0.2
-    #: Boxes outside the goal within ``near`` of an edge point that make it spill.
-    spill: int = 2
-    #: Boxes fewer than a full pile's within ``near`` of an edge point that make it lack...
-    lack: int = 2
-    #: ...or this share of a full pile missing: at a sharp tip a full pile holds only two or three.
-    lack_share: float = 0.5
-    #: Area fraction of a full pile: piles pressed into a circle reach 0.85-0.87.
-    packing: float = 0.85
-    #: Lights within this distance of a lacking band point are off.
-    dark: float = 0.8
-    #: Spacing of the band's points while sculpting.
-    spacing: float = 0.5
-    #: World steps between two looks at the pile while holding.
-    check: int = 500
-    #: Boxes that must arrive in the goal per check to keep holding for progress.
-    gain: int = 2
-    #: Keep holding while fewer boxes than this are out of the robots' reach...
-    stay: int = 5
-    #: ...and extend no hold past this many steps.
-    longest: int = 20000
-
-
-SCULPTING = Sculpting()
 #: Segments per quarter circle of an offset's round corners.
 ROUND_SEGMENTS = 4
 
@@ -171,51 +96,6 @@ def darken_near(on: np.ndarray, centres: np.ndarray, points: np.ndarray, radius:
         return on
     d = np.hypot(*(centres[:, None, :] - points[None, :, :]).transpose(2, 0, 1)).min(axis=1)
     return on & (d >= radius)
-
-
-class Hold:
-    """When the closed loop lets go of the smallest outline.
-
-    At least ``max(hold_steps, check)`` steps; at each check, ``check`` more
-    if at least ``gain`` boxes arrived in the goal since the best count so
-    far, or if fewer than ``stay`` boxes are out of the robots' reach (there
-    is nothing worth dilating for); no extension after ``longest`` steps."""
-
-    def __init__(self, hold_steps: int, in_goal: int, tuning: Sculpting = SCULPTING):
-        self.tuning = tuning
-        self.clock = 0
-        self.best = in_goal
-        self.left = max(hold_steps, tuning.check)
-
-    def tick(self, in_goal, out_of_reach) -> bool:
-        """One world step of holding; ``in_goal()`` and ``out_of_reach()`` count boxes
-        (called only at checks). Returns whether to keep holding."""
-        self.clock += 1
-        self.left -= 1
-        tuning = self.tuning
-        if self.clock % tuning.check == 0 and self.clock < tuning.longest:
-            now = in_goal()
-            if now >= self.best + tuning.gain:
-                self.best = now
-                self.left = max(self.left, tuning.check)
-            elif out_of_reach() < tuning.stay:
-                self.left = max(self.left, tuning.check)
-        return self.left > 0
-
-
-def hold_for_the_end(left: int, cycle: int, least: int) -> bool:
-    """Whether a hold that would let go now goes on, ``left`` steps before the run is
-    measured, when one more cycle (out, back and the shortest hold) takes ``cycle``
-    steps. When one fits but not two, until exactly one does, so that the last cycle
-    sweeps the far boxes in just before the end. When none fits, it still lets go if
-    ``least`` steps are left: the dilation turns back in time (see
-    ``finish.EndPlanning._turn_for_the_deadline``), and a cut-short cycle fetches the
-    boxes a long hold squeezes out of the robots' crowd. With fewer, to the end."""
-    if left < 0:
-        return False
-    if left < cycle:
-        return left < least
-    return left < 2 * cycle and left > cycle
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
