@@ -160,6 +160,11 @@ class ScaledSizing:
         return self.unit_radius + distance
 
 
+def sizing_for(config: Config, goal: Goal, flare: float) -> Sizing:
+    """The outline family the controller lights for this goal and flare (today's only one)."""
+    return ScaledSizing.of(config, goal, flare)
+
+
 def outline_shape(goal_relative: np.ndarray, goal_area: float, file_area: float, flare: float,
                   flare_mode: str) -> OutlineShape:
     """The outline at scale 1 for a goal polygon (relative to its centre) and a flare."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model import geometry
+from sandbox.model import band, geometry
 from sandbox.model.chase import finish, sculpt, sight
 from sandbox.model.chase.hold import Hold
 from sandbox.model.chase.tuning import SCULPTING, Sculpting
@@ -133,7 +133,7 @@ class ChaseController(Controller):
         else:
             convex = geometry.interior_angles(polygon) < 180.0
             self.corners = sculpt.corner_points(polygon, convex, distance)
-        on = self._band(self.outline)
+        on = band.along(self._centres, self.outline, cfg.band)
         if self.strategies["no_corners"] > 0 and len(self.corners) and self.phase == DILATING:
             on = self._darken_corners(on)  # contracting, the tips need their robots
         self._light(sculpt.darken_near(on, self._centres, shaped.dark, self.sculpting.dark))
