@@ -25,8 +25,6 @@ looks subclasses it and overrides its hooks: where a dilation turns
 
 from __future__ import annotations
 
-from types import MappingProxyType
-
 import numpy as np
 
 from sandbox.model import band, geometry
@@ -34,9 +32,8 @@ from sandbox.model.config import Config
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal, make_goal
 from sandbox.model.lights import light_centres
 from sandbox.model.notes import goal_fit_notes
-from sandbox.model.outlines import sizing_for
 from sandbox.model.phases import CONTRACTING, DILATING, HOLDING
-from sandbox.model.schedule import NOTHING_PENDING, InSchedule, Schedule
+from sandbox.model.schedule import InSchedule, Schedule
 
 #: After holding, the authors' program grows a circle back by this much (its ``delta``, m).
 PROGRAM_CIRCLE_REGROWTH = 0.6
@@ -47,7 +44,8 @@ class Cycle:
     and phases, lighting nothing. Its attributes below are its schedule's."""
 
     phase, scale, circle_radius, cycle, updates = InSchedule(), InSchedule(), InSchedule(), InSchedule(), InSchedule()
-    sizing, strategies, min_radius, inradius, progress = InSchedule(), InSchedule(), InSchedule(), InSchedule(), InSchedule()
+    sizing, strategies, progress = InSchedule(), InSchedule(), InSchedule()
+    min_radius, inradius, max_radius = InSchedule(), InSchedule(), InSchedule()
 
     def __init__(self, config: Config, goal: Goal, state: Schedule):
         self.config, self.goal, self.state = config, goal, state
@@ -56,17 +54,6 @@ class Cycle:
     shape = property(lambda self: self.sizing.shape, doc="The outline at scale 1 (None for the circle).")
     min_scale = property(lambda self: self.sizing.smallest)
     max_scale = property(lambda self: self.sizing.largest)
-
-    @property
-    def max_radius(self) -> float:
-        """The largest inradius (radius for a circle) the lit outline may have now."""
-        if self.state.circle_radius is not None:
-            return self.circle_max_radius
-        return self.sizing.radius(self.sizing.largest)
-
-    @property
-    def circle_max_radius(self) -> float:
-        return self.config.circle_max * self.config.arena_size / 2.0
 
     @property
     def is_circle(self) -> bool:
@@ -87,36 +74,13 @@ class Cycle:
     def reconfigure(self, config: Config) -> None:
         """Take new controller values (rate, band, sizes...) keeping the phase
         and a scale within the new limits; the pattern is redrawn at once."""
-        self.config, s = config, self.state
-        self._resize()
-        s.until_update = min(s.until_update, config.update_every)
-        if config.switch_mode != "inradius":
-            s.circle_radius = None
+        self.config = config
+        self.state.reconfigure(config, self.goal)
         self._redraw()
 
     def set_strategies(self, **values: float) -> None:
         """Change strategies (flare, switch, no_corners...); applied at the next controller update."""
-        unknown = set(values) - set(self.strategies)
-        if unknown:
-            raise ValueError(f"unknown strategies: {sorted(unknown)}")
-        self.state.pending = MappingProxyType({**self.state.pending, **values})
-
-    def _take_pending_strategies(self) -> None:
-        s = self.state
-        if not s.pending:
-            return
-        flare_changed = s.pending.get("flare", s.strategies["flare"]) != s.strategies["flare"]
-        s.strategies, s.pending = MappingProxyType({**s.strategies, **s.pending}), NOTHING_PENDING
-        if flare_changed:
-            self._resize()
-        if s.strategies["switch"] <= 0:
-            s.circle_radius = None
-
-    def _resize(self) -> None:
-        """The outline family for the configuration and strategies now, the scale kept within it."""
-        s = self.state
-        s.sizing = sizing_for(self.config, self.goal, s.strategies["flare"])
-        s.scale = min(max(s.scale, s.sizing.smallest), s.sizing.largest)
+        self.state.set_pending(values)
 
     # -- time -------------------------------------------------------------
     def _begin(self) -> None:
@@ -140,7 +104,7 @@ class Cycle:
         s = self.state
         s.until_update = self.config.update_every
         s.updates += 1
-        self._take_pending_strategies()
+        s.take_pending(self.config, self.goal)
         if self._program:
             self._program_update()
             return True
@@ -217,8 +181,8 @@ class Cycle:
         if s.phase == CONTRACTING:
             s.circle_radius *= rate
         else:
-            s.circle_radius = min(s.circle_radius / rate, self.circle_max_radius)
-            if s.circle_radius >= self.circle_max_radius or self._turns_early():
+            s.circle_radius = min(s.circle_radius / rate, s.sizing.circle_largest)
+            if s.circle_radius >= s.sizing.circle_largest or self._turns_early():
                 self._turn_to_contracting()
 
     # -- the authors' program's schedule ------------------------------------

@@ -74,6 +74,8 @@ class Sizing(Protocol):
     #: The smallest and largest sizes.
     smallest: float
     largest: float
+    #: The largest radius of a circle lit in the outline's place (switch).
+    circle_largest: float
 
     def step(self, size: float, factor: float) -> float:
         """The size one update on, ``factor`` being the schedule's (below 1: contracting)."""
@@ -114,18 +116,20 @@ class ScaledSizing:
     largest: float
     #: The outline's inradius at scale 1 (the radius, for a circle).
     unit_radius: float
+    circle_largest: float
 
     @classmethod
     def of(cls, config: Config, goal: Goal, flare: float) -> "ScaledSizing":
         """The outline at scale 1 for this goal and flare, and its smallest and largest scales."""
+        circle_largest = max_circle_radius(config)
         if goal.is_circle:
             smallest = (goal.radius + 2.0 * config.robot_radius) / goal.radius
             largest = max_circle_scale(config, goal.radius)
-            return cls(goal, None, smallest, max(largest, smallest), goal.radius)
+            return cls(goal, None, smallest, max(largest, smallest), goal.radius, circle_largest)
         shape = outline_shape(goal.vertices - goal.centre, goal.area, goal.file_area, flare, config.flare_mode)
         smallest = min_polygon_scale(config, shape, goal.radius)
         largest = max_polygon_scale(config, shape, goal.area)
-        return cls(goal, shape, smallest, max(largest, smallest), shape.inradius)
+        return cls(goal, shape, smallest, max(largest, smallest), shape.inradius, circle_largest)
 
     def step(self, size: float, factor: float) -> float:
         return size * factor
@@ -231,8 +235,13 @@ def max_polygon_scale(config: Config, shape: OutlineShape, goal_area: float) -> 
         growth *= PROGRAM_GROWTH_STEP
 
 
+def max_circle_radius(config: Config) -> float:
+    """The largest radius of a circle: ``circle_max`` of half the arena."""
+    return config.circle_max * config.arena_size / 2.0
+
+
 def max_circle_scale(config: Config, goal_radius: float) -> float:
-    return config.circle_max * config.arena_size / 2.0 / goal_radius
+    return max_circle_radius(config) / goal_radius
 
 
 def overreach(config: Config, outline: np.ndarray) -> tuple[float, float, float, float] | None:

@@ -1,6 +1,6 @@
-"""Where the controller is in its cycle: the state its state machine changes
-(:class:`sandbox.model.controller.Cycle`), kept apart so that a copy of it can
-be run ahead (chase counts its next cycle so)."""
+"""Where the controller is in its cycle: the state its state machine
+(:class:`sandbox.model.controller.Cycle`) changes, kept apart so that a copy
+of it can be run ahead (chase counts its next cycle so)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from sandbox.model.goal import Goal
 from sandbox.model.outlines import Sizing, sizing_for
 from sandbox.model.phases import CONTRACTING
 
-NOTHING_PENDING: Mapping[str, float] = MappingProxyType({})
+_NOTHING_PENDING: Mapping[str, float] = MappingProxyType({})
 
 
 @dataclass
@@ -38,9 +38,41 @@ class Schedule:
         """A new cycle's: contracting from the largest size, the strategies as configured."""
         strategies = {name: getattr(config, name) for name in STRATEGY_NAMES}
         sizing = sizing_for(config, goal, strategies["flare"])
-        return cls(sizing, MappingProxyType(strategies), NOTHING_PENDING, sizing.largest,
+        return cls(sizing, MappingProxyType(strategies), _NOTHING_PENDING, sizing.largest,
                    until_update=config.update_every)
 
+    # -- live changes: the mappings and the sizing are replaced, never changed in place --
+    def reconfigure(self, config: Config, goal: Goal) -> None:
+        """New controller values (rate, band, sizes...): the phase kept, the scale within the new limits."""
+        self.resize(config, goal)
+        self.until_update = min(self.until_update, config.update_every)
+        if config.switch_mode != "inradius":
+            self.circle_radius = None
+
+    def set_pending(self, values: Mapping[str, float]) -> None:
+        """Strategies to apply at the next update."""
+        unknown = set(values) - set(self.strategies)
+        if unknown:
+            raise ValueError(f"unknown strategies: {sorted(unknown)}")
+        self.pending = MappingProxyType({**self.pending, **values})
+
+    def take_pending(self, config: Config, goal: Goal) -> None:
+        """Apply the pending strategies (at an update)."""
+        if not self.pending:
+            return
+        flare_changed = self.pending.get("flare", self.strategies["flare"]) != self.strategies["flare"]
+        self.strategies, self.pending = MappingProxyType({**self.strategies, **self.pending}), _NOTHING_PENDING
+        if flare_changed:
+            self.resize(config, goal)
+        if self.strategies["switch"] <= 0:
+            self.circle_radius = None
+
+    def resize(self, config: Config, goal: Goal) -> None:
+        """The outline family for the configuration and strategies now, the scale kept within it."""
+        self.sizing = sizing_for(config, goal, self.strategies["flare"])
+        self.scale = min(max(self.scale, self.sizing.smallest), self.sizing.largest)
+
+    # -- sizes ------------------------------------------------------------
     @property
     def min_radius(self) -> float:
         """The smallest outline's inradius (its radius for a circle)."""
@@ -50,6 +82,13 @@ class Schedule:
     def inradius(self) -> float:
         """The lit outline's inradius (its radius for a circle)."""
         return self.circle_radius if self.circle_radius is not None else self.sizing.radius(self.scale)
+
+    @property
+    def max_radius(self) -> float:
+        """The largest inradius (radius for a circle) the lit outline may have now."""
+        if self.circle_radius is not None:
+            return self.sizing.circle_largest
+        return self.sizing.radius(self.sizing.largest)
 
     @property
     def progress(self) -> float:

@@ -132,11 +132,7 @@ class Simulation:
         if self._until_program <= 0:
             t0 = time.perf_counter()
             self._until_program = self._program_every
-            program = self.program
-            if program is self.controller:  # asked every step: an observation only when it senses (chase)
-                pattern = program.update(self._observation() if program.senses else None)
-            else:
-                pattern = self._call_program(program.update, self._observation())
+            pattern = self._call_program(self.program.update, self._observation())
             if pattern is not None:
                 self.set_pattern(pattern)
                 self.timings["lights"] += time.perf_counter() - t0
