@@ -1,24 +1,21 @@
 """The paper's controller, its Algorithm 1 (SPEC §5): contract, hold, dilate.
 
-A band of lights follows an outline, the goal or a circle, at a size
-(:mod:`sandbox.model.outlines` gives the outline of each size, and the
-smallest and largest: today the goal scaled about the assembly centre, the
-size being the scale, 1 the goal itself, whose area equals the boxes'). The
-size shrinks by ``scale_rate`` every ``update_every`` steps down to the
-smallest, is held there ``hold_steps`` steps, grows back to the largest, and
-the cycle repeats. Three strategies change what is lit: *flare* pushes the
-outline's corners out (in the outline family), *switch* lights a circle in
-its place while it is large (:attr:`Cycle.is_circle`, :meth:`Cycle._switch_shape`)
-and *no corners* darkens the band's lights nearest its convex corners.
-The schedule comes in two readings (``Config.size_schedule``): the paper
-text's (:meth:`Cycle._clamped_step`) and the authors' program's
-(:meth:`Cycle._program_update`).
+A band of lights follows an outline at a size (the outline family,
+:mod:`sandbox.model.outlines`, gives the outline of each size; today's
+scales the goal about the assembly centre). Every ``update_every`` steps
+the size shrinks by ``scale_rate`` down to the smallest, is held there
+``hold_steps`` steps, grows back to the largest, and the cycle repeats: in
+the paper text's reading (:meth:`Cycle._clamped_step`) or the authors'
+program's (:meth:`Cycle._program_update`). Flare reshapes the outline (in
+its family), switch lights a circle in its place while it is large
+(:meth:`Cycle._switch_shape`), no corners darkens the lights nearest its
+convex corners (:mod:`sandbox.model.band`).
 
-:class:`Cycle` is the state machine alone: it changes only its
-:class:`~sandbox.model.schedule.Schedule` and lights nothing, so a copy of its
-state can be run ahead. :class:`Controller` lights it. It looks at nothing:
-what it lights never depends on the robots or the boxes. A strategy that
-looks subclasses it and overrides its hooks: where a dilation turns
+:class:`Cycle` is the state machine alone: it changes nothing but its
+:class:`~sandbox.model.schedule.Schedule` and lights nothing, so a copy of
+its state can be run ahead. :class:`Controller` lights it, and looks at
+nothing: what it lights never depends on the robots or the boxes. A strategy
+that looks subclasses it and overrides its hooks: where a dilation turns
 (``_turn_radius``, ``_turns_early``), how long the smallest outline is held
 (``_start_hold``, ``_hold_step``, ``_end_hold``) and what is lit (``_redraw``).
 """
@@ -83,13 +80,6 @@ class Cycle:
         self.state.set_pending(values)
 
     # -- time -------------------------------------------------------------
-    def _begin(self) -> None:
-        """The start: the largest size is lit (the authors' program steps from it at once)."""
-        if self._program:
-            self._program_update()
-        else:
-            self._redraw()
-
     def advance(self) -> bool:
         """One world step. Returns whether the light pattern may have changed."""
         s = self.state
@@ -151,8 +141,7 @@ class Cycle:
         return False
 
     def _turn_to_contracting(self) -> None:
-        self.state.phase = CONTRACTING
-        self.state.cycle += 1
+        self.state.phase, self.state.cycle = CONTRACTING, self.state.cycle + 1
 
     # -- the paper text's schedule ------------------------------------------
     def _clamped_step(self) -> None:
@@ -174,9 +163,8 @@ class Cycle:
                 self._turn_to_contracting()
 
     def _clamped_circle_step(self) -> None:
-        """The circle lit in the polygon's place (switch_mode 'inradius') under
-        the clamped schedule: it turns at the circle's largest size; the
-        polygon returns below the switch threshold (see _switch_shape)."""
+        """The circle lit in the polygon's place (see _switch_shape) under the clamped
+        schedule: it turns at the circle's largest size."""
         s, rate = self.state, self.config.scale_rate
         if s.phase == CONTRACTING:
             s.circle_radius *= rate
@@ -265,14 +253,16 @@ class Controller(Cycle):
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
         #: outline does not fit is refused here with a ShapeError.
         self.notes = goal_fit_notes(config, self.sizing)
-        self._begin()
+        if self._program:  # the largest size is lit, and the program steps from it at once
+            self._program_update()
+        else:
+            self._redraw()
 
     def reset(self, config: Config, goal: Goal) -> None:
         """Nothing to do: the simulation builds a new Controller for a new world."""
 
     def update(self, observation) -> np.ndarray | None:
-        """One world step: the new pattern when it changed, else None (the open loop
-        does not read the observation)."""
+        """One world step: the new pattern when it changed, else None (the observation is unread)."""
         return self.intensities if self.advance() else None
 
     def _redraw(self) -> None:

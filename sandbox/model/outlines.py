@@ -6,7 +6,7 @@ its schedules compare) and the outline itself; it never looks inside a size.
 Today's family is :class:`ScaledSizing`: the goal (or the circle) scaled
 about the assembly centre, a size being the scale (the paper's word, which
 the controller keeps). Another family, the band at a signed distance from
-the goal say, would offer the same.
+the goal say, would offer the same, and :func:`sizing_for` would choose it.
 
 An :class:`OutlineShape` is a polygon relative to the assembly centre at
 *scale 1*; the controller lights ``centre + scale * vertices``. For a plain

@@ -26,7 +26,7 @@ class ChaseController(Controller):
     sculpting: Sculpting = SCULPTING
 
     def __init__(self, config: Config, goal: Goal):
-        #: What the last update saw (an observation with the boxes) while chasing, else None.
+        #: What the last update saw (an observation with the boxes) while it senses them, else None.
         self.seen = None
         #: Whether the run goes on past ``config.steps`` (the live app's): then there is no deadline.
         self.open_ended = False
