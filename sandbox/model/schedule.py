@@ -18,9 +18,10 @@ _NOTHING_PENDING: Mapping[str, float] = MappingProxyType({})
 
 @dataclass
 class Schedule:
-    """With the configuration and the goal, all the controller's next sizes depend on.
-    ``dataclasses.replace`` copies it: the sizing and the mappings are replaced when
-    they change, never changed in place, so a copy shares nothing that moves."""
+    """Where the controller is in its cycle: with the configuration and the goal,
+    everything its next sizes depend on. ``dataclasses.replace`` copies it: the
+    sizing and the mappings are replaced when they change, never changed in
+    place, so a copy shares nothing that moves."""
 
     sizing: Sizing  # the outline family for the strategies applied now
     strategies: Mapping[str, float]  # as applied now
