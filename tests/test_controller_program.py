@@ -187,7 +187,7 @@ def test_no_corners_uses_the_flared_outline_vertices():
 def test_no_corners_count_is_at_least_the_fraction():
     """The program turns lights off while (turned off) / lit < c: for 161 lit
     lights and c = 0.5 that is 81, where rounding gives 80 (round half to even)."""
-    from sandbox.model.controller import no_corners_count
+    from sandbox.model.band import no_corners_count
 
     assert no_corners_count(0.5, 161, "at-least") == 81
     assert no_corners_count(0.5, 161, "round") == 80
@@ -214,7 +214,7 @@ def test_first_cycle_length_of_the_circle():
 
 
 def test_a_strategy_that_would_change_nothing_says_so():
-    from sandbox.model.controller import strategy_effect_note
+    from sandbox.model.notes import strategy_effect_note
 
     square, star = shape_vertices("square"), shape_vertices("star")
     # 90 x 1.0 = 90 is not above the square's 90-degree corners; 90 x 1.1 = 99 is.

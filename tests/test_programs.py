@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from sandbox.commands import main
+from sandbox.model.chase import ChaseController
 from sandbox.model.config import Config
 from sandbox.model.controller import Controller
 from sandbox.model.goal import make_goal
@@ -114,13 +115,13 @@ def test_chase_turns_beyond_the_farthest_stray_box_circle():
     """Circle goal: turn when the radius is 2 m beyond the farthest box outside
     the goal, and at least 2 m beyond the smallest radius; never past the largest."""
     cfg = Config(chase=2.0)
-    c = Controller(cfg, make_goal(cfg, None))
+    c = ChaseController(cfg, make_goal(cfg, None))
     centre = c.goal.centre
 
     class Seen:
         box_positions = np.array([centre, centre + [10.0, 0.0], centre + [0.0, -7.0]])
 
-    c._observation = Seen()
+    c.seen = Seen()
     assert c._turn_radius() == pytest.approx(12.0)
     Seen.box_positions = np.array([centre])  # no stray box
     assert c._turn_radius() == pytest.approx(c.min_radius + 2.0)
@@ -133,13 +134,13 @@ def test_chase_turns_beyond_the_farthest_stray_box_square():
     """Square goal of side 2h (h = its inradius): a box at 2h from the centre on
     the x axis lies on the outline at scale 2, inradius 2h; turn 2 m beyond."""
     cfg = Config(chase=2.0)
-    c = Controller(cfg, make_goal(cfg, shape_vertices("square")))
+    c = ChaseController(cfg, make_goal(cfg, shape_vertices("square")))
     h = c.shape.inradius
 
     class Seen:
         box_positions = np.array([c.goal.centre + [2 * h, 0.0]])
 
-    c._observation = Seen()
+    c.seen = Seen()
     assert c._turn_radius() == pytest.approx(2 * h + 2.0)
     assert c.senses == frozenset({"boxes"})
 

@@ -1,4 +1,5 @@
-"""The closed loop's geometry near the goal (sandbox.model.sculpt), values worked by hand."""
+"""Chase, the closed loop (sandbox.model.chase): its geometry near the goal, its hold and its plan for
+the end of a run, values worked by hand."""
 
 from __future__ import annotations
 
@@ -7,9 +8,13 @@ import math
 import numpy as np
 import pytest
 
-from sandbox.model import geometry, sculpt
+from sandbox.model import geometry
+from sandbox.model.chase import ChaseController, finish, sculpt
+from sandbox.model.chase.hold import Hold
+from sandbox.model.chase.tuning import SCULPTING, Sculpting
 from sandbox.model.config import Config
-from sandbox.model.controller import DILATING, HOLDING, Controller
+from sandbox.model.controller import Controller
+from sandbox.model.phases import DILATING, HOLDING
 from sandbox.model.goal import make_goal
 from sandbox.shapes import shape_vertices
 
@@ -83,7 +88,7 @@ def test_darken_near():
     assert on.tolist() == [False, False, True]
 
 
-def _hold_steps(hold: sculpt.Hold, arrivals, out_of_reach) -> int:
+def _hold_steps(hold: Hold, arrivals, out_of_reach) -> int:
     """Steps until the hold lets go; ``arrivals(clock)`` is the count in the goal."""
     while hold.tick(lambda: arrivals(hold.clock), lambda: out_of_reach):
         pass
@@ -91,21 +96,21 @@ def _hold_steps(hold: sculpt.Hold, arrivals, out_of_reach) -> int:
 
 
 def test_hold_lasts_one_check_without_progress():
-    tuning = sculpt.Sculpting()
-    assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=50) == 500
-    assert _hold_steps(sculpt.Hold(800, 300, tuning), lambda clock: 300, out_of_reach=50) == 800
+    tuning = Sculpting()
+    assert _hold_steps(Hold(100, 300, tuning), lambda clock: 300, out_of_reach=50) == 500
+    assert _hold_steps(Hold(800, 300, tuning), lambda clock: 300, out_of_reach=50) == 800
 
 
 def test_hold_goes_on_while_boxes_arrive():
     # Two boxes per 500 steps until step 2000, then none: checks at 500..2000 extend, 2500 does not.
     arrivals = lambda clock: 300 + 2 * min(clock, 2000) // 500  # noqa: E731
-    assert _hold_steps(sculpt.Hold(100, 300), arrivals, out_of_reach=50) == 2500
+    assert _hold_steps(Hold(100, 300), arrivals, out_of_reach=50) == 2500
 
 
 def test_hold_stays_while_little_is_out_of_reach_but_not_forever():
-    tuning = sculpt.Sculpting(longest=3000)
-    assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=4) == 3000
-    assert _hold_steps(sculpt.Hold(100, 300, tuning), lambda clock: 300, out_of_reach=5) == 500
+    tuning = Sculpting(longest=3000)
+    assert _hold_steps(Hold(100, 300, tuning), lambda clock: 300, out_of_reach=4) == 3000
+    assert _hold_steps(Hold(100, 300, tuning), lambda clock: 300, out_of_reach=5) == 500
 
 
 def test_hold_for_the_end():
@@ -113,13 +118,13 @@ def test_hold_for_the_end():
     exactly (go); 1,500 fits one but not two (hold until 1,000 are left); 2,000 fits
     two (go); 300-999 fit no whole cycle but a cut-short one (go: the dilation turns
     back in time); 299 not even that (hold to the end); after the end, never."""
-    assert not sculpt.hold_for_the_end(1000, 1000, 300)
-    assert sculpt.hold_for_the_end(1500, 1000, 300)
-    assert not sculpt.hold_for_the_end(2000, 1000, 300)
-    assert not sculpt.hold_for_the_end(999, 1000, 300)
-    assert not sculpt.hold_for_the_end(300, 1000, 300)
-    assert sculpt.hold_for_the_end(299, 1000, 300)
-    assert not sculpt.hold_for_the_end(-1, 1000, 300)
+    assert not finish.hold_for_the_end(1000, 1000, 300)
+    assert finish.hold_for_the_end(1500, 1000, 300)
+    assert not finish.hold_for_the_end(2000, 1000, 300)
+    assert not finish.hold_for_the_end(999, 1000, 300)
+    assert not finish.hold_for_the_end(300, 1000, 300)
+    assert finish.hold_for_the_end(299, 1000, 300)
+    assert not finish.hold_for_the_end(-1, 1000, 300)
 
 
 # ------------------------------------------------------------------ in the controller
@@ -129,7 +134,7 @@ def test_chase_lights_the_goal_grown_by_a_robot_diameter_at_the_smallest_size():
     robot diameter (0.5 m) from the goal."""
     star = shape_vertices("star")
     open_loop = Controller(Config(), make_goal(Config(), star))
-    closed = Controller(Config(chase=2.0), make_goal(Config(chase=2.0), star))
+    closed = ChaseController(Config(chase=2.0), make_goal(Config(chase=2.0), star))
     for c in (open_loop, closed):
         c.scale = c.min_scale
         c._redraw()
@@ -142,7 +147,7 @@ def test_chase_turns_beyond_the_farthest_stray_box_star():
     """Star goal: a stray box 3 m from the goal; the outline is the goal grown by
     (inradius - the outline's inradius at scale 1), so turn at inradius h + 3 + 2."""
     cfg = Config(chase=2.0)
-    c = Controller(cfg, make_goal(cfg, shape_vertices("star")))
+    c = ChaseController(cfg, make_goal(cfg, shape_vertices("star")))
     h = c.shape.inradius
     tip = c.goal.vertices[np.argmax(np.hypot(*(c.goal.vertices - c.goal.centre).T))]
     outward = (tip - c.goal.centre) / np.hypot(*(tip - c.goal.centre))
@@ -150,11 +155,11 @@ def test_chase_turns_beyond_the_farthest_stray_box_star():
     class Seen:
         box_positions = np.array([c.goal.centre, tip + 3.0 * outward])
 
-    c._observation = Seen()
+    c.seen = Seen()
     assert c._turn_radius() == pytest.approx(h + 3.0 + 2.0)
 
 
-def _closed_loop_hold_steps(c: Controller, boxes: np.ndarray, limit: int = 30000) -> int:
+def _closed_loop_hold_steps(c: ChaseController, boxes: np.ndarray, limit: int = 30000) -> int:
     """Steps the controller holds its smallest outline while it sees ``boxes``
     (the observation's step counts from 0 at the hold's start)."""
 
@@ -162,7 +167,7 @@ def _closed_loop_hold_steps(c: Controller, boxes: np.ndarray, limit: int = 30000
         box_positions = boxes
         step = 0
 
-    c._observation = Seen()
+    c.seen = Seen()
     c.phase, c.scale = "contracting", c.min_scale * 0.99
     c._program_update()  # the first size below the smallest: hold
     while c.phase == HOLDING and Seen.step < limit:
@@ -173,14 +178,14 @@ def _closed_loop_hold_steps(c: Controller, boxes: np.ndarray, limit: int = 30000
 
 def test_chase_hold_lets_go_only_for_boxes_out_of_reach():
     cfg = Config(chase=2.0, hold_steps=100)
-    c = Controller(cfg, make_goal(cfg, None))
+    c = ChaseController(cfg, make_goal(cfg, None))
     centre = c.goal.centre
     in_goal = np.tile(centre, (10, 1))
     far = centre + [20.0, 0.0] + np.zeros((20, 2))
     # 20 boxes out of reach (>= 5), none arriving: let go at the first check.
     assert _closed_loop_hold_steps(c, np.vstack([in_goal, far])) == 500
     # Nothing out of reach: extended at every check until the longest.
-    assert _closed_loop_hold_steps(c, in_goal) == sculpt.SCULPTING.longest
+    assert _closed_loop_hold_steps(c, in_goal) == SCULPTING.longest
 
 
 def _circle_with_boxes_20_m_out():
@@ -208,7 +213,7 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     cfg, goal, boxes = _circle_with_boxes_20_m_out()
 
     def released_at(deadline):
-        c = Controller(cfg.replace(steps=deadline), goal)
+        c = ChaseController(cfg.replace(steps=deadline), goal)
         return _closed_loop_hold_steps(c, boxes)
 
     assert released_at(499 + 11200) == 500  # at the check (step 499) exactly a cycle and a hold are left
@@ -218,7 +223,7 @@ def test_chase_finishes_in_a_hold_when_no_cycle_fits_before_the_deadline():
     # Room for one more cycle but not two: held until exactly one is left, at step 3499.
     assert released_at(499 + 11200 + 3000) == 3500
     assert released_at(499 + 2 * 11200) == 500  # room for two: let go at once
-    c = Controller(cfg.replace(steps=5000), goal)
+    c = ChaseController(cfg.replace(steps=5000), goal)
     c.open_ended = True
     assert _closed_loop_hold_steps(c, boxes) == 500
 
@@ -228,7 +233,7 @@ def _boxes_with_20_in_a_corner(goal):
     return np.vstack([np.tile(goal.centre, (10, 1)), goal.centre + [9.0, 9.0] + np.zeros((20, 2))])
 
 
-def _phase_changes(c: Controller, boxes: np.ndarray, start: int, end: int) -> list[tuple[int, str]]:
+def _phase_changes(c: ChaseController, boxes: np.ndarray, start: int, end: int) -> list[tuple[int, str]]:
     """(observation step, new phase) for each change while the controller sees ``boxes``."""
 
     class Seen:
@@ -256,10 +261,10 @@ def test_chase_dilation_turns_back_in_time_for_the_deadline():
     4,400 (turns, at step 4,099). The hold starts 3,900 steps later, at step 7,999,
     500 before the deadline. Without a deadline it would turn only at 22 m."""
     cfg, goal, boxes = _circle_with_boxes_20_m_out()
-    c = Controller(cfg.replace(steps=8499), goal)
+    c = ChaseController(cfg.replace(steps=8499), goal)
     assert _closed_loop_hold_steps(c, boxes) == 500
     assert _phase_changes(c, boxes, 500, 8499) == [(4099, "contracting"), (7999, HOLDING)]
-    c = Controller(cfg.replace(steps=8499), goal)
+    c = ChaseController(cfg.replace(steps=8499), goal)
     c.open_ended = True
     _closed_loop_hold_steps(c, boxes)
     assert _phase_changes(c, boxes, 500, 8499)[0] == (499 + 52 * 100, "contracting")
@@ -273,14 +278,14 @@ def test_the_contraction_bound_is_never_below_the_count(case):
     cfg = Config(chase=2.0, hold_steps=100, **case)
     goal = make_goal(cfg, shape_vertices(cfg.shape))
     boxes = _boxes_with_20_in_a_corner(goal)
-    c = Controller(cfg, goal)
+    c = ChaseController(cfg, goal)
     _closed_loop_hold_steps(c, boxes)
     checked = 0
     while c.phase == DILATING:
-        if c._until_update == 1:  # the next step is an update: what it would see
-            assert c._contraction_steps_at_most() >= c._steps_back_if_turning_now(limit=10**6)
+        if c.state.until_update == 1:  # the next step is an update: what it would see
+            assert finish.contraction_steps_at_most(c) >= finish.steps_back_if_turning_now(c, limit=10**6)
             checked += 1
-        c.update(c._observation)
+        c.update(c.seen)
     assert checked > 10
 
 
@@ -290,18 +295,18 @@ def test_chase_stretches_its_plan_by_the_longest_overrun_seen():
     cfg, goal, boxes = _circle_with_boxes_20_m_out()
 
     def released_at(deadline):
-        c = Controller(cfg.replace(steps=deadline), goal)
+        c = ChaseController(cfg.replace(steps=deadline), goal)
 
         class Seen:
             box_positions = boxes
             step = 6000
 
-        c._observation, c._released_at, c._predicted = Seen(), 0, 4000
+        c.seen, c.plan.released_at, c.plan.predicted = Seen(), 0, 4000
         c.phase = "contracting"
         c._start_hold()  # a hold starts 6,000 steps after the last one let go
-        assert c._overrun == 1.5 and c._predicted is None
+        assert c.plan.overrun == 1.5 and c.plan.predicted is None
         c._start_hold()  # the next hold, with nothing predicted, keeps it
-        assert c._overrun == 1.5
+        assert c.plan.overrun == 1.5
         return _closed_loop_hold_steps(c, boxes)
 
     assert released_at(499 + 16550) == 500
@@ -318,16 +323,16 @@ def test_the_planned_cycle_is_the_one_the_controller_then_runs(case):
     cfg = Config(chase=2.0, hold_steps=100, **case)
     goal = make_goal(cfg, shape_vertices(cfg.shape))
     boxes = _boxes_with_20_in_a_corner(goal)
-    c = Controller(cfg, goal)
+    c = ChaseController(cfg, goal)
     _closed_loop_hold_steps(c, boxes)
     assert c.phase == "dilating"
-    c.phase, c._hold = HOLDING, sculpt.Hold(cfg.hold_steps, 0)  # back to the moment before letting go
-    planned = c._steps_to_next_hold(limit=10**6)
+    c.phase, c._hold = HOLDING, Hold(cfg.hold_steps, 0)  # back to the moment before letting go
+    planned = finish.steps_to_next_hold(c, limit=10**6)
     assert c.phase == HOLDING  # the copy left the controller alone
     c._end_hold()
     steps = 0
     while c.phase != HOLDING:
-        c.update(c._observation)
+        c.update(c.seen)
         steps += 1
     assert steps == planned > 0
 
@@ -336,7 +341,7 @@ def test_a_sharp_corner_lacks_when_half_a_full_pile_is_missing():
     """With a 0.7 m neighbourhood a full pile holds pi/4 * 0.49 * 0.85 / 0.1624 = 2.01
     boxes at the square's corner: one box there is 1.01 missing (under the 2 of
     `lack`, but half of a full pile): dark; two boxes: lit."""
-    tuning = sculpt.Sculpting(near=0.7)
+    tuning = Sculpting(near=0.7)
 
     def corner_dark(boxes):
         boxes = np.array(boxes)
@@ -352,9 +357,9 @@ def test_with_chase_no_corners_darkens_only_while_dilating():
     star-switch-nocorners case fell from 0.772 to 0.745 in the goal); dilating, half
     the lit band (the 'at-least' rule: the fewest k with k / n >= 0.5) stays dark."""
     star = shape_vertices("star")
-    plain = Controller(Config(chase=2.0), make_goal(Config(chase=2.0), star))
+    plain = ChaseController(Config(chase=2.0), make_goal(Config(chase=2.0), star))
     cfg = Config(chase=2.0, no_corners=0.5)
-    c = Controller(cfg, make_goal(cfg, star))
+    c = ChaseController(cfg, make_goal(cfg, star))
     for ctrl in (plain, c):
         ctrl.scale = 2.0
         ctrl._redraw()

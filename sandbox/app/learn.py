@@ -10,10 +10,11 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from sandbox.app import palette as pal
+from sandbox.model.chase import ChaseController
 from sandbox.model.config import Config
-from sandbox.model.controller import DILATING, Controller
 from sandbox.model.goal import make_goal
 from sandbox.model.lights import LightField
+from sandbox.model.phases import DILATING
 from sandbox.model.robots import PHOTOCELLS
 from sandbox.shapes import shape_vertices
 
@@ -85,7 +86,7 @@ live below; *Camera follows* zooms in on it.
 def _pattern(config: Config, shape: str, steps: int = 0, **strategies: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     cfg = config.replace(**strategies)
     goal = make_goal(cfg, shape_vertices(shape))
-    ctrl = Controller(cfg, goal)
+    ctrl = ChaseController(cfg, goal)
     for _ in range(steps):
         ctrl.advance()
     return ctrl.intensities.copy(), ctrl.outline.copy(), goal.outline().copy()
@@ -95,7 +96,7 @@ def _smallest(config: Config, shape: str, **strategies: float) -> tuple[np.ndarr
     """The pattern at the smallest size (for chase: with no boxes seen, the plain grown goal)."""
     cfg = config.replace(**strategies)
     goal = make_goal(cfg, shape_vertices(shape))
-    ctrl = Controller(cfg, goal)
+    ctrl = ChaseController(cfg, goal)
     ctrl.scale = ctrl.min_scale
     ctrl._redraw()
     return ctrl.intensities.copy(), ctrl.outline.copy(), goal.outline().copy()
@@ -183,7 +184,7 @@ def cycle_picture(config: Config | None = None) -> np.ndarray:
     """The circle goal's cycle: largest, contracting, holding, dilating."""
     cfg = config or Config()
     goal = make_goal(cfg, None)
-    ctrl = Controller(cfg, goal)
+    ctrl = ChaseController(cfg, goal)
     tiles = [_tile(cfg, ctrl.intensities, ctrl.outline, goal.outline(), "1 start: largest")]
     for label, phase in (("2 contracting", None), ("3 holding: smallest", "holding"), ("4 dilating", DILATING)):
         for _ in range(3000 if phase is None else 10**6):
@@ -201,7 +202,7 @@ def _switch_step(config: Config, shape: str, switch: float) -> int:
     """Steps until a little after switch puts a circle in the polygon's place
     (while dilating): the moment that shows what switch does."""
     cfg = config.replace(switch=switch)
-    ctrl = Controller(cfg, make_goal(cfg, shape_vertices(shape)))
+    ctrl = ChaseController(cfg, make_goal(cfg, shape_vertices(shape)))
     steps = 0
     while not (ctrl.phase == DILATING and ctrl.circle_radius is not None) and steps < 200_000:
         ctrl.advance()

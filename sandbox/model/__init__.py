@@ -7,8 +7,16 @@ how success is measured. Headless: nothing here imports the web app.
 - :mod:`.kernels`     the robots' per-step work, compiled with numba
 - :mod:`.world`       the pymunk world: walls, bodies, bulk state
 - :mod:`.undamped`    robots the space's damping leaves alone
-- :mod:`.controller`  the goal and the contract / hold / dilate controller
-- :mod:`.outlines`    the lit outline (flare) and its smallest / largest sizes
+- :mod:`.goal`        the goal region, fitted to the centre and the boxes' area
+- :mod:`.controller`  the paper's contract / hold / dilate controller (Algorithm 1)
+- :mod:`.schedule`    where the controller is in its cycle (a state a copy can run ahead)
+- :mod:`.phases`      the controller's three phase names
+- :mod:`.outlines`    the outline family: the lit outline (flare) and its sizes
+- :mod:`.band`        which lights a band along an outline turns on; no corners
+- :mod:`.notes`       what is said before a run: a goal that does not fit, a strategy that does nothing
+- :mod:`.chase`       chase, a closed loop of ours: the controller seeing the boxes
+- :mod:`.programs`    the light-program interface: observations, pattern checks, loading
+- :mod:`.env`         a Gymnasium-style environment: the light pattern is the action
 - :mod:`.geometry`    pure polygon geometry
 - :mod:`.metrics`     the success metrics and their samples
 - :mod:`.simulation`  ``Simulation``: reset, step, read-only state

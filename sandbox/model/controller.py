@@ -1,299 +1,104 @@
-"""The open-loop light-field controller (SPEC §5, the paper's Algorithm 1).
+"""The paper's controller, its Algorithm 1 (SPEC §5): contract, hold, dilate.
 
-A band of lights follows an outline (the goal polygon or a circle) scaled
-about the assembly centre. The scale shrinks by ``scale_rate`` every
-``update_every`` steps down to the smallest size, holds there for
-``hold_steps``, grows back to the largest size, and the cycle repeats. The
-controller never looks at robots or boxes.
+A band of lights follows an outline at a size (the outline family,
+:mod:`sandbox.model.outlines`, gives the outline of each size; today's
+scales the goal about the assembly centre). Every ``update_every`` steps
+the size shrinks by ``scale_rate`` down to the smallest, is held there
+``hold_steps`` steps, grows back to the largest, and the cycle repeats: in
+the paper text's reading (:meth:`Cycle._clamped_step`) or the authors'
+program's (:meth:`Cycle._program_update`). Flare reshapes the outline (in
+its family), switch lights a circle in its place while it is large
+(:meth:`Cycle._switch_shape`), no corners darkens the lights nearest its
+convex corners (:mod:`sandbox.model.band`).
 
-``scale`` is measured relative to the outline at scale 1 (see
-:mod:`sandbox.outlines`): for a plain polygon or the circle, the goal itself,
-whose area equals the total area of the boxes.
-
-Two schedules (``Config.size_schedule``):
-
-* ``clamped`` (paper text): each update multiplies the scale by
-  ``scale_rate`` (contracting) or its inverse (dilating) and clamps it to the
-  smallest and largest sizes; the smallest is held ``hold_steps`` steps.
-* ``program`` (the authors' program, ``main.cc``): each update lights the
-  current size, then multiplies it by ``scale_rate`` (contracting) or
-  ``2 - scale_rate`` (dilating). The first size found below the smallest is
-  lit for ``hold_steps`` steps, then grown back to at least the smallest
-  (a circle grows by a fixed 0.6 m, the program's ``delta``); the first size
-  found above the largest is not lit: the scale turns and shrinks from it.
-
-And two readings of *switch to circle* (``Config.switch_mode``):
-
-* ``fraction`` (paper text): the outline is a circle of the goal's
-  equal-area radius times the scale whenever it is at least ``switch`` of
-  the way from the smallest to the largest size, both ways;
-* ``inradius`` (the authors' program): only while dilating, once the
-  polygon's inradius exceeds ``switch`` times half the arena (the program's
-  fixed 8 m is 0.25 of 32 m), the polygon is frozen and a circle of that
-  radius takes its place; the circle grows to the circle's largest size,
-  contracts, and the frozen polygon returns once the circle's radius falls
-  below the same threshold.
-
-With *chase* (the closed loop) the controller also looks at the boxes: its
-outline's geometry is :mod:`sandbox.model.sculpt`'s, and its plan for the
-step a run is measured at is :mod:`sandbox.model.finish`'s.
+:class:`Cycle` is the state machine alone: it changes nothing but its
+:class:`~sandbox.model.schedule.Schedule` and lights nothing, so a copy of
+its state can be run ahead. :class:`Controller` lights it, and looks at
+nothing: what it lights never depends on the robots or the boxes. A strategy
+that looks subclasses it and overrides its hooks: where a dilation turns
+(``_turn_radius``, ``_turns_early``), how long the smallest outline is held
+(``_start_hold``, ``_hold_step``, ``_end_hold``) and what is lit (``_redraw``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model import geometry, outlines, sculpt
-from sandbox.model.config import STRATEGY_NAMES, Config
-from sandbox.model.finish import EndPlanning
+from sandbox.model import band, geometry
+from sandbox.model.config import Config
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal, make_goal
 from sandbox.model.lights import light_centres
+from sandbox.model.notes import goal_fit_notes
 from sandbox.model.phases import CONTRACTING, DILATING, HOLDING
-from sandbox.shapes.errors import ShapeError
+from sandbox.model.schedule import InSchedule, Schedule
 
-_SENSES_BOXES, _SENSES_NOTHING = frozenset({"boxes"}), frozenset()
 #: After holding, the authors' program grows a circle back by this much (its ``delta``, m).
 PROGRAM_CIRCLE_REGROWTH = 0.6
 
 
-def goal_fit_notes(controller: "Controller") -> list[str]:
-    """Refuse a goal whose smallest outline does not fit the arena (ShapeError);
-    return a note when only its largest does not."""
-    small = controller.outline_at(controller.min_scale)
-    box = outlines.overreach(controller.config, small)
-    if box is not None:
-        raise ShapeError(f"the goal does not fit the arena: its smallest outline spans {outlines.describe_box(box)} "
-                         f"in a {controller.config.arena_size:g} m arena (use a rounder shape, fewer boxes or a "
-                         "bigger arena)")
-    big = controller.outline_at(controller.max_scale)
-    box = outlines.overreach(controller.config, big)
-    if box is None:
-        return []
-    return [f"the goal's largest outline spans {outlines.describe_box(box)}, past the "
-            f"{controller.config.arena_size:g} m arena's walls: the lights there do not exist"]
+class Cycle:
+    """Algorithm 1's state machine, one world step at a time (:meth:`advance`): sizes
+    and phases, lighting nothing. Its attributes below are its schedule's."""
 
+    phase, scale, circle_radius, cycle, updates = InSchedule(), InSchedule(), InSchedule(), InSchedule(), InSchedule()
+    sizing, strategies, progress = InSchedule(), InSchedule(), InSchedule()
+    min_radius, inradius, max_radius = InSchedule(), InSchedule(), InSchedule()
 
-class Controller(EndPlanning):
-    """State machine driving the light pattern. Call :meth:`advance` once per world step."""
-
-    #: How the closed loop (chase) shapes the band near the goal and holds it.
-    sculpting: sculpt.Sculpting = sculpt.SCULPTING
-
-    def __init__(self, config: Config, goal: Goal):
-        self.config = config
-        self.goal = goal
-        self._centres = light_centres(config).reshape(-1, 2)
-        self.strategies = {name: getattr(config, name) for name in STRATEGY_NAMES}
-        self._pending: dict[str, float] = {}
-        self._set_limits()
-        self.scale = self.max_scale
-        #: Radius of the circle lit in place of the polygon (switch_mode 'inradius'), else None.
-        self.circle_radius: float | None = None
-        self.phase = CONTRACTING
-        self.cycle = 0  # completed contract -> hold -> dilate cycles
-        self.updates = 0
-        self._until_update = config.update_every
-        self._hold_left = 0
-        self._hold: sculpt.Hold | None = None  # the closed loop's hold (chase), else None
-        self.outline = np.empty((0, 2))
-        self.corners = np.empty((0, 2))
-        self.intensities = np.zeros((config.lights_per_side,) * 2)
-        self._observation = None  # what the last update saw (closed loop only)
-        #: Whether the run goes on past ``config.steps`` (the live app's): then there is no deadline.
-        self.open_ended = False
-        self._released_at: int | None = None  # the step the last hold let go at (closed loop)
-        #: Steps the copy counted from letting go of this hold to the next (planned once per hold).
-        self._predicted: int | None = None
-        #: The longest a cycle ran in this run, as a multiple of the copy's prediction (at least 1).
-        self._overrun = 1.0
-        #: Turn at the next dilation update whatever the sizes say (set only in a copy; see _ghost).
-        self._force_turn = False
-        #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
-        #: outline does not fit is refused here with a ShapeError.
-        self.notes = goal_fit_notes(self)
-        if self._program:
-            self._program_update()
-        else:
-            self._redraw()
-
-    @property
-    def _program(self) -> bool:
-        return self.config.size_schedule == "program"
+    def __init__(self, config: Config, goal: Goal, state: Schedule):
+        self.config, self.goal, self.state = config, goal, state
 
     # -- sizes ------------------------------------------------------------
-    def _set_limits(self) -> None:
-        """The outline at scale 1 for the current strategies, and its smallest and largest scales."""
-        cfg, goal = self.config, self.goal
-        if goal.is_circle:
-            self.shape = None
-            self.min_scale = (goal.radius + 2.0 * cfg.robot_radius) / goal.radius
-            largest = outlines.max_circle_scale(cfg, goal.radius)
-        else:
-            self.shape = outlines.outline_shape(goal.vertices - goal.centre, goal.area, goal.file_area,
-                                                self.strategies["flare"], cfg.flare_mode)
-            self.min_scale = outlines.min_polygon_scale(cfg, self.shape, goal.radius)
-            largest = outlines.max_polygon_scale(cfg, self.shape, goal.area)
-        self.max_scale = max(largest, self.min_scale)
-
-    def outline_at(self, scale: float) -> np.ndarray:
-        """The polygon outline (or the circle, as a polygon) at ``scale``."""
-        goal = self.goal
-        if self.shape is None:
-            return geometry.regular_polygon(goal.radius * scale, CIRCLE_DRAW_VERTICES, goal.centre)
-        return goal.centre + scale * self.shape.vertices
-
-    @property
-    def min_radius(self) -> float:
-        """The smallest outline's inradius (its radius for a circle)."""
-        return self.min_scale * (self.goal.radius if self.shape is None else self.shape.inradius)
-
-    @property
-    def inradius(self) -> float:
-        """The lit outline's inradius (its radius for a circle)."""
-        if self.circle_radius is not None:
-            return self.circle_radius
-        return self.scale * (self.goal.radius if self.shape is None else self.shape.inradius)
-
-    @property
-    def max_radius(self) -> float:
-        """The largest inradius (radius for a circle) the lit outline may have now."""
-        if self.circle_radius is not None:
-            return self.circle_max_radius
-        return self.max_scale * (self.goal.radius if self.shape is None else self.shape.inradius)
-
-    @property
-    def circle_max_radius(self) -> float:
-        cfg = self.config
-        return cfg.circle_max * cfg.arena_size / 2.0
-
-    @property
-    def progress(self) -> float:
-        """How far the scale is from smallest (0) to largest (1)."""
-        span = self.max_scale - self.min_scale
-        return 0.0 if span <= 0 else (self.scale - self.min_scale) / span
+    shape = property(lambda self: self.sizing.shape, doc="The outline at scale 1 (None for the circle).")
+    min_scale = property(lambda self: self.sizing.smallest)
+    max_scale = property(lambda self: self.sizing.largest)
 
     @property
     def is_circle(self) -> bool:
-        """Whether the lit outline is currently a circle."""
+        """Whether the lit outline is now a circle: the goal's, or switched in. With
+        switch_mode ``fraction`` (paper text), a circle of the goal's equal-area radius
+        times the scale whenever the size is at least ``switch`` of the way from the
+        smallest to the largest, both ways."""
         if self.goal.is_circle or self.circle_radius is not None:
             return True
         switch = self.strategies["switch"]
         return self.config.switch_mode == "fraction" and switch > 0 and self.progress >= switch - 1e-12
+
+    @property
+    def _program(self) -> bool:
+        return self.config.size_schedule == "program"
 
     # -- live changes -----------------------------------------------------
     def reconfigure(self, config: Config) -> None:
         """Take new controller values (rate, band, sizes...) keeping the phase
         and a scale within the new limits; the pattern is redrawn at once."""
         self.config = config
-        self._set_limits()
-        self.scale = min(max(self.scale, self.min_scale), self.max_scale)
-        self._until_update = min(self._until_update, config.update_every)
-        if self.config.switch_mode != "inradius":
-            self.circle_radius = None
+        self.state.reconfigure(config, self.goal)
         self._redraw()
 
     def set_strategies(self, **values: float) -> None:
-        """Change flare / switch / no_corners; applied at the next controller update."""
-        unknown = set(values) - set(self.strategies)
-        if unknown:
-            raise ValueError(f"unknown strategies: {sorted(unknown)}")
-        self._pending.update(values)
-
-    def _take_pending_strategies(self) -> None:
-        if not self._pending:
-            return
-        flare_changed = self._pending.get("flare", self.strategies["flare"]) != self.strategies["flare"]
-        self.strategies.update(self._pending)
-        self._pending.clear()
-        if flare_changed:
-            self._set_limits()
-            self.scale = min(max(self.scale, self.min_scale), self.max_scale)
-        if self.strategies["switch"] <= 0:
-            self.circle_radius = None
-
-    # -- the light-program interface (sandbox.model.programs) ---------------
-    #: Called every world step: the controller keeps its own update clock.
-    every = 1
-
-    @property
-    def senses(self) -> frozenset:
-        """Open loop: nothing. With *chase*, the boxes' positions."""
-        return _SENSES_BOXES if self._closed_loop or self._pending.get("chase", 0) > 0 else _SENSES_NOTHING
-
-    def reset(self, config: Config, goal: Goal) -> None:
-        """Nothing to do: the simulation builds a new Controller for a new world."""
-
-    def update(self, observation) -> np.ndarray | None:
-        """One world step: the new pattern when it changed, else None."""
-        self._observation = observation
-        return self.intensities if self.advance() else None
+        """Change strategies (flare, switch, no_corners...); applied at the next controller update."""
+        self.state.set_pending(values)
 
     # -- time -------------------------------------------------------------
     def advance(self) -> bool:
         """One world step. Returns whether the light pattern may have changed."""
-        if self.phase == HOLDING:
-            if self._hold is not None and self._observation is not None:
-                return self._closed_loop_hold()
-            self._hold_left -= 1
-            if self._hold_left > 0:
-                return False
-            return self._end_hold()
-        self._until_update -= 1
-        if self._until_update > 0:
+        s = self.state
+        if s.phase == HOLDING:
+            return self._hold_step()
+        s.until_update -= 1
+        if s.until_update > 0:
             return False
         return self._update()
-
-    def _end_hold(self) -> bool:
-        self._hold = None
-        if self._observation is not None:
-            self._released_at = self._observation.step
-        self.phase = DILATING
-        if self._program:
-            self._grow_back()
-        return self._update()
-
-    def _start_hold(self) -> None:
-        """At the smallest size: hold for ``hold_steps`` (none: dilate at once);
-        the closed loop holds as long as :class:`sculpt.Hold` says."""
-        self.phase = HOLDING if self.config.hold_steps > 0 else DILATING
-        self._hold_left = self.config.hold_steps
-        if self.phase == HOLDING and self._closed_loop and self._observation is not None:
-            self._hold = sculpt.Hold(self.config.hold_steps, self._boxes_in_goal(), self.sculpting)
-            if self._released_at is not None and self._predicted:
-                ran = self._observation.step - self._released_at
-                self._overrun = max(self._overrun, ran / self._predicted)
-            self._predicted = None
-
-    def _closed_loop_hold(self) -> bool:
-        """One step of the closed loop's hold: the band is re-sculpted every update."""
-        if self._hold.tick(self._boxes_in_goal, self._boxes_out_of_reach) or self._finish_in_hold():
-            if self._hold.clock % self.config.update_every == 0:
-                self._redraw()
-                return True
-            return False
-        return self._end_hold()
-
-    @property
-    def _closed_loop(self) -> bool:
-        return self.strategies["chase"] > 0
-
-    def _boxes_in_goal(self) -> int:
-        return int(self.goal.contains(self._observation.box_positions).sum())
-
-    def _boxes_out_of_reach(self) -> int:
-        """Boxes beyond the reach of robots on the smallest outline (one robot
-        diameter from the goal): farther than three robot radii from it."""
-        distance = self.goal.distance(self._observation.box_positions)
-        return int((distance > 3.0 * self.config.robot_radius).sum())
 
     def _update(self) -> bool:
-        self._until_update = self.config.update_every
-        self.updates += 1
-        self._take_pending_strategies()
+        s = self.state
+        s.until_update = self.config.update_every
+        s.updates += 1
+        s.take_pending(self.config, self.goal)
         if self._program:
             self._program_update()
             return True
-        if self.circle_radius is not None:
+        if s.circle_radius is not None:
             self._clamped_circle_step()
         else:
             self._clamped_step()
@@ -301,74 +106,90 @@ class Controller(EndPlanning):
         self._redraw()
         return True
 
+    # -- the hold (hooks) -------------------------------------------------------
+    def _start_hold(self) -> None:
+        """At the smallest size: hold for ``hold_steps`` (none: dilate at once).
+        Hook, with the next two: chase holds on while boxes keep arriving."""
+        s = self.state
+        s.phase = HOLDING if self.config.hold_steps > 0 else DILATING
+        s.hold_left = self.config.hold_steps
+
+    def _hold_step(self) -> bool:
+        """One world step of holding; returns whether the pattern may have changed."""
+        s = self.state
+        s.hold_left -= 1
+        if s.hold_left > 0:
+            return False
+        return self._end_hold()
+
+    def _end_hold(self) -> bool:
+        """Let go of the smallest outline and dilate."""
+        self.state.phase = DILATING
+        if self._program:
+            self._grow_back()
+        return self._update()
+
+    # -- where a dilation turns (hooks) ---------------------------------------
+    def _turn_radius(self) -> float:
+        """The inradius (radius for a circle) at which dilation turns: the largest.
+        Hook: chase turns as soon as the outline is beyond the farthest stray box."""
+        return self.max_radius
+
+    def _turns_early(self) -> bool:
+        """Whether a dilation turns at this update whatever its size: never. Hook:
+        chase turns in time for the step its run is measured at."""
+        return False
+
+    def _turn_to_contracting(self) -> None:
+        self.state.phase, self.state.cycle = CONTRACTING, self.state.cycle + 1
+
     # -- the paper text's schedule ------------------------------------------
     def _clamped_step(self) -> None:
-        rate = self.config.scale_rate
-        if self.phase == CONTRACTING:
-            self.scale *= rate
-            if self.scale <= self.min_scale:
-                self.scale = self.min_scale
+        """One update (size_schedule ``clamped``): the scale times ``scale_rate``
+        contracting, over it dilating, clamped to the smallest (held ``hold_steps``)
+        and the largest sizes."""
+        s, rate = self.state, self.config.scale_rate
+        if s.phase == CONTRACTING:
+            s.scale = s.sizing.step(s.scale, rate)
+            if s.scale <= s.sizing.smallest:
+                s.scale = s.sizing.smallest
                 self._start_hold()
-        elif self.phase == DILATING:
-            self.scale /= rate
-            if self.scale >= self.max_scale:
-                self.scale = self.max_scale
+        elif s.phase == DILATING:
+            s.scale = s.sizing.step_back(s.scale, rate)
+            if s.scale >= s.sizing.largest:
+                s.scale = s.sizing.largest
                 self._turn_to_contracting()
-            elif self.inradius >= self._turn_radius() or self._turn_for_the_deadline():
+            elif s.inradius >= self._turn_radius() or self._turns_early():
                 self._turn_to_contracting()
 
     def _clamped_circle_step(self) -> None:
-        """The circle lit in the polygon's place (switch_mode 'inradius') under
-        the clamped schedule: it turns at the circle's largest size; the
-        polygon returns below the switch threshold (see _switch_shape)."""
-        rate = self.config.scale_rate
-        if self.phase == CONTRACTING:
-            self.circle_radius *= rate
+        """The circle lit in the polygon's place (see _switch_shape) under the clamped
+        schedule: it turns at the circle's largest size."""
+        s, rate = self.state, self.config.scale_rate
+        if s.phase == CONTRACTING:
+            s.circle_radius *= rate
         else:
-            self.circle_radius = min(self.circle_radius / rate, self.circle_max_radius)
-            if self.circle_radius >= self.circle_max_radius or self._turn_for_the_deadline():
+            s.circle_radius = min(s.circle_radius / rate, s.sizing.circle_largest)
+            if s.circle_radius >= s.sizing.circle_largest or self._turns_early():
                 self._turn_to_contracting()
-
-    def _turn_radius(self) -> float:
-        """The inradius (radius for a circle) at which dilation turns: the
-        largest, or with *chase* (closed loop) as soon as the outline is
-        ``chase`` metres beyond the farthest box outside the goal, and at least
-        ``chase`` metres beyond the smallest outline, so the robots always
-        back off and push again."""
-        largest = self.max_radius
-        margin = self.strategies["chase"]
-        observation = self._observation
-        if margin <= 0 or observation is None:
-            return largest
-        boxes = observation.box_positions
-        stray = boxes[~self.goal.contains(boxes)]
-        if not len(stray):
-            need = 0.0
-        elif self.circle_radius is not None or self.shape is None:
-            need = float(np.hypot(*(stray - self.goal.centre).T).max()) + margin
-        else:  # the outline is the goal grown by (inradius - its inradius at scale 1): see _redraw_closed_loop
-            need = self.shape.inradius + float(self.goal.distance(stray).max()) + margin
-        return min(largest, max(need, self.min_radius + margin))
-
-    def _turn_to_contracting(self) -> None:
-        self.phase = CONTRACTING
-        self.cycle += 1
 
     # -- the authors' program's schedule ------------------------------------
     def _program_update(self) -> None:
-        """One update of the program's main loop: light the current size, then
-        step it (see the module docstring)."""
-        rate = self.config.scale_rate
-        if self.inradius < self.min_radius and self.phase == CONTRACTING:
+        """One update of the program's main loop (size_schedule ``program``, its
+        ``main.cc``): light the current size, then step it by ``scale_rate``
+        contracting, ``2 - scale_rate`` dilating. The first size found below the
+        smallest is lit for ``hold_steps`` steps, then grown back to at least the
+        smallest; the first found above the largest is not lit: it turns and shrinks."""
+        s, rate = self.state, self.config.scale_rate
+        if s.inradius < s.min_radius and s.phase == CONTRACTING:
             # First size below the smallest: lit while holding, then grown back.
             self._start_hold()
             self._redraw()
-            if self.phase == DILATING:
+            if s.phase == DILATING:
                 self._grow_back()
                 self._program_update()
             return
-        if self.phase == DILATING and (self.inradius > self._turn_radius() * (1 + 1e-12)
-                                       or self._turn_for_the_deadline()):
+        if s.phase == DILATING and (s.inradius > self._turn_radius() * (1 + 1e-12) or self._turns_early()):
             # First size above the largest (or the last that can come back in time):
             # not lit; turn and shrink from it.
             self._turn_to_contracting()
@@ -376,141 +197,104 @@ class Controller(EndPlanning):
             return
         self._switch_shape()
         self._redraw()
-        self._step_size(rate if self.phase == CONTRACTING else 2.0 - rate)
+        self._step_size(rate if s.phase == CONTRACTING else 2.0 - rate)
 
     def _switch_shape(self) -> None:
-        """switch_mode 'inradius': a circle in the polygon's place while it is large."""
-        if self.goal.is_circle or self.config.switch_mode != "inradius" or self.strategies["switch"] <= 0:
+        """switch_mode ``inradius`` (the authors' program): only while dilating, once
+        the polygon's inradius exceeds ``switch`` times half the arena (the program's
+        fixed 8 m is 0.25 of 32 m), the polygon is frozen and a circle of that radius
+        takes its place; it grows to the circle's largest size, contracts, and the
+        frozen polygon returns once its radius falls below the same threshold."""
+        s = self.state
+        if self.goal.is_circle or self.config.switch_mode != "inradius" or s.strategies["switch"] <= 0:
             return
-        threshold = self.strategies["switch"] * self.config.arena_size / 2.0
-        if self.circle_radius is None and self.phase == DILATING and self.inradius > threshold:
-            self.circle_radius = self.inradius  # the polygon stays frozen at this scale
-        elif self.circle_radius is not None and self.phase == CONTRACTING and self.circle_radius < threshold:
-            self.circle_radius = None  # the frozen polygon returns
+        threshold = s.strategies["switch"] * self.config.arena_size / 2.0
+        if s.circle_radius is None and s.phase == DILATING and s.inradius > threshold:
+            s.circle_radius = s.inradius  # the polygon stays frozen at this scale
+        elif s.circle_radius is not None and s.phase == CONTRACTING and s.circle_radius < threshold:
+            s.circle_radius = None  # the frozen polygon returns
 
     def _step_size(self, factor: float) -> None:
-        if self.circle_radius is not None:
-            self.circle_radius *= factor
+        s = self.state
+        if s.circle_radius is not None:
+            s.circle_radius *= factor
         else:
-            self.scale *= factor
+            s.scale = s.sizing.step(s.scale, factor)
 
     def _grow_back(self) -> None:
         """After the hold: back to at least the smallest size (a circle goal by the program's 0.6 m)."""
+        s = self.state
         if self.goal.is_circle:
-            self.scale += PROGRAM_CIRCLE_REGROWTH / self.goal.radius
+            s.scale = s.sizing.widen(s.scale, PROGRAM_CIRCLE_REGROWTH)
             return
         grow = 2.0 - self.config.scale_rate
-        while self.inradius < self.min_radius:
+        while s.inradius < s.min_radius:
             self._step_size(grow)
 
-    # -- pattern ----------------------------------------------------------
     def _redraw(self) -> None:
-        """Recompute the outline and which lights are on."""
-        cfg, goal = self.config, self.goal
-        if self._closed_loop and self.circle_radius is None and (goal.is_circle or not self.is_circle):
-            self._redraw_closed_loop()
-            return
-        if self.is_circle:
-            radius = self.circle_radius if self.circle_radius is not None else goal.radius * self.scale
-            self.outline = geometry.regular_polygon(radius, CIRCLE_DRAW_VERTICES, goal.centre)
-            self.corners = np.empty((0, 2))
-            dist = np.abs(np.hypot(*(self._centres - goal.centre).T) - radius)
-            on = dist <= cfg.band + 1e-9
-        else:
-            self.outline = goal.centre + self.scale * self.shape.vertices
-            self.corners = self.outline[self.shape.corners]
-            on = geometry.distance_to_outline(self._centres, self.outline) <= cfg.band + 1e-9
-            if self.strategies["no_corners"] > 0 and len(self.corners):
-                on = self._darken_corners(on)
-        self.intensities = (on * cfg.light_intensity).reshape(self.intensities.shape)
+        """Light the current outline: the state machine alone lights nothing."""
 
-    def _redraw_closed_loop(self) -> None:
-        """*Chase*: the goal grown by the distance the scale gives, sculpted near
-        the goal from what the boxes show (see :mod:`sandbox.model.sculpt`)."""
-        cfg, goal = self.config, self.goal
-        polygon = goal.outline()
-        distance = self.inradius - (goal.radius if self.shape is None else self.shape.inradius)
-        observation = self._observation
-        if observation is None:
-            shaped = sculpt.Sculpted(sculpt.offset_outline(polygon, distance), np.empty((0, 2)))
+
+class Controller(Cycle):
+    """The paper's controller: the cycle, lit as a band of lights along its outline.
+    A light program (:mod:`sandbox.model.programs`) asked every world step."""
+
+    #: Called every world step: the controller keeps its own update clock.
+    every = 1
+    #: The open loop looks at nothing.
+    senses: frozenset = frozenset()
+
+    def __init__(self, config: Config, goal: Goal):
+        super().__init__(config, goal, Schedule.start(config, goal))
+        self._centres = light_centres(config).reshape(-1, 2)
+        self.outline = np.empty((0, 2))
+        self.corners = np.empty((0, 2))
+        self.intensities = np.zeros((config.lights_per_side,) * 2)
+        #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
+        #: outline does not fit is refused here with a ShapeError.
+        self.notes = goal_fit_notes(config, self.sizing)
+        if self._program:  # the largest size is lit, and the program steps from it at once
+            self._program_update()
         else:
-            boxes = observation.box_positions
-            shaped = sculpt.sculpt(polygon, distance, boxes, goal.contains(boxes), cfg.box_area, self.sculpting)
-        self.outline = shaped.outline
-        if goal.is_circle:
+            self._redraw()
+
+    def reset(self, config: Config, goal: Goal) -> None:
+        """Nothing to do: the simulation builds a new Controller for a new world."""
+
+    def update(self, observation) -> np.ndarray | None:
+        """One world step: the new pattern when it changed, else None (the observation is unread)."""
+        return self.intensities if self.advance() else None
+
+    def _redraw(self) -> None:
+        """Recompute the outline and which lights are on. Hook: chase lights the goal
+        grown, sculpted from what the boxes show."""
+        s = self.state
+        if self.is_circle:
+            radius = s.circle_radius if s.circle_radius is not None else s.sizing.circle_radius(s.scale)
+            self.outline = geometry.regular_polygon(radius, CIRCLE_DRAW_VERTICES, self.goal.centre)
             self.corners = np.empty((0, 2))
+            on = band.around(self._centres, self.goal.centre, radius, self.config.band)
         else:
-            convex = geometry.interior_angles(polygon) < 180.0
-            self.corners = sculpt.corner_points(polygon, convex, distance)
-        on = geometry.distance_to_outline(self._centres, self.outline) <= cfg.band + 1e-9
-        if self.strategies["no_corners"] > 0 and len(self.corners) and self.phase == DILATING:
-            on = self._darken_corners(on)
-        on = sculpt.darken_near(on, self._centres, shaped.dark, self.sculpting.dark)
-        self.intensities = (on * cfg.light_intensity).reshape(self.intensities.shape)
+            self.outline, self.corners = s.sizing.polygon(s.scale), s.sizing.corners(s.scale)
+            on = band.along(self._centres, self.outline, self.config.band)
+            if s.strategies["no_corners"] > 0 and len(self.corners):
+                on = self._darken_corners(on)
+        self._light(on)
 
     def _darken_corners(self, on: np.ndarray) -> np.ndarray:
-        """The no-corners strategy: switch off the band lights nearest convex corners."""
-        lit = np.flatnonzero(on)
-        off = no_corners_count(self.strategies["no_corners"], len(lit), self.config.no_corners_count)
-        if off == 0:
-            return on
-        if self.config.no_corners_count == "at-least":
-            # The program breaks ties by its light index, x + y * n (lit lists ix * n + iy).
-            n = self.config.lights_per_side
-            lit = lit[np.argsort((lit % n) * n + lit // n, kind="stable")]
-        d = np.hypot(*(self._centres[lit, None, :] - self.corners[None, :, :]).transpose(2, 0, 1)).min(axis=1)
-        on = on.copy()
-        # Rounded so that equally near lights tie exactly, whatever order the
-        # file lists its vertices in; ties then go by light index.
-        on[lit[np.argsort(np.round(d, 9), kind="stable")[:off]]] = False
-        return on
+        return band.darken_corners(on, self._centres, self.corners, self.strategies["no_corners"], self.config)
 
-
-def no_corners_count(fraction: float, lit: int, rule: str) -> int:
-    """How many of ``lit`` lights the no-corners strategy turns off."""
-    if rule == "round":
-        return int(round(fraction * lit))
-    # The program turns lights off while (turned off) / lit < fraction.
-    off = 0
-    while off < lit and off / lit < fraction:
-        off += 1
-    return off
+    def _light(self, on: np.ndarray) -> None:
+        self.intensities = (on * self.config.light_intensity).reshape(self.intensities.shape)
 
 
 def first_cycle_steps(config: Config, vertices: np.ndarray | None, limit: int = 10**7) -> int:
-    """World steps until the first contract-hold-dilate cycle ends (the
-    controller alone: it never looks at robots or boxes, so this is exact)."""
+    """World steps until the first contract-hold-dilate cycle ends, seeing nothing.
+    Exact for the open loop, which never looks; a strategy that looks at the boxes
+    runs its own cycles (turning sooner, holding longer): for it, an estimate."""
     ctrl = Controller(config, make_goal(config, vertices))
     steps = 0
     while ctrl.cycle == 0 and steps < limit:
         ctrl.advance()
         steps += 1
     return steps
-
-
-def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | None, chase: float = 0.0) -> str:
-    """Why a strategy at this amount will change nothing on this goal ('' when it will).
-
-    A circle goal has no corners to flare or darken and is already a circle;
-    flare moves a convex corner of angle a only when 90 x amount > a, so on a
-    square it starts above 1 and on the star's 52.5-degree tips above 0.58.
-    With chase on, the lit outline is the goal grown, so flare changes only
-    how far it grows."""
-    if amount <= 0:
-        return ""
-    if name == "flare" and chase > 0 and goal_vertices is not None:
-        return ("With chase on, the band follows the goal grown by the same distance all round, not a flared "
-                "outline: flare changes only the largest size it grows to.")
-    if goal_vertices is None:
-        return {"flare": "Flare does nothing on a circle goal: it has no corners to push out.",
-                "switch": "Switch to circle does nothing on a circle goal: it is a circle already.",
-                "no_corners": "No corners does nothing on a circle goal: it has no corners."}.get(name, "")
-    if name == "flare":
-        angles = geometry.interior_angles(np.asarray(goal_vertices, dtype=float))
-        convex = angles[angles < 180.0]
-        if len(convex) and not (90.0 * amount > convex).any():
-            sharpest = float(convex.min())
-            return (f"Flare {amount:g} does nothing on this goal: flare moves a corner only when 90 x amount "
-                    f"exceeds its angle, and the sharpest corner is {sharpest:.0f} degrees "
-                    f"(flare acts above {sharpest / 90.0:.2f}).")
-    return ""

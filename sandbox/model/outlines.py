@@ -1,5 +1,13 @@
 """The outline the controller lights, and its smallest and largest sizes (SPEC §5, §9).
 
+The controller asks an outline *family* (:class:`Sizing`) for its smallest
+and largest sizes, how a size steps, the outline's inradius at a size (what
+its schedules compare) and the outline itself; it never looks inside a size.
+Today's family is :class:`ScaledSizing`: the goal (or the circle) scaled
+about the assembly centre, a size being the scale (the paper's word, which
+the controller keeps). Another family, the band at a signed distance from
+the goal say, would offer the same, and :func:`sizing_for` would choose it.
+
 An :class:`OutlineShape` is a polygon relative to the assembly centre at
 *scale 1*; the controller lights ``centre + scale * vertices``. For a plain
 polygon scale 1 is the goal itself. Flare changes the shape, in one of two
@@ -30,11 +38,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from sandbox.model import geometry
 from sandbox.model.config import Config
+from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal
 
 #: The authors' program grows a polygon to its largest size in steps of this factor.
 PROGRAM_GROWTH_STEP = 1.05
@@ -56,6 +66,107 @@ class OutlineShape:
     def inradius(self) -> float:
         """Distance from the centre to the nearest point of the sized outline at scale 1."""
         return float(geometry.distance_to_outline(np.zeros((1, 2)), self.sized)[0])
+
+
+class Sizing(Protocol):
+    """An outline family: the outlines the controller can light, one per size."""
+
+    #: The smallest and largest sizes.
+    smallest: float
+    largest: float
+    #: The largest radius of a circle lit in the outline's place (switch).
+    circle_largest: float
+
+    def step(self, size: float, factor: float) -> float:
+        """The size one update on, ``factor`` being the schedule's (below 1: contracting)."""
+
+    def step_back(self, size: float, factor: float) -> float:
+        """The size one update back (the clamped schedule dilates so)."""
+
+    def widen(self, size: float, metres: float) -> float:
+        """The size whose outline's inradius is ``metres`` more."""
+
+    def radius(self, size: float) -> float:
+        """The outline's inradius at ``size`` (its radius for a circle)."""
+
+    def circle_radius(self, size: float) -> float:
+        """The radius of the circle lit in the outline's place at ``size`` (switch)."""
+
+    def polygon(self, size: float) -> np.ndarray:
+        """The outline at ``size``, absolute (a fine polygon for a circle)."""
+
+    def corners(self, size: float) -> np.ndarray:
+        """The outline's convex corners at ``size`` (none for a circle)."""
+
+    def distance(self, size: float) -> float:
+        """How far the outline at ``size`` lies beyond the goal-sized one, on their inradii."""
+
+    def radius_beyond(self, distance: float) -> float:
+        """The inradius of the outline ``distance`` beyond the goal-sized one."""
+
+
+@dataclass(frozen=True)
+class ScaledSizing:
+    """The goal (flared, or the circle) scaled about the assembly centre: a size is
+    the scale, 1 being the outline at the goal's area (see the module docstring)."""
+
+    goal: Goal
+    shape: OutlineShape | None  # None: the circle
+    smallest: float
+    largest: float
+    #: The outline's inradius at scale 1 (the radius, for a circle).
+    unit_radius: float
+    circle_largest: float
+
+    @classmethod
+    def of(cls, config: Config, goal: Goal, flare: float) -> "ScaledSizing":
+        """The outline at scale 1 for this goal and flare, and its smallest and largest scales."""
+        circle_largest = max_circle_radius(config)
+        if goal.is_circle:
+            smallest = (goal.radius + 2.0 * config.robot_radius) / goal.radius
+            largest = max_circle_scale(config, goal.radius)
+            return cls(goal, None, smallest, max(largest, smallest), goal.radius, circle_largest)
+        shape = outline_shape(goal.vertices - goal.centre, goal.area, goal.file_area, flare, config.flare_mode)
+        smallest = min_polygon_scale(config, shape, goal.radius)
+        largest = max_polygon_scale(config, shape, goal.area)
+        return cls(goal, shape, smallest, max(largest, smallest), shape.inradius, circle_largest)
+
+    def step(self, size: float, factor: float) -> float:
+        return size * factor
+
+    def step_back(self, size: float, factor: float) -> float:
+        return size / factor
+
+    def widen(self, size: float, metres: float) -> float:
+        return size + metres / self.unit_radius
+
+    def radius(self, size: float) -> float:
+        return size * self.unit_radius
+
+    def circle_radius(self, size: float) -> float:
+        """The goal's equal-area radius times the scale."""
+        return self.goal.radius * size
+
+    def polygon(self, size: float) -> np.ndarray:
+        if self.shape is None:
+            return geometry.regular_polygon(self.goal.radius * size, CIRCLE_DRAW_VERTICES, self.goal.centre)
+        return self.goal.centre + size * self.shape.vertices
+
+    def corners(self, size: float) -> np.ndarray:
+        if self.shape is None:
+            return np.empty((0, 2))
+        return self.polygon(size)[self.shape.corners]
+
+    def distance(self, size: float) -> float:
+        return self.radius(size) - self.unit_radius
+
+    def radius_beyond(self, distance: float) -> float:
+        return self.unit_radius + distance
+
+
+def sizing_for(config: Config, goal: Goal, flare: float) -> Sizing:
+    """The outline family the controller lights for this goal and flare (today's only one)."""
+    return ScaledSizing.of(config, goal, flare)
 
 
 def outline_shape(goal_relative: np.ndarray, goal_area: float, file_area: float, flare: float,
@@ -124,8 +235,13 @@ def max_polygon_scale(config: Config, shape: OutlineShape, goal_area: float) -> 
         growth *= PROGRAM_GROWTH_STEP
 
 
+def max_circle_radius(config: Config) -> float:
+    """The largest radius of a circle: ``circle_max`` of half the arena."""
+    return config.circle_max * config.arena_size / 2.0
+
+
 def max_circle_scale(config: Config, goal_radius: float) -> float:
-    return config.circle_max * config.arena_size / 2.0 / goal_radius
+    return max_circle_radius(config) / goal_radius
 
 
 def overreach(config: Config, outline: np.ndarray) -> tuple[float, float, float, float] | None:

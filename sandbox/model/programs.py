@@ -12,10 +12,12 @@ A light program is an object with
   (an (n, n) array indexed [ix, iy], or n * n values in that order), or None
   to keep the current one.
 
-The paper's open-loop controller (:class:`sandbox.model.controller.Controller`)
-is one, called every step; :class:`LightProgram` is a base class for others.
-A program's pattern is checked at every update: a wrong shape, a negative
-or non-finite value stops the run with a :class:`ProgramError` that says so.
+The paper's controller is one (:class:`sandbox.model.controller.Controller`;
+the simulation's, :class:`sandbox.model.chase.ChaseController`, senses the
+boxes while its chase strategy is on), called every step with an observation
+like any other; :class:`LightProgram` is a base class for others. A user's
+program's pattern is checked at every update: a wrong shape, a negative or
+non-finite value stops the run with a :class:`ProgramError` that says so.
 
 >>> class Blink(LightProgram):
 ...     def update(self, observation):

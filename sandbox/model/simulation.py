@@ -18,6 +18,7 @@ from typing import Any, Callable
 import numpy as np
 
 from sandbox.model import kernels, metrics, robots, watchdog
+from sandbox.model.chase import ChaseController
 from sandbox.model.config import STRATEGY_NAMES, Config, param
 from sandbox.model.controller import Controller
 from sandbox.model.goal import Goal, make_goal
@@ -30,7 +31,7 @@ from sandbox.shapes import ShapeError, shape_vertices
 def _controller(config: Config, goal: Goal) -> Controller:
     """The controller for a goal, or a ShapeError naming the goal if it cannot fit the arena."""
     try:
-        return Controller(config, goal)
+        return ChaseController(config, goal)  # the paper's, with chase to switch on live
     except ShapeError as exc:
         raise ShapeError(f"{config.shape}: {exc}") from None
 
@@ -134,11 +135,7 @@ class Simulation:
         if self._until_program <= 0:
             t0 = time.perf_counter()
             self._until_program = self._program_every
-            program = self.program
-            if program is self.controller:  # asked every step: an observation only when it senses (chase)
-                pattern = program.update(self._observation() if program.senses else None)
-            else:
-                pattern = self._call_program(program.update, self._observation())
+            pattern = self._call_program(self.program.update, self._observation())
             if pattern is not None:
                 self.set_pattern(pattern)
                 self.timings["lights"] += time.perf_counter() - t0
@@ -213,8 +210,11 @@ class Simulation:
         return every_of(self.program, self.config.update_every)
 
     def _call_program(self, method: Callable, *args: Any) -> Any:
-        """A user's program's method, within its time limit; whatever goes wrong in it (an exception,
-        an overrun, even SystemExit) is a one-line ProgramError."""
+        """The light program's method. A user's program runs within its time limit, and whatever goes
+        wrong in it (an exception, an overrun, even SystemExit) is a one-line ProgramError; the paper's
+        controller is ours, called directly (a bug in it is a bug, with its traceback)."""
+        if self.user_program is None:
+            return method(*args)
         name = f"{type(self.program).__name__}.{method.__name__}"
         try:
             return watchdog.limited(method, *args, limit=self.program_time_limit, what=name,

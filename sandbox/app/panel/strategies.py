@@ -12,7 +12,7 @@ import viser
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.config import CASES, STRATEGIES
-from sandbox.model.controller import strategy_effect_note
+from sandbox.model.notes import strategy_effect_note
 from sandbox.model.simulation import Simulation
 from sandbox.shapes import shape_vertices
 

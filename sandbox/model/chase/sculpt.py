@@ -1,0 +1,102 @@
+"""Chase's outline near the goal: the goal grown, pressed in where boxes spill
+out and dark where the goal lacks them (see :mod:`sandbox.model.chase`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from shapely.geometry import Polygon
+
+from sandbox.model.chase.tuning import SCULPTING, Sculpting
+
+#: Segments per quarter circle of an offset's round corners.
+ROUND_SEGMENTS = 4
+
+
+def offset_outline(polygon: np.ndarray, distance: float) -> np.ndarray:
+    """The polygon grown by ``distance`` with round corners (vertices, not closed)."""
+    grown = Polygon(polygon).buffer(max(distance, 0.0), quad_segs=ROUND_SEGMENTS, join_style="round")
+    if grown.geom_type != "Polygon":  # cannot happen for a simple polygon grown outward; be safe
+        grown = grown.convex_hull
+    return np.asarray(grown.exterior.coords)[:-1]
+
+
+def corner_points(polygon: np.ndarray, corners: np.ndarray, distance: float) -> np.ndarray:
+    """Where the grown outline passes the polygon's convex ``corners`` (a boolean mask):
+    each corner moved ``distance`` out along its outward bisector."""
+    to_prev = _unit(polygon - np.roll(polygon, 1, axis=0))
+    to_next = _unit(polygon - np.roll(polygon, -1, axis=0))
+    return (polygon + distance * _unit(to_prev + to_next))[corners]
+
+
+def densify(vertices: np.ndarray, spacing: float) -> np.ndarray:
+    """The closed polygon with extra vertices so no edge is longer than ``spacing``."""
+    ends = np.roll(vertices, -1, axis=0)
+    pieces = np.maximum(1, np.ceil(np.hypot(*(ends - vertices).T) / spacing).astype(int))
+    starts = np.repeat(vertices, pieces, axis=0)
+    steps = np.repeat(ends - vertices, pieces, axis=0)
+    fraction = np.concatenate([np.arange(k) / k for k in pieces])
+    return starts + fraction[:, None] * steps
+
+
+def nearest_on_outline(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """For each point, the nearest point on the closed polygon's edges."""
+    a = polygon[None, :, :]
+    edge = np.roll(polygon, -1, axis=0)[None, :, :] - a
+    p = points[:, None, :]
+    along = np.clip(((p - a) * edge).sum(-1) / np.maximum((edge * edge).sum(-1), 1e-300), 0.0, 1.0)
+    foot = a + along[..., None] * edge
+    nearest = np.hypot(*(p - foot).transpose(2, 0, 1)).argmin(axis=1)
+    return foot[np.arange(len(points)), nearest]
+
+
+def full_counts(goal: np.ndarray, points: np.ndarray, radius: float, box_area: float, packing: float) -> np.ndarray:
+    """Boxes a full pile holds within ``radius`` of each point, inside the goal."""
+    discs = shapely.buffer(shapely.points(points), radius, quad_segs=16)
+    return shapely.area(shapely.intersection(Polygon(goal), discs)) * packing / box_area
+
+
+@dataclass(frozen=True)
+class Sculpted:
+    """The band's outline and the points whose lights stay dark."""
+
+    outline: np.ndarray
+    dark: np.ndarray  # (m, 2), possibly empty
+
+
+def sculpt(goal: np.ndarray, distance: float, boxes: np.ndarray, in_goal: np.ndarray, box_area: float,
+           tuning: Sculpting = SCULPTING) -> Sculpted:
+    """The goal grown by ``distance``, moved in where boxes spill out, dark where the goal lacks boxes.
+
+    ``goal`` is the goal polygon, ``boxes`` the box centres and ``in_goal``
+    which of them lie in it. Beyond ``tuning.start`` the plain offset."""
+    band = offset_outline(goal, distance)
+    if distance > tuning.start or not len(boxes):
+        return Sculpted(band, np.empty((0, 2)))
+    band = densify(band, tuning.spacing)
+    edge = nearest_on_outline(band, goal)
+    away = band - edge
+    gap = np.hypot(*away.T)
+    outward = away / np.maximum(gap, 1e-12)[:, None]
+    near = np.hypot(*(boxes[None, :, :] - edge[:, None, :]).transpose(2, 0, 1)) < tuning.near
+    spilled = (near & ~in_goal[None, :]).sum(axis=1)
+    held = (near & in_goal[None, :]).sum(axis=1)
+    full = full_counts(goal, edge, tuning.near, box_area, tuning.packing)
+    missing = full - held
+    lacking = (spilled == 0) & ((missing >= tuning.lack) | (missing >= tuning.lack_share * full))
+    gap = np.where(spilled >= tuning.spill, np.maximum(gap - tuning.press, tuning.closest), gap)
+    return Sculpted(edge + gap[:, None] * outward, band[lacking])
+
+
+def darken_near(on: np.ndarray, centres: np.ndarray, points: np.ndarray, radius: float) -> np.ndarray:
+    """``on`` with the lights within ``radius`` of any of ``points`` switched off."""
+    if not len(points):
+        return on
+    d = np.hypot(*(centres[:, None, :] - points[None, :, :]).transpose(2, 0, 1)).min(axis=1)
+    return on & (d >= radius)
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.hypot(*v.T), 1e-12)[:, None]

@@ -1,0 +1,54 @@
+"""What the model tells the user before a run: a goal that does not fit the
+arena, and a strategy that will change nothing on a goal."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sandbox.model import geometry, outlines
+from sandbox.model.config import Config
+from sandbox.model.outlines import Sizing
+from sandbox.shapes.errors import ShapeError
+
+
+def goal_fit_notes(config: Config, sizing: Sizing) -> list[str]:
+    """Refuse a goal whose smallest outline does not fit the arena (ShapeError);
+    return a note when only its largest does not."""
+    box = outlines.overreach(config, sizing.polygon(sizing.smallest))
+    if box is not None:
+        raise ShapeError(f"the goal does not fit the arena: its smallest outline spans {outlines.describe_box(box)} "
+                         f"in a {config.arena_size:g} m arena (use a rounder shape, fewer boxes or a "
+                         "bigger arena)")
+    box = outlines.overreach(config, sizing.polygon(sizing.largest))
+    if box is None:
+        return []
+    return [f"the goal's largest outline spans {outlines.describe_box(box)}, past the "
+            f"{config.arena_size:g} m arena's walls: the lights there do not exist"]
+
+
+def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | None, chase: float = 0.0) -> str:
+    """Why a strategy at this amount will change nothing on this goal ('' when it will).
+
+    A circle goal has no corners to flare or darken and is already a circle;
+    flare moves a convex corner of angle a only when 90 x amount > a, so on a
+    square it starts above 1 and on the star's 52.5-degree tips above 0.58.
+    With chase on, the lit outline is the goal grown, so flare changes only
+    how far it grows."""
+    if amount <= 0:
+        return ""
+    if name == "flare" and chase > 0 and goal_vertices is not None:
+        return ("With chase on, the band follows the goal grown by the same distance all round, not a flared "
+                "outline: flare changes only the largest size it grows to.")
+    if goal_vertices is None:
+        return {"flare": "Flare does nothing on a circle goal: it has no corners to push out.",
+                "switch": "Switch to circle does nothing on a circle goal: it is a circle already.",
+                "no_corners": "No corners does nothing on a circle goal: it has no corners."}.get(name, "")
+    if name == "flare":
+        angles = geometry.interior_angles(np.asarray(goal_vertices, dtype=float))
+        convex = angles[angles < 180.0]
+        if len(convex) and not (90.0 * amount > convex).any():
+            sharpest = float(convex.min())
+            return (f"Flare {amount:g} does nothing on this goal: flare moves a corner only when 90 x amount "
+                    f"exceeds its angle, and the sharpest corner is {sharpest:.0f} degrees "
+                    f"(flare acts above {sharpest / 90.0:.2f}).")
+    return ""
