@@ -14,7 +14,8 @@ from sandbox.model.config import Config
 from sandbox.model.controller import Controller
 from sandbox.model.goal import make_goal
 from sandbox.rl.features import DISTANCE_EDGES, distance_histogram, feature_names
-from sandbox.rl.outline import FLARE_HIGH, NO_CORNERS_HIGH, Knobs, OutlinePainter, polygon_band
+from sandbox.model import band
+from sandbox.rl.outline import FLARE_HIGH, NO_CORNERS_HIGH, Knobs, OutlinePainter
 from sandbox.shapes import shape_vertices
 
 CASES = [("circle", {}, "authors-code"), ("square", {}, "authors-code"),
@@ -33,8 +34,8 @@ def test_outline_action_lights_the_controllers_band(shape, strategies, profile):
     sizes = painter.sizes(config.flare)
     assert (sizes.smallest, sizes.largest) == pytest.approx((controller.min_scale, controller.max_scale))
     if not goal.is_circle:  # (the controller lights a circle by its radius, as the painter does)
-        smallest = controller.outline_at(controller.min_scale)
-        expected = polygon_band(painter.centres, smallest, config.band).reshape(controller.intensities.shape)
+        smallest = controller.sizing.polygon(controller.min_scale)
+        expected = band.along(painter.centres, smallest, config.band).reshape(controller.intensities.shape)
         np.testing.assert_array_equal(painter.pattern(Knobs(size=0.0, flare=config.flare)), expected)
 
 

@@ -20,8 +20,9 @@ Every knob is in [0, 1], the range RL libraries expect. On a circle goal only
 ``size`` changes anything: there are no corners to flare or darken.
 
 This module builds on the public functions the controller is built from
-(:mod:`~sandbox.model.outlines`, :mod:`~sandbox.model.geometry`) and never
-drives a controller, so it needs no hook in it. A test pins its pattern to the
+(:mod:`~sandbox.model.outlines` for the sizes, :mod:`~sandbox.model.band` for
+which lights a band lights and which no corners darkens) and never drives a
+controller, so it needs no hook in it. A test pins its pattern to the
 controller's own at the controller's first size.
 """
 
@@ -31,9 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sandbox.model import geometry, outlines
+from sandbox.model import band, outlines
 from sandbox.model.config import STRATEGIES, STRATEGY_DEFAULTS, Config
-from sandbox.model.controller import no_corners_count
 from sandbox.model.goal import Goal
 from sandbox.model.lights import light_centres
 
@@ -85,36 +85,6 @@ def outline_sizes(config: Config, goal: Goal, flare: float) -> Sizes:
     return Sizes(shape, smallest, max(outlines.max_polygon_scale(config, shape, goal.area), smallest))
 
 
-def circle_band(centres: np.ndarray, centre: np.ndarray, radius: float, band: float) -> np.ndarray:
-    """Which lights lie within ``band`` of the circle (a boolean per light)."""
-    return np.abs(np.hypot(*(centres - centre).T) - radius) <= band + 1e-9
-
-
-def polygon_band(centres: np.ndarray, outline: np.ndarray, band: float) -> np.ndarray:
-    """Which lights lie within ``band`` of the closed outline."""
-    return geometry.distance_to_outline(centres, outline) <= band + 1e-9
-
-
-def darken_corners(on: np.ndarray, centres: np.ndarray, corners: np.ndarray, fraction: float,
-                   config: Config) -> np.ndarray:
-    """The no-corners strategy: switch off the band's lights nearest the convex corners.
-
-    The same rule as the controller's (how many by ``config.no_corners_count``,
-    ties by light index as the authors' program breaks them), so the agent's
-    band is the one the paper's controller would light."""
-    lit = np.flatnonzero(on)
-    off = no_corners_count(fraction, len(lit), config.no_corners_count)
-    if off == 0 or not len(corners):
-        return on
-    if config.no_corners_count == "at-least":
-        n = config.lights_per_side
-        lit = lit[np.argsort((lit % n) * n + lit // n, kind="stable")]
-    d = np.hypot(*(centres[lit, None, :] - corners[None, :, :]).transpose(2, 0, 1)).min(axis=1)
-    on = on.copy()
-    on[lit[np.argsort(np.round(d, 9), kind="stable")[:off]]] = False
-    return on
-
-
 class OutlinePainter:
     """Turns :class:`Knobs` into the light pattern for one configuration and goal."""
 
@@ -136,11 +106,12 @@ class OutlinePainter:
         sizes = self.sizes(knobs.flare)
         scale = sizes.scale(knobs.size)
         if sizes.shape is None or knobs.circle:
-            on = circle_band(self.centres, goal.centre, goal.radius * scale, cfg.band)
+            on = band.around(self.centres, goal.centre, goal.radius * scale, cfg.band)
         else:
             outline = goal.centre + scale * sizes.shape.vertices
-            on = polygon_band(self.centres, outline, cfg.band)
-            if knobs.no_corners > 0:
-                on = darken_corners(on, self.centres, outline[sizes.shape.corners], knobs.no_corners, cfg)
+            on = band.along(self.centres, outline, cfg.band)
+            corners = outline[sizes.shape.corners]
+            if knobs.no_corners > 0 and len(corners):
+                on = band.darken_corners(on, self.centres, corners, knobs.no_corners, cfg)
         n = cfg.lights_per_side
         return (on * cfg.light_intensity).reshape(n, n)
