@@ -7,6 +7,7 @@ import pytest
 from shapely.geometry import Polygon
 
 import sandbox.shapes as shapes
+from sandbox.model.config import Config
 from sandbox.shapes import (
     ShapeError,
     builtin_shape_names,
@@ -341,3 +342,31 @@ def test_coordinates_too_large_are_refused(tmp_path):
     with pytest.raises(ShapeError, match=r"huge.txt, line 2: .* too large"):
         load_polygon(huge)
     rejects("[[0, 0], [1e13, 0], [0, 1]]", "vertex 2", "too large", source="big.json")
+
+
+def test_a_goal_larger_than_the_construction_area_is_refused_with_what_would_fit():
+    """500 boxes of 0.1624 m² are 81.2 m²: a 2:1 rectangle of that area is 12.74 x 6.37 m and fits the
+    16 m area; a 25:1 one is 45.05 x 1.80 m and fits at (16 / 45.05)² of the boxes, 63."""
+    from sandbox.model.goal import make_goal
+    from sandbox.shapes import ShapeError
+
+    config = Config()
+    make_goal(config, np.array([[0, 0], [2, 0], [2, 1], [0, 1]], float))
+    with pytest.raises(ShapeError, match=r"the goal is 45\.1 x 1\.8 m, larger than the 16 m construction area .*"
+                                         r"at most 63 boxes, or a less elongated shape"):
+        make_goal(config, np.array([[0, 0], [25, 0], [25, 1], [0, 1]], float))
+
+
+def test_the_least_move_puts_a_goal_inside_the_construction_wall():
+    """The construction area is 24.5..40.5 m (16 m about the assembly centre, 32.5 m). A 4 x 4 m square whose
+    right edge is at 40.6 m moves 0.35 m left (a box's circumradius, 0.25 m, clear of the wall); one 15.8 m
+    wide has 0.1 m on each side: it is centred between the walls."""
+    from sandbox.model.goal import inside_construction
+
+    config = Config()
+    square = np.array([[36.6, 30.0], [40.6, 30.0], [40.6, 34.0], [36.6, 34.0]])
+    np.testing.assert_allclose(inside_construction(config, square), [-0.35, 0.0])
+    wide = np.array([[24.5, 30.0], [40.3, 30.0], [40.3, 34.0], [24.5, 34.0]])
+    np.testing.assert_allclose(inside_construction(config, wide), [0.1, 0.0])
+    inside = square - [5.0, 0.0]
+    np.testing.assert_allclose(inside_construction(config, inside), [0.0, 0.0])

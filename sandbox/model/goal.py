@@ -1,5 +1,13 @@
 """The goal region: the user's polygon (or a circle) fitted to the assembly
-centre and to the boxes' total area (SPEC §4)."""
+centre and to the boxes' total area (SPEC §4), and kept where the boxes are.
+
+The boxes start in, and never leave, the construction area: a square wall
+stops them (robots pass it). A goal is fitted as the authors' program does,
+its centroid on the assembly centre. A goal larger than the construction
+area at the boxes' area cannot be built anywhere: it is refused, with what
+would make it fit. :func:`inside_construction` finds the least move that
+puts a goal inside the wall (a crescent's centroid lies near its hollow, so
+centred it reaches past)."""
 
 from __future__ import annotations
 
@@ -10,6 +18,7 @@ import numpy as np
 
 from sandbox.model import geometry
 from sandbox.model.config import Config
+from sandbox.shapes.errors import ShapeError
 
 #: Vertices of the polygon that stands for a circle when one is drawn or measured against.
 CIRCLE_DRAW_VERTICES = 96
@@ -24,6 +33,8 @@ class Goal:
     vertices: np.ndarray | None  # absolute, file order
     #: Area of the polygon as its file drew it (the program sizes outlines from it).
     file_area: float = 0.0
+    #: How far the goal was moved off the assembly centre to lie inside the construction wall (m).
+    moved: tuple[float, float] = (0.0, 0.0)
 
     @property
     def is_circle(self) -> bool:
@@ -68,4 +79,42 @@ def make_goal(config: Config, vertices: np.ndarray | None) -> Goal:
     simpler = geometry.simplify(fitted, config.light_pitch / 20.0)
     if len(simpler) < len(fitted):
         fitted = geometry.fit_to_area(simpler, area, centre)  # simplifying nudges the area: refit
+    check_fits_construction(config, fitted)
     return Goal(centre, area, fitted, abs(geometry.signed_area(vertices)))
+
+
+def check_fits_construction(config: Config, fitted: np.ndarray) -> None:
+    """A ShapeError, with what would make it fit, when the goal is larger than the construction area."""
+    size = fitted.max(axis=0) - fitted.min(axis=0)
+    if (size > config.construction_size + 1e-9).any():
+        raise ShapeError(too_large(config, size))
+
+
+def inside_construction(config: Config, fitted: np.ndarray) -> np.ndarray:
+    """The least move (dx, dy) that puts the fitted goal inside the construction area, a box's
+    circumradius clear of its wall where there is room (else centred between the walls); a
+    ShapeError when the goal is larger than the area itself."""
+    half, clear = config.construction_size / 2.0, config.box_circumradius
+    check_fits_construction(config, fitted)
+    low, high = fitted.min(axis=0), fitted.max(axis=0)
+    size = high - low
+    shift = np.zeros(2)
+    for axis in range(2):
+        wall_low, wall_high = config.centre - half, config.centre + half
+        room = wall_high - wall_low - size[axis]
+        margin = min(clear, room / 2.0)
+        if low[axis] < wall_low + margin:
+            shift[axis] = wall_low + margin - low[axis]
+        elif high[axis] > wall_high - margin:
+            shift[axis] = wall_high - margin - high[axis]
+    return shift
+
+
+def too_large(config: Config, size: np.ndarray) -> str:
+    """Why a goal of this size (at the boxes' area) cannot be built, and what would make it fit."""
+    side = config.construction_size
+    fits = min(side / size[0], side / size[1]) ** 2  # the area scales with the square of the length
+    boxes = int(config.boxes * fits)
+    return (f"at the boxes' total area ({config.boxes:,} boxes, {config.boxes * config.box_area:.0f} m²) the goal "
+            f"is {size[0]:.1f} x {size[1]:.1f} m, larger than the {side:g} m construction area the boxes cannot "
+            f"leave: use at most {boxes:,} boxes, or a less elongated shape (both sides at most {side:g} m)")

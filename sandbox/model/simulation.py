@@ -36,6 +36,14 @@ def _controller(config: Config, goal: Goal) -> Controller:
         raise ShapeError(f"{config.shape}: {exc}") from None
 
 
+def _goal(config: Config, vertices: np.ndarray | None) -> Goal:
+    """The goal fitted to this world, or a ShapeError naming it if it cannot be built here."""
+    try:
+        return make_goal(config, vertices)
+    except ShapeError as exc:
+        raise ShapeError(f"{config.shape}: {exc}") from None
+
+
 def _read_only(a: np.ndarray) -> np.ndarray:
     v = a.view()
     v.flags.writeable = False
@@ -84,7 +92,7 @@ class Simulation:
         if seed is not None:
             cfg = cfg.replace(seed=int(seed))
         rng = np.random.default_rng(cfg.seed)
-        goal = make_goal(cfg, self.shape_vertices)
+        goal = _goal(cfg, self.shape_vertices)
         controller = self._new_controller(cfg, goal)  # first: a goal that cannot fit stops here
         world = World(cfg, rng, progress, goal)
         # Built: from here on nothing can fail halfway.
@@ -283,7 +291,7 @@ class Simulation:
         returns what there is to say about the fit (see Controller.notes)."""
         shape = None if vertices is None else np.asarray(vertices, dtype=float)
         config = self.config if name is None else self.config.replace(shape=name)
-        goal = make_goal(config, shape)
+        goal = _goal(config, shape)
         controller = self._new_controller(config, goal)
         controller.set_strategies(**{name_: getattr(config, name_) for name_ in STRATEGY_NAMES})
         self.shape_vertices, self.config, self.goal, self.controller = shape, config, goal, controller
