@@ -100,7 +100,7 @@ def test_help_lists_commands():
 
 @pytest.mark.parametrize("name, text", [("deep.json", "[" * 100_000 + "]" * 100_000),
                                         ("huge.txt", "0 0\n1e308 0\n0 1e308\n"),
-                                        ("sliver.txt", "-12 0\n12 0\n0 0.3\n")])
+                                        ("sliver.txt", "-120 0\n120 0\n0 0.3\n")])  # 50 m long at 20 boxes
 def test_pathological_shape_files_are_one_line_errors(tmp_path, name, text):
     path = tmp_path / name
     path.write_text(text)

@@ -14,7 +14,7 @@ from sandbox.model.simulation import Simulation
 from sandbox.model.world import World
 from sandbox.shapes import ShapeError
 
-SLIVER = np.array([[-12.0, 0.0], [12.0, 0.0], [0.0, 0.3]])
+SLIVER = np.array([[-120.0, 0.0], [120.0, 0.0], [0.0, 0.3]])  # at 60 boxes, 125 m long: mostly outside 16 m
 
 
 def test_populations_that_cannot_be_placed_are_refused_with_the_numbers():
@@ -35,11 +35,12 @@ def test_no_robot_starts_inside_the_construction_area_even_when_crowded():
 
 def test_a_goal_that_cannot_fit_is_refused_and_the_old_one_stays():
     sim = Simulation(Config(robots=10, boxes=60), seed=1)
-    with pytest.raises(ShapeError, match=r"does not fit the arena: its smallest outline spans x = -\d+"):
+    too_long = r"sliver: at the boxes. total area \(60 boxes, 10 m²\) the goal is 124\.9 x 0\.2 m.*: use a less elongated"
+    with pytest.raises(ShapeError, match=too_long):
         sim.set_shape(SLIVER, "sliver")
     assert sim.goal.is_circle and sim.config.shape == "circle"
     sim.step(10)  # still running
-    with pytest.raises(ShapeError, match="does not fit"):
+    with pytest.raises(ShapeError, match="larger than the 16 m construction area"):
         Simulation(Config(robots=10, boxes=60), shape=SLIVER)
 
 

@@ -34,8 +34,8 @@ def test_outline_action_lights_the_controllers_band(shape, strategies, profile):
     sizes = painter.sizes(config.flare)
     assert (sizes.smallest, sizes.largest) == pytest.approx((controller.min_scale, controller.max_scale))
     if not goal.is_circle:  # (the controller lights a circle by its radius, as the painter does)
-        smallest = controller.sizing.polygon(controller.min_scale)
-        expected = band.along(painter.centres, smallest, config.band).reshape(controller.intensities.shape)
+        sizing = controller.sizing
+        expected = sizing.lit(painter.centres, sizing.smallest, config.band).reshape(controller.intensities.shape)
         np.testing.assert_array_equal(painter.pattern(Knobs(size=0.0, flare=config.flare)), expected)
 
 
@@ -49,7 +49,8 @@ def test_circle_knob_lights_a_ring_around_a_polygon_goal():
     painter = OutlinePainter(config, make_goal(config, shape_vertices("star")))
     ring = painter.pattern(Knobs(size=0.5, circle=True))
     lit = painter.centres[ring.reshape(-1) > 0]
-    radius = painter.goal.radius * painter.sizes(0.0).scale(0.5)
+    sizes = painter.sizes(0.0)
+    radius = sizes.circle_radius(sizes.smallest + 0.5 * (sizes.largest - sizes.smallest))
     assert np.abs(np.hypot(*(lit - painter.goal.centre).T) - radius).max() <= config.band + 1e-9
 
 

@@ -268,6 +268,12 @@ class Config:
         choices=("inradius", "fraction"), paper="fraction", rebuild=False)
     no_corners: float = _strategy("no_corners")
     chase: float = _strategy("chase")
+    outline: str = _param(
+        "auto", "the outline the band follows: 'scaled', the goal scaled about the assembly centre (the paper); "
+        "'offset', the goal grown by a distance, contracted to one robot diameter (builds any simple polygon); "
+        "'auto', scaled when the centre lies deep inside the goal (its distance to the edge at least a third "
+        "of its distance to the farthest vertex) and the smallest scaled outline fits, else offset",
+        group="strategies", choices=("auto", "scaled", "offset"), rebuild=False)
     no_corners_count: str = _param(
         "at-least", "how many lights no_corners c turns off of n lit: 'round', round(c n), equally near lights "
         "taken column by column (paper text), or 'at-least', the fewest k with k / n >= c, row by row (the "

@@ -28,7 +28,7 @@ from sandbox.model import band, geometry
 from sandbox.model.config import Config
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal, make_goal
 from sandbox.model.lights import light_centres
-from sandbox.model.notes import goal_fit_notes
+from sandbox.model.notes import goal_notes
 from sandbox.model.phases import CONTRACTING, DILATING, HOLDING
 from sandbox.model.schedule import InSchedule, Schedule
 
@@ -61,7 +61,8 @@ class Cycle:
         if self.goal.is_circle or self.circle_radius is not None:
             return True
         switch = self.strategies["switch"]
-        return self.config.switch_mode == "fraction" and switch > 0 and self.progress >= switch - 1e-12
+        return (self.config.switch_mode == "fraction" and switch > 0 and self.sizing.switchable
+                and self.progress >= switch - 1e-12)
 
     @property
     def _program(self) -> bool:
@@ -156,8 +157,8 @@ class Cycle:
                 self._start_hold()
         elif s.phase == DILATING:
             s.scale = s.sizing.step_back(s.scale, rate)
-            if s.scale >= s.sizing.largest:
-                s.scale = s.sizing.largest
+            if s.scale >= s.sizing.turn:
+                s.scale = s.sizing.turn
                 self._turn_to_contracting()
             elif s.inradius >= self._turn_radius() or self._turns_early():
                 self._turn_to_contracting()
@@ -206,7 +207,8 @@ class Cycle:
         takes its place; it grows to the circle's largest size, contracts, and the
         frozen polygon returns once its radius falls below the same threshold."""
         s = self.state
-        if self.goal.is_circle or self.config.switch_mode != "inradius" or s.strategies["switch"] <= 0:
+        if (self.goal.is_circle or self.config.switch_mode != "inradius" or s.strategies["switch"] <= 0
+                or not s.sizing.switchable):
             return
         threshold = s.strategies["switch"] * self.config.arena_size / 2.0
         if s.circle_radius is None and s.phase == DILATING and s.inradius > threshold:
@@ -252,7 +254,7 @@ class Controller(Cycle):
         self.intensities = np.zeros((config.lights_per_side,) * 2)
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
         #: outline does not fit is refused here with a ShapeError.
-        self.notes = goal_fit_notes(config, self.sizing)
+        self.notes = goal_notes(config, goal, self.sizing)
         if self._program:  # the largest size is lit, and the program steps from it at once
             self._program_update()
         else:
@@ -276,7 +278,7 @@ class Controller(Cycle):
             on = band.around(self._centres, self.goal.centre, radius, self.config.band)
         else:
             self.outline, self.corners = s.sizing.polygon(s.scale), s.sizing.corners(s.scale)
-            on = band.along(self._centres, self.outline, self.config.band)
+            on = s.sizing.lit(self._centres, s.scale, self.config.band)
             if s.strategies["no_corners"] > 0 and len(self.corners):
                 on = self._darken_corners(on)
         self._light(on)

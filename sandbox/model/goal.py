@@ -3,9 +3,9 @@ centre and to the boxes' total area (SPEC §4), and kept where the boxes are.
 
 The boxes start in, and never leave, the construction area: a square wall
 stops them (robots pass it). A goal is fitted as the authors' program does,
-its centroid on the assembly centre. A goal larger than the construction
-area at the boxes' area cannot be built anywhere: it is refused, with what
-would make it fit. :func:`inside_construction` finds the least move that
+its centroid on the assembly centre. A goal that, at the boxes' area,
+cannot lie mostly inside the construction area cannot be built anywhere: it
+is refused, with what would make it fit. :func:`inside_construction` finds the least move that
 puts a goal inside the wall (a crescent's centroid lies near its hollow, so
 centred it reaches past)."""
 
@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 
 from sandbox.model import geometry
 from sandbox.model.config import Config
@@ -22,6 +23,8 @@ from sandbox.shapes.errors import ShapeError
 
 #: Vertices of the polygon that stands for a circle when one is drawn or measured against.
 CIRCLE_DRAW_VERTICES = 96
+#: A goal is refused when, centred between the construction walls, less than this share of it lies inside.
+MOSTLY_INSIDE = 0.9
 
 
 @dataclass(frozen=True)
@@ -35,6 +38,9 @@ class Goal:
     file_area: float = 0.0
     #: How far the goal was moved off the assembly centre to lie inside the construction wall (m).
     moved: tuple[float, float] = (0.0, 0.0)
+    #: The outline family the band follows ('scaled' or 'offset') and why (sandbox.model.family).
+    family: str = "scaled"
+    family_reason: str = ""
 
     @property
     def is_circle(self) -> bool:
@@ -65,11 +71,20 @@ class Goal:
 
 
 def make_goal(config: Config, vertices: np.ndarray | None) -> Goal:
-    """Fit the user's polygon (or a circle) to the assembly centre and the boxes' total area.
+    """Fit the user's polygon (or a circle) to the assembly centre and the boxes' total area, and
+    decide the outline family it takes (:mod:`sandbox.model.family`).
 
     The fitted outline is simplified to a twentieth of a light pitch: far
     finer than a light can show, and a 10,000-vertex file then costs what a
     hand-drawn one does (every light and every box is measured against it)."""
+    # The outline family is decided on the fitted goal, which family.py measures with the outlines.
+    from sandbox.model.family import settle
+
+    return settle(config, fit_goal(config, vertices))
+
+
+def fit_goal(config: Config, vertices: np.ndarray | None) -> Goal:
+    """The user's polygon (or a circle) fitted, its centroid on the assembly centre (the family undecided)."""
     centre = np.full(2, config.centre)
     area = max(config.boxes, 1) * config.box_area
     if vertices is None:
@@ -84,9 +99,18 @@ def make_goal(config: Config, vertices: np.ndarray | None) -> Goal:
 
 
 def check_fits_construction(config: Config, fitted: np.ndarray) -> None:
-    """A ShapeError, with what would make it fit, when the goal is larger than the construction area."""
-    size = fitted.max(axis=0) - fitted.min(axis=0)
-    if (size > config.construction_size + 1e-9).any():
+    """A ShapeError, with what would make it fit, when the goal is too large for the construction area:
+    centred between its walls, less than :data:`MOSTLY_INSIDE` of its area would lie inside. (The paper
+    text's star, 16.3 m across its tips with 16 m between the walls, is built all the same.)"""
+    low, high = fitted.min(axis=0), fitted.max(axis=0)
+    size = high - low
+    if (size <= config.construction_size + 1e-9).all():
+        return
+    centred = fitted - (low + high) / 2.0 + config.centre
+    half = config.construction_size / 2.0
+    square = shapely.box(config.centre - half, config.centre - half, config.centre + half, config.centre + half)
+    polygon = shapely.Polygon(centred)
+    if polygon.intersection(square).area < MOSTLY_INSIDE * polygon.area:
         raise ShapeError(too_large(config, size))
 
 
@@ -115,6 +139,7 @@ def too_large(config: Config, size: np.ndarray) -> str:
     side = config.construction_size
     fits = min(side / size[0], side / size[1]) ** 2  # the area scales with the square of the length
     boxes = int(config.boxes * fits)
+    fewer = f"use at most {boxes:,} boxes, or " if boxes >= 1 else "use "
     return (f"at the boxes' total area ({config.boxes:,} boxes, {config.boxes * config.box_area:.0f} m²) the goal "
             f"is {size[0]:.1f} x {size[1]:.1f} m, larger than the {side:g} m construction area the boxes cannot "
-            f"leave: use at most {boxes:,} boxes, or a less elongated shape (both sides at most {side:g} m)")
+            f"leave: {fewer}a less elongated shape (both sides at most {side:g} m)")

@@ -1,5 +1,6 @@
-"""What the model tells the user before a run: a goal that does not fit the
-arena, and a strategy that will change nothing on a goal."""
+"""What the model tells the user before a run: the outline a goal takes and
+why, a goal that does not fit the arena or reaches past the wall that stops
+boxes, and a strategy that will change nothing on a goal."""
 
 from __future__ import annotations
 
@@ -7,8 +8,47 @@ import numpy as np
 
 from sandbox.model import geometry, outlines
 from sandbox.model.config import Config
+from sandbox.model.goal import Goal
 from sandbox.model.outlines import Sizing
 from sandbox.shapes.errors import ShapeError
+
+
+def goal_notes(config: Config, goal: Goal, sizing: Sizing) -> list[str]:
+    """What to say about a goal before it runs (see :func:`goal_fit_notes`), its outline family
+    first when it is not the paper's: which one, why, and where the goal was moved."""
+    notes = []
+    if goal.family == "offset":
+        notes.append(f"the band follows the goal's edge at a distance (outline: offset): {goal.family_reason}")
+    if any(goal.moved):
+        dx, dy = goal.moved
+        notes.append(f"the goal was moved {_shift_words(dx, dy)} so that it lies inside the wall that stops the "
+                     f"boxes")
+    past = past_construction(config, goal)
+    if past:
+        notes.append(f"part of the goal lies past the wall that stops the boxes ({past}): boxes cannot fill it "
+                     f"(outline = offset moves such a goal inside)")
+    return notes + goal_fit_notes(config, sizing)
+
+
+def past_construction(config: Config, goal: Goal) -> str:
+    """How far the goal reaches past the construction wall, in words ('' when it does not)."""
+    if goal.vertices is None:
+        return ""
+    low_wall = config.centre - config.construction_size / 2.0
+    high_wall = config.centre + config.construction_size / 2.0
+    (x0, y0), (x1, y1) = goal.vertices.min(axis=0), goal.vertices.max(axis=0)
+    sides = {"left": low_wall - x0, "right": x1 - high_wall, "bottom": low_wall - y0, "top": y1 - high_wall}
+    over = [f"{amount:.2f} m at the {side}" for side, amount in sides.items() if amount > 1e-6]
+    return ", ".join(over)
+
+
+def _shift_words(dx: float, dy: float) -> str:
+    parts = []
+    if abs(dx) > 1e-6:
+        parts.append(f"{abs(dx):.2f} m {'right' if dx > 0 else 'left'}")
+    if abs(dy) > 1e-6:
+        parts.append(f"{abs(dy):.2f} m {'up' if dy > 0 else 'down'}")
+    return " and ".join(parts)
 
 
 def goal_fit_notes(config: Config, sizing: Sizing) -> list[str]:
@@ -26,7 +66,8 @@ def goal_fit_notes(config: Config, sizing: Sizing) -> list[str]:
             f"{config.arena_size:g} m arena's walls: the lights there do not exist"]
 
 
-def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | None, chase: float = 0.0) -> str:
+def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | None, chase: float = 0.0,
+                         family: str = "scaled") -> str:
     """Why a strategy at this amount will change nothing on this goal ('' when it will).
 
     A circle goal has no corners to flare or darken and is already a circle;
@@ -36,6 +77,13 @@ def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | N
     how far it grows."""
     if amount <= 0:
         return ""
+    if family == "offset" and name in ("flare", "switch", "no_corners"):
+        return {"flare": "Flare does nothing with the offset outline: its band already rounds every corner at "
+                         "the same distance as the edges.",
+                "switch": "Switch to circle does nothing with the offset outline: far from the goal its band "
+                          "is nearly a circle already.",
+                "no_corners": "No corners does nothing with the offset outline: its band has no convex corners "
+                              "to darken."}[name]
     if name == "flare" and chase > 0 and goal_vertices is not None:
         return ("With chase on, the band follows the goal grown by the same distance all round, not a flared "
                 "outline: flare changes only the largest size it grows to.")

@@ -2,11 +2,13 @@
 
 The controller asks an outline *family* (:class:`Sizing`) for its smallest
 and largest sizes, how a size steps, the outline's inradius at a size (what
-its schedules compare) and the outline itself; it never looks inside a size.
-Today's family is :class:`ScaledSizing`: the goal (or the circle) scaled
-about the assembly centre, a size being the scale (the paper's word, which
-the controller keeps). Another family, the band at a signed distance from
-the goal say, would offer the same, and :func:`sizing_for` would choose it.
+its schedules compare), the outline itself and which lights its band lights;
+it never looks inside a size. Two families: :class:`ScaledSizing`, the goal
+(or the circle) scaled about the assembly centre, a size being the scale
+(the paper's word, which the controller keeps); and
+:class:`~sandbox.model.offset.OffsetSizing`, the goal grown by a distance.
+The goal says which one it takes (:mod:`sandbox.model.family` decides);
+:func:`sizing_for` builds it.
 
 An :class:`OutlineShape` is a polygon relative to the assembly centre at
 *scale 1*; the controller lights ``centre + scale * vertices``. For a plain
@@ -42,9 +44,10 @@ from typing import Protocol
 
 import numpy as np
 
-from sandbox.model import geometry
+from sandbox.model import band, geometry
 from sandbox.model.config import Config
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal
+from sandbox.model.offset import OffsetSizing
 
 #: The authors' program grows a polygon to its largest size in steps of this factor.
 PROGRAM_GROWTH_STEP = 1.05
@@ -71,11 +74,14 @@ class OutlineShape:
 class Sizing(Protocol):
     """An outline family: the outlines the controller can light, one per size."""
 
-    #: The smallest and largest sizes.
+    #: The smallest and largest sizes (the first contraction starts at the largest), and the size
+    #: every dilation turns at.
     smallest: float
     largest: float
-    #: The largest radius of a circle lit in the outline's place (switch).
+    turn: float
+    #: The largest radius of a circle lit in the outline's place (switch), and whether switch may.
     circle_largest: float
+    switchable: bool
 
     def step(self, size: float, factor: float) -> float:
         """The size one update on, ``factor`` being the schedule's (below 1: contracting)."""
@@ -104,6 +110,9 @@ class Sizing(Protocol):
     def radius_beyond(self, distance: float) -> float:
         """The inradius of the outline ``distance`` beyond the goal-sized one."""
 
+    def lit(self, centres: np.ndarray, size: float, width: float) -> np.ndarray:
+        """Which lights (centres, flat) the band at ``size`` lights: those within ``width`` of it."""
+
 
 @dataclass(frozen=True)
 class ScaledSizing:
@@ -117,6 +126,13 @@ class ScaledSizing:
     #: The outline's inradius at scale 1 (the radius, for a circle).
     unit_radius: float
     circle_largest: float
+    #: Switch may light a circle in its place.
+    switchable = True
+
+    @property
+    def turn(self) -> float:
+        """Where dilations turn: the largest scale."""
+        return self.largest
 
     @classmethod
     def of(cls, config: Config, goal: Goal, flare: float) -> "ScaledSizing":
@@ -163,9 +179,14 @@ class ScaledSizing:
     def radius_beyond(self, distance: float) -> float:
         return self.unit_radius + distance
 
+    def lit(self, centres: np.ndarray, size: float, width: float) -> np.ndarray:
+        return band.along(centres, self.polygon(size), width)
+
 
 def sizing_for(config: Config, goal: Goal, flare: float) -> Sizing:
-    """The outline family the controller lights for this goal and flare (today's only one)."""
+    """The outline family the goal takes (see :mod:`sandbox.model.family`), for this flare."""
+    if goal.family == "offset":
+        return OffsetSizing.of(config, goal)
     return ScaledSizing.of(config, goal, flare)
 
 

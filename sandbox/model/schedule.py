@@ -86,10 +86,10 @@ class Schedule:
 
     @property
     def max_radius(self) -> float:
-        """The largest inradius (radius for a circle) the lit outline may have now."""
+        """The inradius (radius for a circle) at which the lit outline turns from dilating."""
         if self.circle_radius is not None:
             return self.sizing.circle_largest
-        return self.sizing.radius(self.sizing.largest)
+        return self.sizing.radius(self.sizing.turn)
 
     @property
     def progress(self) -> float:

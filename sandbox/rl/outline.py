@@ -63,54 +63,32 @@ class Knobs:
         return cls(float(size), float(flare) * FLARE_HIGH, bool(circle >= 0.5), float(no_corners) * NO_CORNERS_HIGH)
 
 
-@dataclass(frozen=True)
-class Sizes:
-    """An outline at scale 1 (None: the goal's equal-area circle) and its smallest and largest scales."""
-
-    shape: outlines.OutlineShape | None
-    smallest: float
-    largest: float
-
-    def scale(self, size: float) -> float:
-        return self.smallest + size * (self.largest - self.smallest)
-
-
-def outline_sizes(config: Config, goal: Goal, flare: float) -> Sizes:
-    """The outline and its size limits for a flare amount, as the controller's ``_set_limits`` computes them."""
-    if goal.is_circle:
-        smallest = (goal.radius + 2.0 * config.robot_radius) / goal.radius
-        return Sizes(None, smallest, max(outlines.max_circle_scale(config, goal.radius), smallest))
-    shape = outlines.outline_shape(goal.vertices - goal.centre, goal.area, goal.file_area, flare, config.flare_mode)
-    smallest = outlines.min_polygon_scale(config, shape, goal.radius)
-    return Sizes(shape, smallest, max(outlines.max_polygon_scale(config, shape, goal.area), smallest))
-
-
 class OutlinePainter:
     """Turns :class:`Knobs` into the light pattern for one configuration and goal."""
 
     def __init__(self, config: Config, goal: Goal):
         self.config, self.goal = config, goal
         self.centres = light_centres(config).reshape(-1, 2)
-        self._sizes: dict[float, Sizes] = {}
+        self._sizes: dict[float, outlines.Sizing] = {}
 
-    def sizes(self, flare: float) -> Sizes:
-        """The outline's sizes for a flare amount (rounded to :data:`FLARE_STEP`), computed once."""
+    def sizes(self, flare: float) -> outlines.Sizing:
+        """The goal's outline family (the controller's) for a flare amount (rounded to
+        :data:`FLARE_STEP`), computed once."""
         key = round(round(flare / FLARE_STEP) * FLARE_STEP, 6)
         if key not in self._sizes:
-            self._sizes[key] = outline_sizes(self.config, self.goal, key)
+            self._sizes[key] = outlines.sizing_for(self.config, self.goal, key)
         return self._sizes[key]
 
     def pattern(self, knobs: Knobs) -> np.ndarray:
         """The intensities, (n, n) indexed [ix, iy]: ``light_intensity`` on the band, 0 elsewhere."""
         cfg, goal = self.config, self.goal
         sizes = self.sizes(knobs.flare)
-        scale = sizes.scale(knobs.size)
-        if sizes.shape is None or knobs.circle:
-            on = band.around(self.centres, goal.centre, goal.radius * scale, cfg.band)
+        size = sizes.smallest + knobs.size * (sizes.largest - sizes.smallest)
+        if goal.is_circle or (knobs.circle and sizes.switchable):
+            on = band.around(self.centres, goal.centre, sizes.circle_radius(size), cfg.band)
         else:
-            outline = goal.centre + scale * sizes.shape.vertices
-            on = band.along(self.centres, outline, cfg.band)
-            corners = outline[sizes.shape.corners]
+            on = sizes.lit(self.centres, size, cfg.band)
+            corners = sizes.corners(size)
             if knobs.no_corners > 0 and len(corners):
                 on = band.darken_corners(on, self.centres, corners, knobs.no_corners, cfg)
         n = cfg.lights_per_side

@@ -1,0 +1,156 @@
+"""The offset outline family: the band at a distance from the goal (issue 22).
+
+The paper's outline is the goal scaled about the assembly centre. For a goal
+whose centroid lies near its edge (an L, a crescent, a C) scaling cannot
+work: the smallest scale that keeps the centre a robot diameter inside the
+outline is enormous. Here a size is a distance ``d`` instead: a light is on
+when its centre's signed distance to the goal (negative inside) is within
+``band`` of ``d``, so the band is the edge of the goal grown by ``d``, one
+light wide as the paper's. It follows every arm, notch and hollow of the
+goal, and no centre is needed.
+
+The geometry decides the sizes (measured on nine shapes, 2-4 seeds x
+40,000-100,000 steps: the prototype's notes are in the design log,
+``static/shapes/README.md``):
+
+* **smallest** ``d``: one robot diameter, the paper's gap;
+* **largest** ``d``, where the first contraction starts: the band encloses
+  the robots' spawn square, one light pitch clear (robots start uncharged,
+  so the band must pass every one), a pitch inside the walls at most;
+* **turn** ``d``, where every dilation turns: the band encloses the
+  construction area, where every box is, one pitch clear. Going back out to
+  the spawn square did worse on every shape tried, with half the cycles;
+* **steps**: ``d + R`` times ``scale_rate`` contracting (over it dilating),
+  ``R`` the radius of the circle of the goal's area. For a circle goal the
+  band is then exactly the paper's scaled ring, and elsewhere it moves as
+  fast as the paper's does at the same distance from a goal of that area.
+
+Of the paper's strategies, flare and switch have nothing to do: the band
+rounds every convex corner at the same distance as the edges (the star's
+tips fill), and at a large distance it is nearly a circle. The band has no
+convex corners for no corners to darken. Chase grows the goal by a distance
+already, and works unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+
+from sandbox.model import geometry
+from sandbox.model.config import Config
+from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal
+
+#: Lights exactly ``band`` from the level set are in it, whatever the rounding.
+_EDGE = 1e-9
+#: Points a polygon's covering distance is sampled at, this far apart (m), corners included.
+_COVER_SPACING = 0.25
+
+
+# -- the distance field -----------------------------------------------------------------------
+def signed_distance(points: np.ndarray, goal: Goal) -> np.ndarray:
+    """Signed distance of each point (..., 2) to the goal's edge: positive outside, negative inside
+    (a circle goal exactly, a polygon against its vertices)."""
+    p = np.asarray(points, dtype=float)
+    flat = p.reshape(-1, 2)
+    if goal.vertices is None:
+        out = np.hypot(*(flat - goal.centre).T) - goal.radius
+    else:
+        out = geometry.distance_to_outline(flat, goal.vertices)
+        out = np.where(geometry.points_in_polygon(flat, goal.vertices), -out, out)
+    return out.reshape(p.shape[:-1])
+
+
+def square_points(centre: np.ndarray, half: float, spacing: float) -> np.ndarray:
+    """Points filling the square of half-side ``half`` about ``centre`` (edges included), ``spacing`` apart."""
+    n = max(int(math.ceil(2.0 * half / spacing)), 1) + 1
+    s = np.linspace(-half, half, n)
+    gx, gy = np.meshgrid(s, s, indexing="ij")
+    return np.stack([gx.ravel(), gy.ravel()], axis=-1) + np.asarray(centre, dtype=float)
+
+
+def covering_distance(goal: Goal, centre: np.ndarray, half: float) -> float:
+    """The smallest ``d`` whose grown goal covers the square of half-side ``half`` about ``centre``:
+    the largest distance from a point of the square to the goal."""
+    return float(max(signed_distance(square_points(centre, half, _COVER_SPACING), goal).max(), 0.0))
+
+
+def wall_distance(goal: Goal, arena_size: float, clearance: float) -> float:
+    """The largest ``d`` whose grown goal stays ``clearance`` inside the arena's walls
+    (the grown goal's bounding box is the goal's grown by ``d``)."""
+    if goal.vertices is None:
+        low, high = goal.centre - goal.radius, goal.centre + goal.radius
+    else:
+        low, high = goal.vertices.min(axis=0), goal.vertices.max(axis=0)
+    return float(min(low.min(), (arena_size - high).min()) - clearance)
+
+
+# -- the family ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class OffsetSizing:
+    """The goal grown by a distance: a size is ``d`` in metres (see the module docstring).
+    The outline's "inradius" (what the controller's schedules compare) is ``R + d``."""
+
+    goal: Goal
+    smallest: float
+    largest: float
+    turn: float  # where dilations turn
+    unit_radius: float  # R: the radius of the circle of the goal's area
+    circle_largest: float
+    #: Flare and switch reshape a scaled outline; a grown goal has nothing for them to do.
+    switchable = False
+    shape = None
+    _distances: dict = field(default_factory=dict, compare=False, repr=False)
+
+    @classmethod
+    def of(cls, config: Config, goal: Goal) -> "OffsetSizing":
+        """The smallest, largest and turning distances for this goal (see the module docstring)."""
+        pitch, centre = config.light_pitch, np.full(2, config.centre)
+        walls = wall_distance(goal, config.arena_size, pitch)
+        smallest = 2.0 * config.robot_radius
+        largest = max(min(covering_distance(goal, centre, config.robot_spawn_size / 2.0) + pitch, walls), smallest)
+        turn = min(covering_distance(goal, centre, config.construction_size / 2.0) + pitch, largest)
+        return cls(goal, smallest, largest, max(turn, smallest), goal.radius, config.circle_max * config.arena_size / 2.0)
+
+    def step(self, size: float, factor: float) -> float:
+        return (size + self.unit_radius) * factor - self.unit_radius
+
+    def step_back(self, size: float, factor: float) -> float:
+        return (size + self.unit_radius) / factor - self.unit_radius
+
+    def widen(self, size: float, metres: float) -> float:
+        return size + metres
+
+    def radius(self, size: float) -> float:
+        return self.unit_radius + size
+
+    def circle_radius(self, size: float) -> float:
+        """The circle a circle goal grown by ``size`` is."""
+        return self.unit_radius + size
+
+    def polygon(self, size: float) -> np.ndarray:
+        """The goal grown by ``size``: the band's middle line, to draw and to measure against."""
+        if self.goal.vertices is None:
+            return geometry.regular_polygon(self.circle_radius(size), CIRCLE_DRAW_VERTICES, self.goal.centre)
+        grown = shapely.Polygon(self.goal.vertices).buffer(size, quad_segs=8)
+        return np.asarray(grown.exterior.coords)[:-1]
+
+    def corners(self, size: float) -> np.ndarray:
+        return np.empty((0, 2))
+
+    def distance(self, size: float) -> float:
+        return size
+
+    def radius_beyond(self, distance: float) -> float:
+        return self.unit_radius + distance
+
+    def lit(self, centres: np.ndarray, size: float, band: float) -> np.ndarray:
+        """The lights whose signed distance to the goal is within ``band`` of ``size`` (the
+        lights' distances are measured once per goal)."""
+        known = self._distances.get("centres")
+        if known is None or known[0] is not centres:
+            self._distances["centres"] = known = (centres, signed_distance(centres, self.goal))
+        return np.abs(known[1] - size) <= band + _EDGE
