@@ -338,6 +338,10 @@ class ProcessRunner(FramePublisher):
                     on_error: Callable[[BaseException], None] | None = None) -> None:
         self._runner_call("set_program", on_done, on_error, spec)
 
+    def set_outline(self, outline: str, *, on_done: Callable[[Any], None] | None = None,
+                    on_error: Callable[[BaseException], None] | None = None) -> None:
+        self._runner_call("set_outline", on_done, on_error, outline)
+
     def _runner_call(self, method: str, on_done: Callable | None, on_error: Callable | None, *args: Any) -> None:
         """Call one of the child's Runner methods that report back (reset, set_shape, update_config)."""
         self._queue_call(("runner_call", method, args), on_done, on_error)

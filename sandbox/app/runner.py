@@ -234,6 +234,17 @@ class Runner(FramePublisher):
 
         self.post(do, on_done=on_done, on_error=on_error)
 
+    def set_outline(self, outline: str, *, on_done: Callable[[Any], None] | None = None,
+                    on_error: Callable[[BaseException], None] | None = None) -> None:
+        """Choose the outline family; ``on_done`` gets the notes about the goal, ``on_error`` a refusal."""
+
+        def do(sim: Simulation) -> list[str]:
+            notes = sim.set_outline(outline)
+            self._goal_key += 1  # an offset goal may have moved
+            return notes
+
+        self.post(do, on_done=on_done, on_error=on_error)
+
     @property
     def latest(self) -> Snapshot:
         assert self._latest is not None
@@ -438,6 +449,8 @@ class Runner(FramePublisher):
             program=self.program_name,
             program_error=self.program_error,
             world_key=self._world_key,
+            family=sim.goal.family,
+            family_reason=sim.goal.family_reason,
         )
         with self._new_frame:
             self._latest = snap

@@ -65,6 +65,9 @@ class Snapshot:
     program_error: tuple[int, str] | None = None
     #: Changes with every new world (a reset): charts never join two worlds' samples.
     world_key: int = 0
+    #: The outline family the band follows ('scaled' or 'offset') and why.
+    family: str = "scaled"
+    family_reason: str = ""
 
 
 def case_name(shape: str, strategies: dict) -> str:

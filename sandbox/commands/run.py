@@ -118,6 +118,8 @@ def run_command(args: argparse.Namespace) -> int:
         "mean_outside_distance": final.mean_outside_distance,
         "boxes_escaped": final.boxes_escaped,
         "cycles": sim.cycle,
+        "outline": sim.goal.family,
+        "outline_reason": sim.goal.family_reason,
         "controller": spec or paper_controller_name(config),
         "senses": sorted(sim.senses),
         "light_energy": round(sim.light_energy, 3),
@@ -134,4 +136,5 @@ def run_command(args: argparse.Namespace) -> int:
         print(f"  boxes in goal:             {final.fraction_in_goal:.3f}")
         print(f"  mean distance of the rest: {final.mean_outside_distance:.3f} m")
         print(f"  boxes escaped:             {final.boxes_escaped}")
+        print(f"  outline:                   {sim.goal.family} ({sim.goal.family_reason})")
     return 0

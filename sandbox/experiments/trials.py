@@ -53,6 +53,7 @@ def run_sweep_trial(config: dict, seed: int, steps: int, shape: list | None, con
         "cpu_seconds": round(time.process_time() - cpu, 3),
         "host": socket.gethostname(),
         "controller": controller or paper_controller_name(cfg),
+        "outline": sim.goal.family,  # the family the goal took (config's outline may say 'auto')
         "senses": sorted(sim.senses),  # what the light program looked at
         "light_energy": round(sim.light_energy, 3),  # sum of all intensities over all steps
         "samples": samples,

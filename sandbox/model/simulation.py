@@ -271,6 +271,8 @@ class Simulation:
         if "shape" in live:
             name = str(live.pop("shape"))
             self.set_shape(shape_vertices(name), name=name)
+        if "outline" in live:
+            self.set_outline(live.pop("outline"))
         strategies = {k: live.pop(k) for k in STRATEGY_NAMES if k in live}
         if live:
             # The controller takes the new values and keeps its place in the cycle.
@@ -297,6 +299,18 @@ class Simulation:
         self.shape_vertices, self.config, self.goal, self.controller = shape, config, goal, controller
         self._start_program()
         return controller.notes
+
+    def set_outline(self, outline: str) -> list[str]:
+        """Choose the outline family ('auto', 'scaled' or 'offset'): the goal is fitted again (an offset
+        goal may move inside the construction wall) and its outline starts from its largest size.
+        Returns the notes about the goal; nothing changes if it is refused (ShapeError)."""
+        previous = self.config
+        self.config = self.config.replace(outline=outline)
+        try:
+            return self.set_shape(self.shape_vertices)
+        except BaseException:
+            self.config = previous
+            raise
 
     # ------------------------------------------------------------- state
     @property

@@ -1,6 +1,6 @@
-"""The Strategies folder: the paper's seven cases in one control, then a
-checkbox and an amount per strategy, generated from their declaration
-(:data:`sandbox.model.config.STRATEGIES`)."""
+"""The Strategies folder: the paper's seven cases in one control, the outline
+the band follows (and why), then a checkbox and an amount per strategy,
+generated from their declaration (:data:`sandbox.model.config.STRATEGIES`)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import viser
 
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.snapshot import Snapshot
-from sandbox.model.config import CASES, STRATEGIES
+from sandbox.model.config import CASES, STRATEGIES, param
 from sandbox.model.notes import strategy_effect_note
 from sandbox.model.simulation import Simulation
 from sandbox.shapes import shape_vertices
@@ -25,12 +25,17 @@ class StrategiesFolder:
         self.gui, self.runner = gui, runner
         self._use_shape, self._on_change = use_shape, on_change
         self.controls: dict[str, tuple[Any, Any]] = {}
+        self._outline_shown = ""
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
         with gui.add_folder("Strategies"):
             self.case = gui.add_dropdown("Paper case", (CHOOSE, *CASES), initial_value=CHOOSE,
                                          hint="One of the paper's seven cases: its goal shape and strategies at once")
+            self.outline = gui.add_dropdown("Outline", param("outline").choices, initial_value=snap.config.outline,
+                                            hint="auto: the paper's scaled outline when the goal's centre lies deep "
+                                                 "inside it, else the goal's edge at a distance (offset)")
+            self.outline_status = gui.add_markdown(self._outline_text(snap))
             gui.add_markdown("Changes reach the running simulation at the next controller update; no reset.")
             for s in STRATEGIES:
                 value = getattr(snap.config, s.name)
@@ -46,8 +51,34 @@ class StrategiesFolder:
             if self.case.value in CASES:
                 self.use_case(self.case.value, event.client)
 
+        @self.outline.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if event.client is not None:
+                self.use_outline(self.outline.value, event.client)
+
     def update(self, snap: Snapshot) -> None:
-        pass  # the controls are the state; nothing to refresh
+        text = self._outline_text(snap)
+        if text != self._outline_shown:
+            self.outline_status.content = self._outline_shown = text
+
+    @staticmethod
+    def _outline_text(snap: Snapshot) -> str:
+        reason = snap.family_reason.split(": ", 1)[-1] if snap.family_reason else ""
+        follows = "the goal grown by a distance" if snap.family == "offset" else "the goal scaled"
+        return f"**Band follows:** {follows} ({snap.family}){' - ' + reason if reason else ''}"
+
+    def use_outline(self, outline: str, client: Any) -> None:
+        """Another outline family: the goal is fitted again and its outline starts from its largest size."""
+
+        def done(notes: list[str]) -> None:
+            self._on_change(f"outline {outline}")
+            for note in notes:
+                notify(client, "About this goal", note[0].upper() + note[1:] + ".", "blue")
+
+        def refused(exc: BaseException) -> None:
+            notify_error(client, "Outline not changed", str(exc))
+
+        self.runner.set_outline(outline, on_done=done, on_error=refused)
 
     def use_case(self, name: str, client: Any) -> None:
         """The case's goal and strategies (the others off), in one go."""
@@ -77,6 +108,7 @@ class StrategiesFolder:
         self.runner.post(functools.partial(Simulation.set_strategies, **{name: value}), on_error=failed)
         self._on_change(f"{name} {value:g}")
         chase = float(self.controls["chase"][1].value) if self.controls["chase"][0].value else 0.0
-        note = strategy_effect_note(name, value, self.runner.latest.goal_vertices, chase)
+        snap = self.runner.latest
+        note = strategy_effect_note(name, value, snap.goal_vertices, chase, snap.family)
         if note:  # applied all the same: the goal may change to one it acts on
             notify(client, "No visible effect", note, "yellow")
