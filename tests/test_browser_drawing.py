@@ -80,6 +80,7 @@ def page(app, browser):
     page.client = client
     wait_until(lambda: camera_settled(client, app.runner.latest.world_config), what="the camera framing")
     page.canvas = canvas_box(page)  # asked once: a busy page answers layout questions slowly
+    zoom_in(page, client, ZOOMED_HEIGHT)
     page.get_by_text("Draw", exact=True).first.click()
     page.get_by_role("button", name="Start drawing", exact=True).wait_for()
     yield page
@@ -105,6 +106,28 @@ def camera_settled(client, config) -> bool:
     aspect = client.camera.aspect
     position, _, _ = top_down_camera(config, aspect)
     return bool(aspect) and np.allclose(client.camera.position, position, atol=1e-3)
+
+
+#: The camera's height (m) once the designer has zoomed in on the construction area with the wheel.
+ZOOMED_HEIGHT = 28.0
+
+
+def zoom_in(page, client, height: float) -> None:
+    """Roll the mouse wheel over the middle of the floor, as a designer does, until the camera is
+    this low and at rest (it eases in, reporting as it goes)."""
+    box = page.canvas
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    last = [None]
+
+    def low_and_resting() -> bool:
+        z = round(float(client.camera.position[2]), 3)
+        resting, last[0] = z == last[0], z
+        if resting and z > height:
+            page.mouse.wheel(0, -150)
+            last[0] = None
+        return resting and z <= height
+
+    wait_until(lambda: (time.sleep(0.25), low_and_resting())[1], what="the camera zoomed in and at rest")
 
 
 def to_screen(page, x: float, y: float) -> tuple[float, float]:

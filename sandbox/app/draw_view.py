@@ -26,17 +26,19 @@ from sandbox.app.panel.common import floor_point
 #: Heights (m) above the floor: over everything the simulation draws (scene.Z_TOP is 0.12), the handles
 #: over the lines so that a press on a vertex grabs the vertex, not the pad under it.
 Z_PAD, Z_PREVIEW, Z_LINE, Z_HANDLE = 0.3, 0.32, 0.34, 0.4
-#: The drawn outline: bright and a fixed number of pixels thick at any zoom.
-LINE_COLOUR, LINE_PIXELS = (170, 255, 60), 6.0
-CLOSING_COLOUR = (110, 170, 40)  # the edge back to the first point: the outline closes there when used
+#: The drawn outline: bright and a fixed number of pixels thick at any zoom. The page's colour
+#: handling lifts every channel (60 shows as about 120), so a vivid colour needs zeros.
+LINE_COLOUR, LINE_PIXELS = (0, 255, 0), 7.0
+CLOSING_COLOUR = (0, 150, 0)  # the edge back to the first point: the outline closes there when used
 RUBBER_COLOUR, RUBBER_PIXELS = (255, 255, 255), 4.0
-CROSSING_COLOUR, CROSSING_PIXELS = (255, 40, 40), 9.0
-HANDLE_COLOUR, FIRST_HANDLE_COLOUR, CROSSING_HANDLE_COLOUR = (170, 255, 60), (255, 255, 255), (255, 70, 70)
+CROSSING_COLOUR, CROSSING_PIXELS = (255, 0, 0), 10.0
+HANDLE_COLOUR, FIRST_HANDLE_COLOUR, CROSSING_HANDLE_COLOUR = (0, 255, 0), (255, 255, 255), (255, 0, 0)
 PREVIEW_GOAL_COLOUR, PREVIEW_BAND_COLOUR, PREVIEW_PIXELS = (235, 245, 255), pal.LIGHT_LINE, 3.0
 #: Dashes of the preview outlines (m): dashed says "not built yet".
 DASH, GAP = 0.6, 0.4
-#: A handle's radius as a fraction of the arena's side (0.58 m in the 64 m arena): big enough to grab.
-HANDLE_FRACTION = 0.009
+#: A handle's radius as a fraction of the arena's side (0.38 m in the 64 m arena): about 10 pixels across
+#: with the whole arena in view, easy to grab once zoomed in on the construction area.
+HANDLE_FRACTION = 0.006
 #: The pad reaches this far past the walls (fraction of the arena), so a drag just outside still lands.
 PAD_MARGIN = 0.25
 
@@ -108,6 +110,19 @@ class DrawView:
     @property
     def handle_radius(self) -> float:
         return HANDLE_FRACTION * self.arena_size
+
+    def set_arena(self, arena_size: float) -> None:
+        """A new world of another size: the pad and the handles are sized from the arena."""
+        with self._lock:
+            if float(arena_size) == self.arena_size:
+                return
+            self.arena_size = float(arena_size)
+            if self._pad is not None:
+                self.set_pad(False)
+                self.set_pad(True)
+            if self._handles is not None:
+                self._handles.remove()  # rebuilt at the next show, at the new size
+                self._handles = None
 
     # ----------------------------------------------------------- outline
     def show(self, points: list, crossings: list[tuple[int, int]]) -> None:
@@ -185,7 +200,7 @@ class DrawView:
                     self._labels[k].position = position
             else:
                 self._labels.append(self.scene.add_label(f"/draw/labels/{k + 1}", str(k + 1), position=position,
-                                                         anchor="bottom-left", font_screen_scale=1.1))
+                                                         anchor="bottom-left", font_screen_scale=1.3))
 
     # --------------------------------------------------------------- pad
     def set_pad(self, active: bool) -> None:

@@ -125,7 +125,12 @@ class DrawFolder:
 
     def update(self, snap: Snapshot) -> None:
         """A new world or new strategies change the preview's size: recompute it."""
-        if self.points and snap.world_config != self._preview_config:
+        config = snap.world_config
+        if config == self._preview_config:
+            return
+        with self._lock:
+            self._centre = (config.centre, config.centre)
+            self.view.set_arena(config.arena_size)
             self._refresh()
 
     # ------------------------------------------------------------ input
