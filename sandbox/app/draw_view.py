@@ -26,15 +26,15 @@ from sandbox.app.panel.common import floor_point
 #: Heights (m) above the floor: over everything the simulation draws (scene.Z_TOP is 0.12), the handles
 #: over the lines so that a press on a vertex grabs the vertex, not the pad under it.
 Z_PAD, Z_PREVIEW, Z_LINE, Z_HANDLE = 0.3, 0.32, 0.34, 0.4
-#: The drawn outline: bright and a fixed number of pixels thick at any zoom. The page's colour
-#: handling lifts every channel (60 shows as about 120), so a vivid colour needs zeros.
-LINE_COLOUR, LINE_PIXELS = (0, 255, 0), 7.0
-CLOSING_COLOUR = (0, 150, 0)  # the edge back to the first point: the outline closes there when used
-RUBBER_COLOUR, RUBBER_PIXELS = (255, 255, 255), 4.0
+#: The drawn outline: bright and a fixed number of pixels thick at any zoom. Magenta, which nothing
+#: else on the floor is, and which the page's tone mapping leaves vivid (a bright green turns pale).
+LINE_COLOUR, LINE_PIXELS = (255, 0, 255), 7.0
+CLOSING_COLOUR = (150, 0, 150)  # the edge back to the first point: the outline closes there when used
+RUBBER_COLOUR, RUBBER_PIXELS = LINE_COLOUR, LINE_PIXELS  # the edge the release will add
 CROSSING_COLOUR, CROSSING_PIXELS = (255, 0, 0), 10.0
-HANDLE_COLOUR, FIRST_HANDLE_COLOUR, CROSSING_HANDLE_COLOUR = (0, 255, 0), (255, 255, 255), (255, 0, 0)
-PREVIEW_GOAL_COLOUR, PREVIEW_BAND_COLOUR, PREVIEW_PIXELS = (235, 245, 255), pal.LIGHT_LINE, 3.0
-#: Dashes of the preview outlines (m): dashed says "not built yet".
+HANDLE_COLOUR, FIRST_HANDLE_COLOUR, CROSSING_HANDLE_COLOUR = LINE_COLOUR, (255, 255, 255), (255, 0, 0)
+#: The preview in the legend's colours for the goal and the lit outline, dashed: "not built yet".
+PREVIEW_GOAL_COLOUR, PREVIEW_BAND_COLOUR, PREVIEW_PIXELS = pal.GOAL_LINE, pal.LIGHT_LINE, 4.0
 DASH, GAP = 0.6, 0.4
 #: A handle's radius as a fraction of the arena's side (0.38 m in the 64 m arena): about 10 pixels across
 #: with the whole arena in view, easy to grab once zoomed in on the construction area.

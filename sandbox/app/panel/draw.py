@@ -64,7 +64,7 @@ def status_text(n: int, drawing: bool, problem: str, preview: GoalPreview | None
     else:
         text = f"**Ready**: {n} points. "
         if preview is not None:
-            text += (f"Dashed on the floor: the goal at its final size ({preview.area:.0f} m², centred) in white, "
+            text += (f"Dashed on the floor: the goal at its final size ({preview.area:.0f} m², centred) in blue, "
                      "the smallest and largest outlines of its light band in orange. ")
             text += "".join(f"Note: {note}. " for note in preview.notes)
         text += "**Close and use** builds it."
