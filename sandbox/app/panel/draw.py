@@ -73,6 +73,13 @@ def status_text(n: int, drawing: bool, problem: str, preview: GoalPreview | None
     return text
 
 
+def _warm_up(config: Any) -> None:
+    try:
+        preview_goal(config, template_vertices("L"), 0.0)
+    except ShapeError:
+        pass  # an arena too small for it: compiled all the same
+
+
 class DrawFolder:
     """The drawing state and its controls. ``use(vertices, name, client)`` hands a finished goal on."""
 
@@ -89,6 +96,9 @@ class DrawFolder:
         config = runner.latest.world_config
         self.view = DrawView(scene, config.arena_size, self.pad_drag, self.vertex_drag)
         self._centre = (config.centre, config.centre)
+        # The preview's geometry is compiled (numba) on its first call, most of a second: do it now, aside,
+        # rather than in the middle of the first drag.
+        threading.Thread(target=_warm_up, args=(config,), daemon=True, name="draw-preview-warm-up").start()
 
     # ------------------------------------------------------------ build
     def build(self, snap: Snapshot) -> None:
