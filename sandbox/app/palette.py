@@ -23,7 +23,6 @@ BOX_WALL = (150, 160, 185)
 ARENA_WALL = (205, 210, 220)
 HEADING_MARK = (20, 22, 28)
 SELECTED = (190, 90, 255)
-DRAW_LINE = (120, 255, 140)
 SENSOR_COLOURS = np.array([[255, 255, 255], [90, 90, 90], [64, 200, 255], [255, 140, 30]], dtype=np.uint8)
 
 #: Pixels per light cell in the light-grid texture (cells stay crisp even with

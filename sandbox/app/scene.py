@@ -7,7 +7,7 @@ Layout (z up, arena on z = 0, camera above looking down):
 - ``/arena/walls``, ``/arena/box_wall``   outer wall and the box-only wall
 - ``/goal``, ``/light_outline``   goal outline and current light outline
 - ``/swarm/robots``, ``/swarm/headings``, ``/swarm/boxes``   point clouds
-- ``/inspect/*``, ``/draw/*``   the followed robot and the shape being drawn
+- ``/inspect/*``   the followed robot (the shape being drawn is :mod:`.draw_view`'s ``/draw/*``)
 - ``/caption``   what is running: case, strategies, step (also in recordings)
 
 Every viewer receives every update, so the moving parts are sent compactly
@@ -125,7 +125,6 @@ class SceneView:
         self._outline_shape: tuple | None = None
         self._outline_bytes: bytes | None = None
         self._n: tuple[int, int] | None = None
-        self._draw_points: list[tuple[float, float]] = []
         self.handles: dict[str, Any] = {}
         self.update(snapshot)
 
@@ -177,17 +176,11 @@ class SceneView:
         self.handles["sensors"] = sc.add_point_cloud(
             "/inspect/sensors", np.zeros((4, 3), np.float32), pal.SENSOR_COLOURS, point_size=0.09,
             point_shape="circle", visible=False)
-        self.handles["draw_line"] = sc.add_line_segments("/draw/line", empty, pal.DRAW_LINE, thickness=0.15,
-                                                         visible=False)
-        self.handles["draw_points"] = sc.add_point_cloud(
-            "/draw/points", np.zeros((1, 3), np.float32), pal.DRAW_LINE, point_size=0.6, point_shape="circle",
-            visible=False)
         self._built_for = _geometry_key(cfg, n, m)
         self._sent = CompactSender()
         self._lights_key = self._field_key = self._goal_key = None
         self._outline_bytes = None
         self._n = (n, m)
-        self._redraw_preview()
 
     # ----------------------------------------------------------- dynamic
     def update(self, snap: Snapshot) -> None:
@@ -262,30 +255,3 @@ class SceneView:
         if xy is not None:
             out[:, :2] = np.round(np.asarray(xy) / POINT_GRID) * POINT_GRID
         return out
-
-    # ------------------------------------------------------------ drawing
-    def set_draw_points(self, points: list[tuple[float, float]]) -> None:
-        with self._lock:
-            self._draw_points = list(points)
-            self._redraw_preview()
-
-    def _redraw_preview(self) -> None:
-        h = self.handles
-        pts = np.array(self._draw_points, dtype=np.float32).reshape(-1, 2)
-        if len(pts) == 0:
-            h["draw_line"].visible = False
-            h["draw_points"].visible = False
-            return
-        p3 = np.zeros((len(pts), 3), np.float32)
-        p3[:, :2], p3[:, 2] = pts, Z_TOP
-        h["draw_points"].points = p3
-        h["draw_points"].colors = np.tile(np.array(pal.DRAW_LINE, np.uint8), (len(pts), 1))
-        h["draw_points"].visible = True
-        if len(pts) >= 2:
-            segs = pal.open_segments(pts, Z_TOP)
-            if len(pts) >= 3:  # dashed-looking closing edge: drawn thinner via a second pass is overkill; show it
-                segs = np.concatenate([segs, pal.open_segments(np.stack([pts[-1], pts[0]]), Z_TOP)])
-            h["draw_line"].points = segs
-            h["draw_line"].visible = True
-        else:
-            h["draw_line"].visible = False

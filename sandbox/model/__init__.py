@@ -14,6 +14,7 @@ how success is measured. Headless: nothing here imports the web app.
 - :mod:`.outlines`    the outline family: the lit outline (flare) and its sizes
 - :mod:`.band`        which lights a band along an outline turns on; no corners
 - :mod:`.notes`       what is said before a run: a goal that does not fit, a strategy that does nothing
+- :mod:`.preview`     a goal before it is used: fitted, with its smallest and largest outlines
 - :mod:`.chase`       chase, a closed loop of ours: the controller seeing the boxes
 - :mod:`.programs`    the light-program interface: observations, pattern checks, loading
 - :mod:`.env`         a Gymnasium-style environment: the light pattern is the action

@@ -26,7 +26,7 @@ from sandbox.app.snapshot import Snapshot
 
 class Panel:
     """Builds the GUI on ``server`` for ``runner`` and keeps its read-outs current.
-    ``view`` is the scene (it shows drawn points and the heat map)."""
+    ``view`` is the scene (it shows the heat map); the shape being drawn has its own nodes (draw_view)."""
 
     def __init__(self, server: Any, runner: Any, view: Any, *, allow_programs: bool = True,
                  may_load_programs: Any = None):
@@ -37,7 +37,7 @@ class Panel:
         self.metrics = MetricsFolder(gui, runner)
         self.run = RunFolder(gui, runner, show_field=lambda on: view.set_show_field(on, runner.latest),
                              after_reset=self._after_reset)
-        self.shape = ShapeFolder(gui, runner, show_draw_points=view.set_draw_points, on_change=self.metrics.mark)
+        self.shape = ShapeFolder(gui, runner, server.scene, on_change=self.metrics.mark)
         self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark)
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)

@@ -1,0 +1,276 @@
+"""The Draw folder of Goal shape: a polygon designer's tools.
+
+The drawing is a list of points, numbered from 1 on the floor. Ways to change it:
+click the floor (or press, drag and release: a rubber band follows the pointer)
+while drawing; drag a numbered handle; pick a template; type or paste points;
+undo; clear. Points snap to a grid unless that is off. After every change the
+floor shows the outline, its crossing edges in red, and (when it is a usable
+polygon) a dashed preview of the goal at the size it will be built with the
+smallest and largest outlines of its light band; a line of text says what
+*Close and use* and the other buttons are waiting for.
+
+Callbacks come from viser's threads and event loop: every change holds the lock.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable
+
+import viser
+
+from sandbox.app.draw_view import DrawView
+from sandbox.app.panel.common import notify_error
+from sandbox.app.snapshot import Snapshot
+from sandbox.model.preview import GoalPreview, preview_goal
+from sandbox.shapes import ShapeError, validate_polygon
+from sandbox.shapes.drawing import (
+    FORMATS_HINT,
+    crossing_edges,
+    edge_name,
+    format_coordinates,
+    parse_coordinates,
+    snap,
+    without_repeats,
+)
+from sandbox.shapes.templates import placed, template_names, template_vertices
+
+SOURCE = "drawn shape"
+PICK_TEMPLATE = "(pick one)"
+DEFAULT_GRID = 0.5
+Point = tuple[float, float]
+
+
+def without_source(message: str) -> str:
+    """A validation message without the leading "drawn shape: " (the status line says what it is about)."""
+    return message.split(": ", 1)[1] if message.startswith(SOURCE) else message
+
+
+def status_text(n: int, drawing: bool, problem: str, preview: GoalPreview | None, typed_error: str = "",
+                red: list[str] = ()) -> str:
+    """The line under the buttons: what the disabled ones wait for, or what Close and use will build."""
+    place = f"Click the floor (or press, drag and release) to place point {n + 1}." if drawing else \
+        "Press **Start drawing** to click points on the floor, pick a **Template**, or type **Points**."
+    if n == 0:
+        text = f"**No points yet**: Undo, Clear and Close and use need some. {place}"
+    elif n < 3:
+        text = f"**Close and use needs at least 3 points**: {n} so far. {place}"
+    elif problem:
+        text = f"**Close and use is off**: {problem}."
+        if red:
+            names = ", ".join(red[:-1]) + " and " + red[-1] if len(red) > 1 else red[0]
+            text += f" In red on the floor: edge{'s' if len(red) > 1 else ''} {names}; drag a numbered point " \
+                    "to untangle them."
+    else:
+        text = f"**Ready**: {n} points. "
+        if preview is not None:
+            text += (f"Dashed on the floor: the goal at its final size ({preview.area:.0f} m², centred) in blue, "
+                     "the smallest and largest outlines of its light band in orange. ")
+            text += "".join(f"Note: {note}. " for note in preview.notes)
+        text += "**Close and use** builds it."
+    if typed_error:
+        text += f"\n\n**Points not applied**: {typed_error}"
+    return text
+
+
+def _warm_up(config: Any) -> None:
+    try:
+        preview_goal(config, template_vertices("L"), 0.0)
+    except ShapeError:
+        pass  # an arena too small for it: compiled all the same
+
+
+class DrawFolder:
+    """The drawing state and its controls. ``use(vertices, name, client)`` hands a finished goal on."""
+
+    def __init__(self, gui: Any, runner: Any, scene: Any, use: Callable[[Any, str, Any], None]):
+        self.gui, self.runner, self._use = gui, runner, use
+        self.points: list[Point] = []
+        self.drawing = False
+        self._lock = threading.RLock()
+        self._problem = ""
+        self._red: list[str] = []  # the crossing edges, by vertex numbers
+        self._typed_error = ""
+        self._preview: GoalPreview | None = None
+        self._preview_config: Any = None
+        config = runner.latest.world_config
+        self.view = DrawView(scene, config.arena_size, self.pad_drag, self.vertex_drag)
+        self._centre = (config.centre, config.centre)
+        # The preview's geometry is compiled (numba) on its first call, most of a second: do it now, aside,
+        # rather than in the middle of the first drag.
+        threading.Thread(target=_warm_up, args=(config,), daemon=True, name="draw-preview-warm-up").start()
+
+    # ------------------------------------------------------------ build
+    def build(self, snap: Snapshot) -> None:
+        gui = self.gui
+        with gui.add_folder("Draw", expand_by_default=False):
+            gui.add_markdown("Click points on the floor, drag a numbered point to move it. The goal is centred "
+                             "and scaled to the boxes' area when used.")
+            self.status = gui.add_markdown("")
+            self.toggle = gui.add_button("Start drawing", icon=viser.Icon.PENCIL)
+            self.undo = gui.add_button("Undo last point", icon=viser.Icon.ARROW_BACK_UP, disabled=True)
+            self.close = gui.add_button("Close and use", icon=viser.Icon.CHECK, disabled=True)
+            self.clear = gui.add_button("Clear", icon=viser.Icon.TRASH, disabled=True)
+            self.template = gui.add_dropdown("Template", (PICK_TEMPLATE, *template_names()),
+                                             initial_value=PICK_TEMPLATE,
+                                             hint="Start from a letter or a figure; its points stay editable")
+            self.snap_on = gui.add_checkbox("Snap to grid", True, hint="New and moved points go to the nearest "
+                                            "grid node")
+            self.grid = gui.add_number("Grid (m)", DEFAULT_GRID, min=0.1, max=5.0, step=0.1,
+                                       hint="Spacing of the snapping grid (turn Snap to grid on to use it)")
+            self.typed = gui.add_text("Points", "", multiline=True, hint=FORMATS_HINT)
+            self.apply = gui.add_button("Apply points", icon=viser.Icon.ARROW_RIGHT,
+                                        hint="Replace the drawing with the points typed above")
+            self.show_preview = gui.add_checkbox("Preview final size", True,
+                                                 hint="Dashed: the goal as it will be built and its light band")
+        self.toggle.on_click(lambda event: self._set_drawing(not self.drawing))
+        self.undo.on_click(lambda event: self._change(self.points[:-1]))
+        self.clear.on_click(lambda event: self._change([]))
+        self.close.on_click(self._close_and_use)
+        self.template.on_update(self._pick_template)
+        self.apply.on_click(self._apply_typed)
+        self.snap_on.on_update(lambda event: self._sync_controls())
+        self.show_preview.on_update(lambda event: self._refresh())
+        self._refresh()
+
+    def update(self, snap: Snapshot) -> None:
+        """A new world or new strategies change the preview's size: recompute it."""
+        config = snap.world_config
+        if config == self._preview_config:
+            return
+        with self._lock:
+            self._centre = (config.centre, config.centre)
+            self.view.set_arena(config.arena_size)
+            self._refresh()
+
+    # ------------------------------------------------------------ input
+    @property
+    def step(self) -> float:
+        return float(self.grid.value) if self.snap_on.value else 0.0
+
+    def click(self, point: Point) -> bool:
+        """A click on the floor: the next point while drawing (returns whether it was taken).
+        A click on an existing point only grabs it: it adds nothing."""
+        if not self.drawing:
+            return False
+        self._add(point)
+        return True
+
+    def pad_drag(self, phase: str, point: Point | None) -> None:
+        """Press, drag and release on the floor while drawing: the next point where released."""
+        with self._lock:
+            if not self.drawing:
+                return
+            last = self.points[-1] if self.points else None
+            if phase == "end":
+                self.view.show_rubber(None, None)
+                if point is not None:
+                    self._add(point)
+            elif last is not None and point is not None:
+                self.view.show_rubber(last, snap(point, self.step))
+
+    def vertex_drag(self, index: int, phase: str, point: Point | None) -> None:
+        """A numbered handle dragged: its vertex follows, snapped; the preview returns on release."""
+        with self._lock:
+            if not 0 <= index < len(self.points):
+                return
+            if point is not None:
+                moved = snap(point, self.step)
+                if moved != self.points[index]:
+                    self.points[index] = moved
+                    self.view.show(self.points, crossing_edges(self.points))
+            if phase == "start":
+                self.view.show_preview(None)
+            elif phase == "end":
+                self._change(without_repeats(self.points))
+
+    # ---------------------------------------------------------- actions
+    def _add(self, point: Point) -> None:
+        with self._lock:
+            p = snap(point, self.step)
+            if self._on_a_vertex(p) or self._on_a_vertex(point):
+                return
+            self._change([*self.points, p])
+
+    def _on_a_vertex(self, p: Point) -> bool:
+        r = self.view.handle_radius
+        return any((p[0] - x) ** 2 + (p[1] - y) ** 2 < r * r for x, y in self.points)
+
+    def _set_drawing(self, on: bool) -> None:
+        with self._lock:
+            self.drawing = on
+            self.view.set_pad(on)
+            self._refresh()
+
+    def _close_and_use(self, event: viser.GuiEvent) -> None:
+        with self._lock:
+            try:
+                vertices = validate_polygon(self.points, SOURCE)
+            except ShapeError as exc:
+                notify_error(event.client, "Shape not used", str(exc))
+                return
+            self._use(vertices, "drawn", event.client)
+            self.drawing = False
+            self.view.set_pad(False)
+            self._change([])
+
+    def _pick_template(self, event: viser.GuiEvent) -> None:
+        name = self.template.value
+        if event.client is None or name == PICK_TEMPLATE:
+            return  # this panel putting the dropdown back, not a pick
+        with self._lock:
+            self._change([tuple(p) for p in placed(template_vertices(name), self._centre, self.step).tolist()])
+            self.template.value = PICK_TEMPLATE  # so that the same template can be picked again
+
+    def _apply_typed(self, event: viser.GuiEvent) -> None:
+        with self._lock:
+            try:
+                points = parse_coordinates(self.typed.value)
+            except ShapeError as exc:
+                self._typed_error = str(exc)
+                notify_error(event.client, "Points not applied", str(exc))
+                self._sync_controls()
+                return
+            self._change(without_repeats(points))  # typed points are not snapped: they are what was asked
+
+    def _change(self, points: list[Point]) -> None:
+        """The drawing is now ``points``: redraw, re-check, re-preview, and show them as text."""
+        with self._lock:
+            self.points = list(points)
+            self._typed_error = ""
+            self._refresh()
+            self.typed.value = format_coordinates(self.points)
+
+    # ---------------------------------------------------------- display
+    def _refresh(self) -> None:
+        with self._lock:
+            crossings = crossing_edges(self.points)
+            n = len(self.points)
+            self._red = [edge_name(e, n) for e in sorted({e for pair in crossings for e in pair})]
+            self._problem, self._preview = self._check()
+            self.view.show(self.points, crossings)
+            if self._preview is not None and self.show_preview.value:
+                self.view.show_preview(self._preview.goal, self._preview.smallest, self._preview.largest)
+            else:
+                self.view.show_preview(None)
+            self._sync_controls()
+
+    def _check(self) -> tuple[str, GoalPreview | None]:
+        """Why the drawing cannot be used ('' if it can), and its preview when it can."""
+        self._preview_config = config = self.runner.latest.world_config
+        if len(self.points) < 3:
+            return "", None
+        try:
+            vertices = validate_polygon(self.points, SOURCE)
+            return "", preview_goal(config, vertices, config.flare)
+        except ShapeError as exc:
+            return without_source(str(exc)), None
+
+    def _sync_controls(self) -> None:
+        n = len(self.points)
+        self.toggle.label = "Stop drawing" if self.drawing else "Start drawing"
+        self.undo.disabled = self.clear.disabled = n == 0
+        self.close.disabled = n < 3 or bool(self._problem)
+        self.grid.disabled = not self.snap_on.value
+        self.status.content = status_text(n, self.drawing, self._problem, self._preview, self._typed_error,
+                                          self._red)
