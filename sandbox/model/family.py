@@ -62,8 +62,12 @@ def choose(config: Config, goal: Goal) -> tuple[str, str]:
         return "scaled", ("asked for (outline = scaled)" if asked == "scaled"
                           else "a circle: the paper's ring, which the offset outline would light the same")
     depth = centre_depth(goal)
-    past = scaled_overreach(config, goal)
     if asked == "scaled":
+        if depth <= 0.0:
+            return "offset", ("scaled was asked for, but the centre lies on the goal's edge or outside it, where "
+                              "scaling about it cannot bring the band to the goal: the offset outline runs this "
+                              "goal instead")
+        past = scaled_overreach(config, goal)
         if past:
             return "offset", (f"scaled was asked for, but its smallest outline would span {past}, past the "
                               f"arena: the offset outline runs this goal instead")
@@ -72,6 +76,7 @@ def choose(config: Config, goal: Goal) -> tuple[str, str]:
         return "offset", (f"auto: the centre lies near the goal's edge (its distance to the edge is {depth:.2f} of "
                           f"its distance to the farthest vertex, below {DEEP_INSIDE:.2f}), so scaling about it "
                           f"cannot reach every part; the band follows the goal's edge at a distance instead")
+    past = scaled_overreach(config, goal)
     if past:
         return "offset", (f"auto: the smallest scaled outline would span {past}, past the arena; the band "
                           f"follows the goal's edge at a distance instead")
