@@ -6,7 +6,8 @@ callable taking the parsed arguments and returning an exit code.
 
 - ``run``, ``bench``: :mod:`.run`, :mod:`.bench` (headless)
 - ``serve``, ``record``: :mod:`sandbox.app.server`, :mod:`sandbox.app.record`
-- ``sweep``, ``report``: :mod:`sandbox.experiments.sweep`, :mod:`sandbox.experiments.report`
+- ``sweep``, ``report``, ``advise``: :mod:`sandbox.experiments.sweep`, :mod:`sandbox.experiments.report`,
+  :mod:`sandbox.experiments.advise`
 
 Only the chosen subcommand's module is imported (not to avoid a cycle:
 there is none, :mod:`sandbox.cli` imports no command), so that ``phototaxis
@@ -31,6 +32,7 @@ SUBCOMMANDS = {
     "record": "sandbox.app.record",
     "sweep": "sandbox.experiments.sweep",
     "report": "sandbox.experiments.report",
+    "advise": "sandbox.experiments.advise",
 }
 
 

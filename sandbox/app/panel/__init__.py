@@ -12,6 +12,7 @@ import time
 from typing import Any
 
 from sandbox.app import learn, legend
+from sandbox.app.panel.advice import AdviceFolder
 from sandbox.app.panel.common import PANEL_HZ, floor_point
 from sandbox.app.panel.inspector import InspectorFolder
 from sandbox.app.panel.metrics import MetricsFolder
@@ -39,12 +40,13 @@ class Panel:
                              after_reset=self._after_reset)
         self.shape = ShapeFolder(gui, runner, server.scene, on_change=self.metrics.mark)
         self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark)
+        self.advice = AdviceFolder(gui, runner, use=self.strategies.use)
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
         self.inspector = InspectorFolder(gui, runner, server)
         self.record = RecordFolder(gui, server)
-        self.folders = (self.run, self.shape, self.strategies, self.program, self.metrics, self.inspector,
-                        self.record, self.parameters)
+        self.folders = (self.run, self.shape, self.advice, self.strategies, self.program, self.metrics,
+                        self.inspector, self.record, self.parameters)
         snap = runner.latest
         self._build_legend(gui)
         for folder in self.folders:

@@ -67,6 +67,27 @@ class StrategiesFolder:
         follows = "the goal grown by a distance" if snap.family == "offset" else "the goal scaled"
         return f"**Band follows:** {follows} ({snap.family}){' - ' + reason if reason else ''}"
 
+    def use(self, outline: str, strategies: dict[str, float], client: Any) -> None:
+        """An outline and the strategies' amounts (those not given off), shown and applied."""
+        self.outline.value = outline
+        self.use_outline(outline, client)
+        values = {s.name: float(strategies.get(s.name, 0.0)) for s in STRATEGIES}
+        self.runner.post(functools.partial(Simulation.set_strategies, **values),
+                         on_error=lambda exc: notify_error(client, "Strategies not used", str(exc)))
+        self._show_strategies(values)
+        self._on_change(f"outline {outline}, " + ", ".join(f"{k} {v:g}" for k, v in values.items() if v > 0))
+
+    def _show_strategies(self, values: dict[str, float]) -> None:
+        self._quiet = True
+        try:
+            for s in STRATEGIES:
+                on, amount = self.controls[s.name]
+                on.value = values[s.name] > 0
+                if values[s.name] > 0:
+                    amount.value = values[s.name]
+        finally:
+            self._quiet = False
+
     def use_outline(self, outline: str, client: Any) -> None:
         """Another outline family: the goal is fitted again and its outline starts from its largest size."""
 
@@ -87,13 +108,7 @@ class StrategiesFolder:
         self._use_shape(shape_vertices(case["shape"]), case["shape"], client)
         self.runner.post(functools.partial(Simulation.set_strategies, **strategies),
                          on_error=lambda exc: notify_error(client, "Case not used", str(exc)))
-        for s in STRATEGIES:  # show them
-            on, amount = self.controls[s.name]
-            self._quiet = True
-            on.value = strategies[s.name] > 0
-            if strategies[s.name] > 0:
-                amount.value = strategies[s.name]
-            self._quiet = False
+        self._show_strategies(strategies)
         self._on_change(f"case {name}")
 
     def _changed(self, name: str, client: Any) -> None:

@@ -1,0 +1,140 @@
+"""The *Which strategy builds my shape?* folder: the running goal's candidate
+outlines and strategies tried in short trials beside the live simulation
+(:mod:`sandbox.experiments.advise`), ranked, with one click to use the best.
+
+The trials run in one worker process at a lower priority, and while they run
+the folder compares the live simulation's speed with its speed before: when
+it falls below :data:`SLOWED` of it, the folder says so.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable
+
+import viser
+
+from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.snapshot import Snapshot
+from sandbox.experiments import advise as advice
+
+#: Below this share of its speed before the advice, the page says the advice slows the simulation.
+SLOWED = 0.8
+
+
+class AdviceFolder:
+    def __init__(self, gui: Any, runner: Any, use: Callable[[str, dict, Any], None], *, seeds: int = advice.SEEDS,
+                 steps: int = advice.STEPS):
+        self.gui, self.runner = gui, runner
+        self._use = use
+        self.seeds, self.steps = seeds, steps
+        self.results: list[advice.Ranked] = []
+        self._cancel = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._busy = False
+        self._speed_before = 0.0
+        self._progress = (0, 0)
+        self._shown = ""
+
+    def build(self, snap: Snapshot) -> None:
+        gui = self.gui
+        with gui.add_folder("Which strategy builds my shape?", expand_by_default=False):
+            gui.add_markdown(f"Short trials ({self.seeds} seeds x {self.steps:,} steps) of every outline and "
+                             "strategy that can build the current goal, beside the live simulation.")
+            self.start = gui.add_button("Try them all", icon=viser.Icon.TEST_PIPE,
+                                        hint="Run the trials in the background and rank the strategies")
+            self.cancel = gui.add_button("Cancel", icon=viser.Icon.X, visible=False)
+            self.bar = gui.add_progress_bar(0.0, visible=False)
+            self.status = gui.add_markdown("")
+            self.use_best = gui.add_button("Use the best", icon=viser.Icon.CHECK, disabled=True,
+                                           hint="Give the running goal the first-ranked outline and strategies")
+
+        @self.start.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self.begin(event.client)
+
+        @self.cancel.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self._cancel.set()
+
+        @self.use_best.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self.apply_best(event.client)
+
+    # ------------------------------------------------------------- running
+    @property
+    def running(self) -> bool:
+        return self._busy
+
+    def begin(self, client: Any) -> None:
+        """Start the trials of the running goal (refused while some run)."""
+        if self.running:
+            notify_error(client, "Advice already running", "Wait for it, or cancel it first.")
+            return
+        snap = self.runner.latest
+        config, vertices = snap.world_config.replace(shape=snap.shape_name), snap.goal_vertices
+        self._cancel.clear()
+        self._speed_before = snap.steps_per_second
+        self._progress = (0, 0)
+        self.results, self.use_best.disabled = [], True
+        self.start.disabled, self.cancel.visible, self.bar.visible, self.bar.value = True, True, True, 0.0
+        self._busy = True
+        self._thread = threading.Thread(target=self._run, args=(config, vertices, client), name="phototaxis-advice",
+                                        daemon=True)
+        self._thread.start()
+
+    def _run(self, config: Any, vertices: Any, client: Any) -> None:
+        try:
+            self.results = advice.advise(config, vertices, seeds=self.seeds, steps=self.steps, workers=1,
+                                         progress=self._heard, cancel=self._cancel)
+            best = self.results[0].candidate.label if self.results else "nothing"
+            notify(client, "Advice ready", f"Best for this goal: {best}.", "green")
+        except advice.Cancelled:
+            notify(client, "Advice cancelled", "The trials were stopped.")
+        except Exception as exc:  # noqa: BLE001 - a goal the advice refuses, a worker that died: say so
+            notify_error(client, "Advice failed", str(exc))
+        finally:
+            self._busy = False
+            self.start.disabled, self.cancel.visible, self.bar.visible = False, False, False
+            self.use_best.disabled = not self.results
+            self._show(self._text())
+
+    def _heard(self, done: int, total: int) -> None:
+        self._progress = (done, total)
+        self.bar.value = 100.0 * done / max(total, 1)
+
+    def apply_best(self, client: Any) -> None:
+        """The first-ranked outline and strategies, on the running goal."""
+        if not self.results:
+            notify_error(client, "No advice yet", "Press Try them all first.")
+            return
+        best = self.results[0].candidate
+        strategies = {name: 0.0 for name in ("flare", "switch", "no_corners", "chase")} | dict(best.strategies)
+        self._use(best.outline, strategies, client)
+
+    # ------------------------------------------------------------ read-outs
+    def update(self, snap: Snapshot) -> None:
+        self._show(self._text(snap))
+
+    def _show(self, text: str) -> None:
+        if text != self._shown:
+            self.status.content = self._shown = text
+
+    def _text(self, snap: Snapshot | None = None) -> str:
+        if self.running:
+            done, total = self._progress
+            line = f"Running: {done} of {total or '...'} trials done."
+            speed = (snap or self.runner.latest).steps_per_second
+            if self._speed_before > 0 and speed < SLOWED * self._speed_before:
+                line += (f" **The trials slow the live simulation to {100 * speed / self._speed_before:.0f} % of "
+                         f"its speed** (Cancel to give it back).")
+            return line
+        if self.results:
+            return advice.table(self.results, self.steps)
+        return ""
+
+    def stop(self) -> None:
+        """Stop trials still running (the app is stopping)."""
+        self._cancel.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)

@@ -1,0 +1,232 @@
+"""Which strategy builds my shape? Short trials of every strategy that means
+something for a goal, ranked: :func:`advise` (``phototaxis advise``, and the
+page's *Which strategy builds my shape?*).
+
+The candidates are the outline families that can run the goal (the paper's
+scaled outline only where it fits) with the strategies that mean something
+on each: on a scaled outline none, flare, switch, no corners, switch with no
+corners, and chase; on an offset outline none and chase (flare, switch and
+no corners do nothing there). Each runs a few seeds of a short trial in
+worker processes, as a sweep's trials do; the table ranks them by the
+fraction of boxes in the goal, then by how far the rest lie.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import math
+import multiprocessing
+import os
+import threading
+from dataclasses import dataclass, field
+from typing import Callable, Iterator
+
+import numpy as np
+
+from sandbox.model.config import STRATEGY_DEFAULTS, Config
+
+#: Seeds and world steps of one candidate's trials (about a third of a 100,000-step run's cycles).
+SEEDS, STEPS = 2, 30_000
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """An outline family and the strategies' amounts (the others off)."""
+
+    outline: str
+    strategies: tuple[tuple[str, float], ...] = ()
+
+    @property
+    def label(self) -> str:
+        named = " + ".join(name.replace("_", " ") for name, _ in self.strategies)
+        return f"{self.outline}{' + ' + named if named else ''}"
+
+    def config(self, base: Config) -> Config:
+        off = {name: 0.0 for name in ("flare", "switch", "no_corners", "chase")}
+        return base.replace(**{**off, **dict(self.strategies)}, outline=self.outline)
+
+
+@dataclass
+class Ranked:
+    """One candidate's trials, summarised."""
+
+    candidate: Candidate
+    fractions: list[float] = field(default_factory=list)
+    distances: list[float] = field(default_factory=list)
+
+    @property
+    def fraction(self) -> float:
+        return float(np.mean(self.fractions)) if self.fractions else math.nan
+
+    @property
+    def fraction_se(self) -> float:
+        return _se(self.fractions)
+
+    @property
+    def distance(self) -> float:
+        return float(np.mean(self.distances)) if self.distances else math.nan
+
+    def as_dict(self) -> dict:
+        return {"outline": self.candidate.outline, "strategies": dict(self.candidate.strategies),
+                "label": self.candidate.label, "fraction_in_goal": round(self.fraction, 4),
+                "fraction_in_goal_se": round(self.fraction_se, 4), "mean_outside_distance": round(self.distance, 4),
+                "trials": len(self.fractions)}
+
+
+def _se(values: list[float]) -> float:
+    return float(np.std(values, ddof=1) / math.sqrt(len(values))) if len(values) > 1 else math.nan
+
+
+def candidates(config: Config, vertices: np.ndarray | None) -> list[Candidate]:
+    """Every outline family that can run this goal, with the strategies that mean something on it."""
+    from sandbox.model.family import choose
+    from sandbox.model.goal import fit_goal
+
+    on = STRATEGY_DEFAULTS
+    goal = fit_goal(config, vertices)  # a ShapeError here: the goal cannot be built at all
+    out = []
+    if choose(config.replace(outline="scaled"), goal)[0] == "scaled":
+        out.append(Candidate("scaled"))
+        if vertices is not None:  # a circle has no corners to flare or darken and is a circle already
+            out += [Candidate("scaled", (("flare", on["flare"]),)), Candidate("scaled", (("switch", on["switch"]),)),
+                    Candidate("scaled", (("no_corners", on["no_corners"]),)),
+                    Candidate("scaled", (("switch", on["switch"]), ("no_corners", on["no_corners"])))]
+        out.append(Candidate("scaled", (("chase", on["chase"]),)))
+    out += [Candidate("offset"), Candidate("offset", (("chase", on["chase"]),))]
+    return out
+
+
+def rank(results: list[Ranked]) -> list[Ranked]:
+    """Best first: the most boxes in the goal, then the closest rest."""
+    return sorted(results, key=lambda r: (-r.fraction, r.distance))
+
+
+def _nice_worker() -> None:
+    """Advice runs beside the live simulation: its workers yield the processor first."""
+    with contextlib.suppress(OSError, AttributeError):
+        os.nice(10)
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def advise(config: Config, vertices: np.ndarray | None, *, seeds: int = SEEDS, steps: int = STEPS,
+           workers: int = 1, progress: Callable[[int, int], None] | None = None,
+           cancel: threading.Event | None = None) -> list[Ranked]:
+    """Run every candidate's trials (seeds from ``config.seed``) and rank them. ``progress(done, total)``
+    hears each finished trial; ``cancel`` stops the trials not yet started (those running finish)."""
+    from sandbox.experiments.trials import run_sweep_trial
+
+    shape = None if vertices is None else np.asarray(vertices, dtype=float).tolist()
+    ranked = {c: Ranked(c) for c in candidates(config, vertices)}
+    jobs = [(c, config.seed + k) for c in ranked for k in range(seeds)]
+    with _pool(workers) as pool:
+        futures = {pool.submit(run_sweep_trial, c.config(config).to_dict(), seed, steps, shape): c for c, seed in jobs}
+        done = 0
+        for future in _as_completed(futures, cancel):
+            final = future.result()["samples"][-1]
+            ranked[futures[future]].fractions.append(final["fraction_in_goal"])
+            ranked[futures[future]].distances.append(final["mean_outside_distance"])
+            done += 1
+            if progress:
+                progress(done, len(jobs))
+    return rank([r for r in ranked.values() if r.fractions])
+
+
+@contextlib.contextmanager
+def _pool(workers: int) -> Iterator[cf.ProcessPoolExecutor]:
+    pool = cf.ProcessPoolExecutor(max_workers=max(1, workers), mp_context=multiprocessing.get_context("spawn"),
+                                  initializer=_nice_worker)
+    try:
+        yield pool
+    except BaseException:
+        _stop_workers(pool)  # cancelled or interrupted: trials in flight stop now, not when they finish
+        raise
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
+    for process in list(getattr(pool, "_processes", {}).values()):
+        with contextlib.suppress(Exception):
+            process.terminate()
+
+
+class Cancelled(Exception):
+    """The advice was stopped before every candidate had run."""
+
+
+def _as_completed(futures: dict, cancel: threading.Event | None) -> Iterator[cf.Future]:
+    """The futures as they finish; Cancelled as soon as ``cancel`` is set."""
+    pending = set(futures)
+    while pending:
+        finished, pending = cf.wait(pending, timeout=0.2, return_when=cf.FIRST_COMPLETED)
+        if cancel is not None and cancel.is_set():
+            raise Cancelled("the advice was cancelled")
+        yield from finished
+
+
+def table(results: list[Ranked], steps: int) -> str:
+    """The ranked candidates as a Markdown table."""
+    rows = ["| rank | outline and strategies | boxes in the goal | rest lie (m) |", "| --- | --- | --- | --- |"]
+    for i, r in enumerate(results, 1):
+        se = f" ± {r.fraction_se:.3f}" if not math.isnan(r.fraction_se) else ""
+        rows.append(f"| {i} | {r.candidate.label} | {r.fraction:.3f}{se} | {r.distance:.2f} |")
+    seeds = max((len(r.fractions) for r in results), default=0)
+    return "\n".join(rows) + f"\n\n{seeds} seed(s) x {steps:,} steps each; mean ± standard error."
+
+
+# ------------------------------------------------------------------- CLI
+def add_parser(sub) -> "argparse.ArgumentParser":
+    import argparse
+
+    from sandbox.cli import add_config_arguments
+
+    p = sub.add_parser("advise", help="rank the strategies that can build a goal, from short trials",
+                       description="Run short trials of every outline and strategy that means something for the "
+                       "goal (--shape), in worker processes, and print them ranked by the fraction of boxes in "
+                       "the goal. --steps sets the trials' length (default 30,000).")
+    p.add_argument("--trials", type=int, default=SEEDS, metavar="N",
+                   help=f"seeds per candidate, from --seed (default {SEEDS})")
+    p.add_argument("--workers", type=int, default=None, metavar="N", help="worker processes (default: all cores)")
+    p.add_argument("--json", action="store_true", help="print the ranking as JSON")
+    p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
+    add_config_arguments(p, with_case=False)
+    p.set_defaults(func=advise_command)
+    return p
+
+
+def advise_command(args) -> int:
+    import json
+    import sys
+
+    from sandbox.cli import UserError, config_from_args
+    from sandbox.shapes import shape_vertices
+
+    if not 1 <= args.trials <= 100:
+        raise UserError(f"--trials must be between 1 and 100, got {args.trials}")
+    if args.workers is not None and not 1 <= args.workers <= 64:
+        raise UserError(f"--workers must be between 1 and 64, got {args.workers}")
+    config = config_from_args(args)
+    steps = config.steps if args.steps is not None else STEPS  # typed, or the advice's own length
+    config = config.replace(steps=steps)
+    vertices = shape_vertices(config.shape)
+    workers = args.workers or os.cpu_count() or 1
+
+    def said(done: int, total: int) -> None:
+        if not args.no_progress:
+            print(f"\radvise: {done}/{total} trials", end="" if done < total else "\n", file=sys.stderr, flush=True)
+
+    try:
+        results = advise(config, vertices, seeds=args.trials, steps=steps, workers=workers, progress=said)
+    except ValueError as exc:  # a candidate the goal refuses (it cannot fit)
+        raise UserError(str(exc)) from None
+    if args.json:
+        json.dump({"shape": config.shape, "steps": steps, "seeds": list(range(config.seed, config.seed + args.trials)),
+                   "ranking": [r.as_dict() for r in results]}, sys.stdout)
+        sys.stdout.write("\n")
+    else:
+        print(f"advice for {config.shape}:\n")
+        print(table(results, steps))
+    return 0

@@ -1,0 +1,102 @@
+"""Which strategy builds my shape? (sandbox/experiments/advise.py and the page's folder)."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import numpy as np
+import pytest
+
+from sandbox.experiments.advise import Candidate, Ranked, candidates, rank, table
+from sandbox.model.config import Config
+from sandbox.shapes import shape_vertices
+
+TINY = Config(robots=20, boxes=40, update_every=10, hold_steps=5)
+
+
+def labels(shape):
+    return [c.label for c in candidates(Config(), shape_vertices(shape))]
+
+
+def test_the_candidates_are_what_means_something_on_each_goal():
+    assert labels("circle") == ["scaled", "scaled + chase", "offset", "offset + chase"]
+    assert labels("star") == ["scaled", "scaled + flare", "scaled + switch", "scaled + no corners",
+                              "scaled + switch + no corners", "scaled + chase", "offset", "offset + chase"]
+    assert labels("crescent") == ["offset", "offset + chase"]  # scaled cannot fit it
+    assert "scaled" in labels("l-shape")  # it fits, badly: the advice shows how badly
+
+
+def test_a_candidate_sets_its_strategies_and_turns_the_others_off():
+    config = Candidate("offset", (("chase", 2.0),)).config(Config(flare=1.75, switch=0.25))
+    assert (config.outline, config.chase, config.flare, config.switch, config.no_corners) == ("offset", 2.0, 0, 0, 0)
+
+
+def test_the_ranking_puts_most_in_the_goal_first_then_the_closest_rest():
+    a, b, c = (Ranked(Candidate(o), [f], [d]) for o, f, d in (("scaled", 0.7, 1.0), ("offset", 0.8, 0.9),
+                                                                   ("offset", 0.8, 0.5)))
+    assert rank([a, b, c]) == [c, b, a]
+    text = table(rank([a, b, c]), 30_000)
+    assert text.splitlines()[2] == "| 1 | offset | 0.800 | 0.50 |" and "1 seed(s) x 30,000 steps" in text
+
+
+def test_advise_from_the_command_line_prints_a_ranked_table_and_json(capsys):
+    from sandbox.commands import main
+
+    code = main(["advise", "--shape", "crescent", "--steps", "400", "--trials", "1", "--workers", "1",
+                 "--robots", "20", "--boxes", "40", "--json", "--no-progress"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["steps"] == 400 and out["seeds"] == [0]
+    assert [r["label"] for r in out["ranking"]] in (["offset", "offset + chase"], ["offset + chase", "offset"])
+    fractions = [r["fraction_in_goal"] for r in out["ranking"]]
+    assert fractions == sorted(fractions, reverse=True)
+
+
+def test_the_pages_advice_runs_beside_the_simulation_and_its_best_is_used():
+    from sandbox.app.panel.advice import AdviceFolder
+    from sandbox.app.runner import Runner
+
+    runner = Runner(TINY.replace(shape="l-shape"), fps=30, steps_per_frame=2).start()
+    used = []
+    try:
+        folder = AdviceFolder(_Gui(), runner, use=lambda o, s, client: used.append((o, s)), seeds=1, steps=300)
+        folder.build(runner.latest)
+        folder.begin(client=None)
+        deadline = time.time() + 120
+        while folder.running and time.time() < deadline:
+            time.sleep(0.05)
+        assert not folder.running and len(folder.results) == len(candidates(TINY, shape_vertices("l-shape")))
+        assert folder.status.content.startswith("| rank |") and not folder.use_best.disabled
+        folder.apply_best(client=None)
+        best = folder.results[0].candidate
+        assert used == [(best.outline, {"flare": 0.0, "switch": 0.0, "no_corners": 0.0, "chase": 0.0,
+                                        **dict(best.strategies)})]
+    finally:
+        runner.stop()
+
+
+class _Handle:
+    def __init__(self, value=None, **kwargs):
+        self.value, self.content, self.visible, self.disabled = value, "", True, False
+        self.__dict__.update(kwargs)
+
+    def on_click(self, func):
+        return func
+
+
+class _Gui:
+    """Just enough of viser's GuiApi for a folder built without a server."""
+
+    def add_folder(self, *args, **kwargs):
+        import contextlib
+
+        return contextlib.nullcontext()
+
+    def add_markdown(self, content=""):
+        return _Handle(content=content)
+
+    def add_button(self, label, **kwargs):
+        return _Handle(**kwargs)
+
+    def add_progress_bar(self, value, **kwargs):
+        return _Handle(value, **kwargs)
