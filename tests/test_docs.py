@@ -16,7 +16,7 @@ ROOT = Path(__file__).resolve().parent.parent
 CLI = ROOT / "docs" / "cli.md"
 PAGES = sorted({ROOT / "README.md", ROOT / "MODEL.md", *(ROOT / "docs").glob("*.md"), *(ROOT / "static").rglob("*.md")})
 #: Pages linked to before they exist, each written on another branch: remove an entry once its page is merged.
-WRITTEN_ELSEWHERE = {"docs/security.md"}  # the server's security branch
+WRITTEN_ELSEWHERE: set[str] = set()
 
 LINK = re.compile(r"!?\[(?:[^\]\[]|\[[^\]]*\])*\]\(\s*<?([^)\s>]+)>?(?:\s+\"[^\"]*\")?\s*\)")
 
