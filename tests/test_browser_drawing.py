@@ -261,7 +261,9 @@ def test_draw_an_l_by_clicks_and_a_drag(app, page):
     assert draw.points == [tuple(map(float, p)) for p in L_ARMS]  # snapped to the 0.5 m grid
     status_says(page, "Ready")
     assert draw.view.preview_goal.visible and draw.view.preview_band.visible
-    assert [label.text for label in draw.view._labels] == ["1", "2", "3", "4", "5", "6"]
+    # The point is stored before the floor shows it (the click's callback draws it next): wait for the labels.
+    wait_until(lambda: [label.text for label in draw.view._labels] == ["1", "2", "3", "4", "5", "6"],
+               what="six numbered points on the floor")
     shot(page, "l-2-drawn")
     use(app, page, "L", 6, began)
     assert not draw.drawing and draw.points == []
