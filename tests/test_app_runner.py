@@ -25,16 +25,29 @@ def wait_until(condition, timeout=30.0):  # generous: a loaded machine (a sweep 
     raise AssertionError("timed out")
 
 
-def settled_step(runner, quiet=0.3, timeout=10.0):
-    """The runner's step once it has stayed the same for ``quiet`` seconds."""
-    deadline = time.time() + timeout
-    step = runner.latest.step
-    while time.time() < deadline:
-        time.sleep(quiet)
-        if runner.latest.step == step:
-            return step
-        step = runner.latest.step
-    raise AssertionError("still stepping")
+def paused_step(runner) -> int:
+    """The step the engine stopped at once told to pause.
+
+    ``runner.playing`` flips at once in this process, while the engine may be in the
+    middle of a frame's steps and, in its own process, a frame may still be on its
+    way. A frame says whether the engine was playing when it was taken: the first
+    one that says paused carries the last step, and every later one the same."""
+    found = []
+
+    def paused() -> bool:
+        snap = runner.latest
+        if not snap.playing:
+            found.append(snap.step)
+        return bool(found)
+
+    wait_until(paused)
+    return found[0]
+
+
+def frames_pass(runner, count: int = 5) -> None:
+    """Wait until ``count`` more frames have arrived (the engine sends them while paused too)."""
+    start = runner.latest.frame
+    wait_until(lambda: runner.latest.frame >= start + count)
 
 
 @pytest.fixture
@@ -48,15 +61,19 @@ def runner():
 def test_commands_run_in_the_simulation_thread(runner):
     names = runner.call(lambda sim: threading.current_thread().name)
     assert names == "phototaxis-simulation"
-    assert runner.call(lambda sim: sim.steps_done) >= 0
+    assert runner.call(lambda sim: sim is runner.sim)  # the runner's own simulation, and the answer comes back
+    before = runner.call(lambda sim: sim.steps_done)
+    wait_until(lambda: runner.latest.step > before)
+    shown = runner.latest.step
+    assert runner.call(lambda sim: sim.steps_done) >= shown  # the running world, at least as far as it was shown
 
 
 def test_runs_pauses_steps_and_resets(runner):
     wait_until(lambda: runner.sim.steps_done > 10)
     runner.set_playing(False)
-    steps = runner.call(lambda sim: sim.steps_done)
-    time.sleep(0.1)
-    assert runner.call(lambda sim: sim.steps_done) == steps
+    steps = paused_step(runner)
+    frames_pass(runner)
+    assert runner.call(lambda sim: sim.steps_done) == steps == runner.latest.step
     runner.step_once(3)
     wait_until(lambda: runner.latest.step == steps + 3)
     runner.reset(7)
@@ -297,8 +314,8 @@ def test_with_no_viewer_for_a_while_the_app_pauses_and_a_viewer_resumes_it():
     a.start()
     try:
         wait_until(lambda: a.auto_paused and not a.runner.playing, timeout=15)
-        step = settled_step(a.runner)  # a frame already on its way from the engine may still land
-        time.sleep(0.5)
+        step = paused_step(a.runner)  # a frame already on its way from the engine may still land
+        frames_pass(a.runner)
         assert a.runner.latest.step == step
         a._on_connect(FakeClient())  # as viser calls it when a browser connects
         wait_until(lambda: a.runner.playing and a.runner.latest.step > step)

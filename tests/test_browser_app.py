@@ -1,8 +1,10 @@
 """The real page in headless Chromium (Debian's chromium through Playwright).
 
 One small simulation and one browser for the whole module; each test drives
-one part of the panel and checks that it reached the simulation. Waits are
-for conditions, never fixed sleeps.
+one part of the panel and checks that it reached the simulation. Every wait is
+for a condition (a frame after the command, a step that stops changing, an
+element that appears or stops moving), never a fixed sleep: a loaded machine
+makes the tests slower, not flaky. Only ``wait_until`` sleeps, between two looks.
 """
 
 from __future__ import annotations
@@ -33,6 +35,52 @@ def wait_until(condition, timeout: float = 20.0, what: str = "condition"):
             return value
         time.sleep(0.05)
     raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+def paused_step(runner) -> int:
+    """The step the engine stopped at once told to pause.
+
+    ``runner.playing`` flips at once in this process, while the simulation process may
+    be in the middle of a frame's steps and a frame may still be on its way. Each frame
+    says whether the engine was playing when it was taken: the first that says paused
+    carries the last step, and every later one the same."""
+    found = []
+
+    def paused() -> bool:
+        snap = runner.latest
+        if not snap.playing:
+            found.append(snap.step)
+        return bool(found)
+
+    wait_until(paused, what="the engine to pause")
+    return found[0]
+
+
+def frames_pass(runner, count: int = 5) -> None:
+    """Wait until ``count`` more frames have arrived from the engine (it sends them while paused too)."""
+    start = runner.latest.frame
+    wait_until(lambda: runner.latest.frame >= start + count, what=f"{count} more frames")
+
+
+def panel_refreshes(app, count: int = 2) -> None:
+    """Wait until the panel has refreshed ``count`` more times (it does, throttled, as frames arrive)."""
+    seen = [app.panel._last_refresh]
+
+    def refreshed() -> bool:
+        if app.panel._last_refresh != seen[-1]:
+            seen.append(app.panel._last_refresh)
+        return len(seen) > count
+
+    wait_until(refreshed, what=f"{count} panel refreshes")
+
+
+def done_moving(locator) -> bool:
+    """Whether an element and everything around it have finished their animations (a drop-down opening)."""
+    return locator.evaluate("""el => {
+        for (let e = el; e; e = e.parentElement)
+            if (e.getAnimations().some(a => a.playState === "running")) return false;
+        return true;
+    }""")
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +136,7 @@ def choose(page, label: str, option: str) -> None:
         field.click()
         item = page.get_by_role("option", name=option, exact=True)
         item.wait_for(state="visible", timeout=10_000)
-        page.wait_for_timeout(300)  # let the drop-down finish opening
+        wait_until(lambda: done_moving(item), 5, "the drop-down to finish opening")
         item.click()
         try:
             wait_until(lambda: field.input_value() == option, 3, f"{label} = {option}")
@@ -106,12 +154,14 @@ def dismiss_notifications(page) -> None:
     """Close every notification: the page lives for the whole module, and stacked
     notices can cover the floor where a later test clicks."""
     close_all = "document.querySelectorAll('.mantine-Notification-closeButton').forEach(b => b.click())"
-    for _ in range(50):  # closing is animated: click until none is left
+
+    def none_left() -> bool:  # closing is animated: click until none is left
         if not page.locator(".mantine-Notification-root").count():
-            return
+            return True
         page.evaluate(close_all)
-        page.wait_for_timeout(100)
-    raise AssertionError("notifications did not close")
+        return False
+
+    wait_until(none_left, 10, "the notifications to close")
 
 
 # --------------------------------------------------------------------- tests
@@ -208,10 +258,9 @@ def test_the_largest_world_builds_with_progress_and_can_be_cancelled(app, page):
 def test_run_controls(app, page):
     runner = app.runner
     click_button(page, "Pause")
-    wait_until(lambda: not runner.playing, what="pause")
-    before = runner.latest.step
-    time.sleep(0.3)
-    assert runner.latest.step == before
+    before = paused_step(runner)  # a frame already on its way from the engine may still land
+    frames_pass(runner)
+    assert runner.latest.step == before and not runner.playing
     click_button(page, "Step")
     update = runner.latest.world_config.update_every
     wait_until(lambda: runner.latest.step == before + update, what="one controller update")
@@ -236,19 +285,21 @@ def test_run_controls(app, page):
 
 
 def test_quick_shape_picks_are_never_lost(app, page):
-    """Picks 2 s apart, as in the report that lost about 1 in 10: each one reaches
-    the simulation, and the dropdown still shows it a moment later."""
+    """Picks one after another, one click each, as in the report that lost about 1 in
+    10: each one reaches the simulation, and the dropdown still shows it after the
+    panel has refreshed from the frames that follow (a stale frame used to undo it)."""
     field = page.get_by_label("Shape", exact=True)
     for name in ("square", "triangle", "house", "star", "l-shape", "circle"):
-        started = time.time()
         field.click()
         item = page.get_by_role("option", name=name, exact=True)
         item.wait_for(state="visible", timeout=10_000)
-        page.wait_for_timeout(300)
+        wait_until(lambda: done_moving(item), 5, "the drop-down to finish opening")
         item.click()
         wait_until(lambda: app.runner.latest.shape_name == name, 10, f"the {name} goal")
-        time.sleep(max(0.0, 2.0 - (time.time() - started)))
-        assert field.input_value() == name and app.runner.latest.shape_name == name
+        panel_refreshes(app, 3)
+        assert app.panel.shape.shape.value == name  # what every page is told
+        wait_until(lambda: field.input_value() == name, 5, f"the page to show {name}")
+        assert app.runner.latest.shape_name == name
 
 
 def test_shape_picker_changes_the_goal(app, page):
@@ -312,7 +363,6 @@ def test_drawing_by_clicks_creates_a_valid_goal(app, page):
     for k, (dx, dy) in enumerate(((-120, -80), (120, -80), (150, 90), (0, 160), (-150, 90))):
         page.mouse.click(cx + dx, cy + dy)
         wait_until(lambda: len(app.panel.shape.draw_points) == k + 1, what=f"drawn point {k + 1}")
-        page.wait_for_timeout(400)  # not a double click
     pts = np.array(app.panel.shape.draw_points)
     assert np.all((pts > 0) & (pts < app.runner.latest.world_config.arena_size))  # on the floor
     click_button(page, "Undo last point")
@@ -466,14 +516,23 @@ def test_second_browser_and_disconnect(app, browser, page):
     wait_until(lambda: len(app.server.get_clients()) == 2, what="two clients")
     first, second = (app.server.get_clients()[i] for i in sorted(app.server.get_clients()))
     # Each viewer's camera frames the arena for its own window: the narrow one from higher up.
-    wait_until(lambda: second.camera.position[2] > first.camera.position[2] * 1.2, what="the narrow view to back off")
+
+    def cameras() -> str:  # what a failure should say
+        return (f"first: height {first.camera.position[2]:.1f} m, aspect {first.camera.aspect:.2f}; "
+                f"second: height {second.camera.position[2]:.1f} m, aspect {second.camera.aspect:.2f}; "
+                f"followers {sorted(app.panel.inspector.followers)} of clients {first.client_id}, {second.client_id}")
+
+    try:
+        wait_until(lambda: second.camera.position[2] > first.camera.position[2] * 1.2, what="the narrow view to back off")
+    except AssertionError as exc:
+        raise AssertionError(f"{exc} ({cameras()})") from None
     # Following a robot with the camera is one viewer's choice, not everybody's.
     click_button(other, "Follow a random robot")
     wait_until(lambda: app.runner.latest.robot is not None, what="a followed robot")
     click_button(other, "Camera follows (this viewer)")
     wait_until(lambda: second.camera.position[2] < 20, what="the second viewer's camera to follow")
-    time.sleep(1.0)
-    assert first.camera.position[2] > 40  # the first viewer still sees the whole arena
+    panel_refreshes(app, 3)  # the panel moves the cameras that follow, at each refresh
+    assert second.camera.position[2] < 20 and first.camera.position[2] > 40, cameras()  # the first sees the arena
     click_button(other, "Stop following")
     other.close()
     wait_until(lambda: len(app.server.get_clients()) == 1, what="one client again")

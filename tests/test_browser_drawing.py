@@ -249,7 +249,6 @@ def test_draw_an_l_by_clicks_and_a_drag(app, page):
         if k == 1:
             status_says(page, "needs at least 3 points")
             shot(page, "l-1-two-points")
-        page.wait_for_timeout(350)  # two clicks closer than this are a double click
     # Point 4 by press, drag and release: the rubber band from point 3 follows the pointer.
     rubber = []
     drag_floor(page, (33, 33), L_ARMS[3], during=lambda: rubber.append(
@@ -259,11 +258,12 @@ def test_draw_an_l_by_clicks_and_a_drag(app, page):
     for k, (x, y) in enumerate(L_ARMS[4:], 4):
         click_floor(page, x, y)
         wait_until(lambda: len(draw.points) == k + 1, what=f"point {k + 1}")
-        page.wait_for_timeout(350)
     assert draw.points == [tuple(map(float, p)) for p in L_ARMS]  # snapped to the 0.5 m grid
     status_says(page, "Ready")
     assert draw.view.preview_goal.visible and draw.view.preview_band.visible
-    assert [label.text for label in draw.view._labels] == ["1", "2", "3", "4", "5", "6"]
+    # The point is stored before the floor shows it (the click's callback draws it next): wait for the labels.
+    wait_until(lambda: [label.text for label in draw.view._labels] == ["1", "2", "3", "4", "5", "6"],
+               what="six numbered points on the floor")
     shot(page, "l-2-drawn")
     use(app, page, "L", 6, began)
     assert not draw.drawing and draw.points == []

@@ -17,6 +17,13 @@ from sandbox.shapes import ShapeError
 SLIVER = np.array([[-120.0, 0.0], [120.0, 0.0], [0.0, 0.3]])  # at 60 boxes, 125 m long: mostly outside 16 m
 
 
+def wait_until(condition, timeout: float) -> None:
+    deadline = time.time() + timeout
+    while not condition():
+        assert time.time() < deadline, "timed out"
+        time.sleep(0.01)
+
+
 def test_populations_that_cannot_be_placed_are_refused_with_the_numbers():
     with pytest.raises(ConfigError, match=r"100,000 robots .* at most 3,007"):
         Config().replace(robots=100_000)
@@ -72,11 +79,12 @@ def test_building_a_world_reports_progress_and_can_be_cancelled():
         assert isinstance(outcome.get("error"), BuildCancelled)
         assert seen[-1] is None and any(f is not None and 0 < f < 1 for f in seen)
         # The error is reported before the loop takes its next snapshot: wait for that one.
-        deadline = time.time() + 10
-        while runner.latest.config.robots != 3_000 and time.time() < deadline:
-            time.sleep(0.01)
+        wait_until(lambda: runner.latest.config.robots == 3_000, 10)
         snap = runner.latest
         assert len(snap.robot_positions) == 10 and snap.config.robots == 3_000  # old world on; change still waits
-        assert runner.steps_per_second() >= 0.0
+        runner.set_playing(True)  # and it goes on stepping, its speed measured
+        wait_until(lambda: runner.latest.step > 0, 30)
+        assert len(runner.latest.robot_positions) == 10
+        assert runner.steps_per_second() > 0.0
     finally:
         runner.stop()

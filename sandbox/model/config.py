@@ -602,7 +602,7 @@ def case_config(name: str, base: Config | None = None) -> Config:
 
 
 def markdown_table() -> str:
-    """The parameter table in README.md (a test keeps the two in step)."""
+    """The parameter table in docs/cli.md (a test keeps the two in step)."""
     rows = ["| flag | default (`authors-code`) | `paper-text` | unit | what it is |",
             "| --- | --- | --- | --- | --- |"]
     for p in params():
