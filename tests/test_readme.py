@@ -240,6 +240,7 @@ class Server:
                                      stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                                      start_new_session=True)
         self.output: list[str] = []
+        self.asked = False
         self.address = threading.Event()
         self.reader = threading.Thread(target=self._read, daemon=True)
         self.reader.start()
@@ -261,10 +262,15 @@ class Server:
         except urllib.error.HTTPError as exc:  # an answer all the same (e.g. a page that asks to log in)
             return exc.code
 
-    def stop(self) -> int:
-        """Stop it as a service manager would (SIGTERM) and return its exit code."""
-        if self.proc.poll() is None:
+    def ask_to_stop(self) -> None:
+        """SIGTERM, once, as a service manager sends it."""
+        if self.proc.poll() is None and not self.asked:
             self.proc.send_signal(signal.SIGTERM)
+            self.asked = True
+
+    def stop(self) -> int:
+        """Stop it (SIGTERM) and return its exit code."""
+        self.ask_to_stop()
         try:
             return self.proc.wait(60)
         finally:
@@ -277,7 +283,8 @@ class Server:
 @pytest.mark.slow
 def test_readme_serve_commands_answer_and_stop(workdir):
     """Every ``serve`` the README shows starts, answers HTTP and exits with 0 when stopped.
-    They start together: each spends most of its start waiting for its simulation process."""
+    They start together: each spends most of its start waiting for its simulation process. Each is
+    asked to stop as soon as it has answered, so that it does not simulate beside the next ones."""
     assert SERVED, "README.md shows no serve command"
     servers = [(command, argv, Server(phototaxis_args(argv), workdir)) for command, argv in SERVED]
     failures = []
@@ -289,6 +296,7 @@ def test_readme_serve_commands_answer_and_stop(workdir):
                     failures.append(f"README.md:{command.line}: {command.text}: answered HTTP {status}")
             except AssertionError as exc:
                 failures.append(f"README.md:{command.line}: {command.text}: {exc}")
+            server.ask_to_stop()
     finally:
         for command, argv, server in servers:
             code = server.stop()

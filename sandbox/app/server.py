@@ -244,24 +244,30 @@ def serve_command(args: argparse.Namespace) -> int:
                   access=access, program_time_limit=program_time_limit(args))
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
-    app.start()
-    print(f"Phototaxis sandbox running at {app.url}  (Ctrl+C to stop)", flush=True)
-    if access.token and is_shared(args.host):
-        watchers = "may watch" if access.viewers == WATCH else "are refused"
-        print(f"  shared beyond this machine: pages without the token {watchers}; only pages with it control",
-              flush=True)
 
     def stop_on_term(signum: int, frame: Any) -> None:
+        # Once: a second SIGTERM while the app stops (a service manager's impatience) is ignored
+        # instead of cutting the clean stop short.
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
         raise KeyboardInterrupt
 
     if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, stop_on_term)  # stop cleanly when a service manager asks
+        # Before the app starts, so that a SIGTERM during start-up stops it cleanly too.
+        signal.signal(signal.SIGTERM, stop_on_term)
     try:
+        app.start()
+        print(f"Phototaxis sandbox running at {app.url}  (Ctrl+C to stop)", flush=True)
+        if access.token and is_shared(args.host):
+            watchers = "may watch" if access.viewers == WATCH else "are refused"
+            print(f"  shared beyond this machine: pages without the token {watchers}; only pages with it control",
+                  flush=True)
         while True:
             time.sleep(3600)
     except KeyboardInterrupt:
         pass
     finally:
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)  # the stop below is not cut short either
         app.stop()
         print("stopped", flush=True)
     return 0
