@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from sandbox.cli import UserError
-from sandbox.experiments import figures, reference, stats, versus
+from sandbox.experiments import reference, stats, versus
 from sandbox.experiments.storage import ResultStore, load_meta
 from sandbox.experiments.trials import METRICS, SweepError
 from sandbox.model.config import Config, params
@@ -61,6 +61,8 @@ def build_report(out: str | Path, dest: str | Path | None = None, against: str |
     _write_final_csv(by_case, dest / "final.csv")
     _write_rows(dest / "summary.csv", [dataclasses.asdict(r) for m in METRICS for r in tables[m]])
     _write_rows(dest / "ks_tests.csv", [dataclasses.asdict(r) for m in METRICS for r in tests[m]])
+    from sandbox.experiments import figures  # matplotlib: only when a report is drawn, not on every command
+
     figs = {m: figures.plot_metric(by_case, m, dest / FIGURES_DIR / m) for m in METRICS}
     figs["layouts"] = figures.plot_layouts(by_case, dest / FIGURES_DIR / "final_layouts")
 
