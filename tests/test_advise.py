@@ -5,8 +5,6 @@ from __future__ import annotations
 import json
 import time
 
-import numpy as np
-import pytest
 
 from sandbox.experiments.advise import Candidate, Ranked, candidates, rank, table
 from sandbox.model.config import Config

@@ -4,7 +4,6 @@ the panel's logic (upload validation, CSV), on a small population."""
 from __future__ import annotations
 
 import threading
-import time
 
 import numpy as np
 import pytest
@@ -12,42 +11,9 @@ import pytest
 from sandbox.app import palette
 from sandbox.app.runner import Runner
 from sandbox.model.config import Config
+from tests.waiting import frames_pass, paused_step, wait_until
 
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
-
-
-def wait_until(condition, timeout=30.0):  # generous: a loaded machine (a sweep beside the tests) is slow
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        if condition():
-            return True
-        time.sleep(0.01)
-    raise AssertionError("timed out")
-
-
-def paused_step(runner) -> int:
-    """The step the engine stopped at once told to pause.
-
-    ``runner.playing`` flips at once in this process, while the engine may be in the
-    middle of a frame's steps and, in its own process, a frame may still be on its
-    way. A frame says whether the engine was playing when it was taken: the first
-    one that says paused carries the last step, and every later one the same."""
-    found = []
-
-    def paused() -> bool:
-        snap = runner.latest
-        if not snap.playing:
-            found.append(snap.step)
-        return bool(found)
-
-    wait_until(paused)
-    return found[0]
-
-
-def frames_pass(runner, count: int = 5) -> None:
-    """Wait until ``count`` more frames have arrived (the engine sends them while paused too)."""
-    start = runner.latest.frame
-    wait_until(lambda: runner.latest.frame >= start + count)
 
 
 @pytest.fixture

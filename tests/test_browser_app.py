@@ -10,13 +10,13 @@ makes the tests slower, not flaky. Only ``wait_until`` sleeps, between two looks
 from __future__ import annotations
 
 import io
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from sandbox.app.live_bench import CHROMIUM_ARGS, chromium_path
+from tests.waiting import frames_pass, paused_step, wait_until
 
 CHROMIUM = chromium_path()
 pytestmark = [pytest.mark.browser,
@@ -25,41 +25,6 @@ playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwr
 
 SQUARE = b"0 0\n4 0\n4 4\n0 4\n"
 BOWTIE = b"0 0\n4 4\n4 0\n0 4\n"  # crosses itself
-
-
-def wait_until(condition, timeout: float = 20.0, what: str = "condition"):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        value = condition()
-        if value:
-            return value
-        time.sleep(0.05)
-    raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
-
-
-def paused_step(runner) -> int:
-    """The step the engine stopped at once told to pause.
-
-    ``runner.playing`` flips at once in this process, while the simulation process may
-    be in the middle of a frame's steps and a frame may still be on its way. Each frame
-    says whether the engine was playing when it was taken: the first that says paused
-    carries the last step, and every later one the same."""
-    found = []
-
-    def paused() -> bool:
-        snap = runner.latest
-        if not snap.playing:
-            found.append(snap.step)
-        return bool(found)
-
-    wait_until(paused, what="the engine to pause")
-    return found[0]
-
-
-def frames_pass(runner, count: int = 5) -> None:
-    """Wait until ``count`` more frames have arrived from the engine (it sends them while paused too)."""
-    start = runner.latest.frame
-    wait_until(lambda: runner.latest.frame >= start + count, what=f"{count} more frames")
 
 
 def panel_refreshes(app, count: int = 2) -> None:

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.live_bench import CHROMIUM_ARGS, chromium_path
+from tests.waiting import wait_until
 
 CHROMIUM = chromium_path()
 pytestmark = [pytest.mark.browser,
@@ -31,16 +32,6 @@ BUILD_STEPS = 400
 
 L_ARMS = [(29, 29), (35, 29), (35, 31), (31, 31), (31, 35), (29, 35)]  # 6 m arms, 2 m wide
 PLUS = "29,31; 31,31; 31,29; 33,29; 33,31; 35,31; 35,33; 33,33; 33,35; 31,35; 31,33; 29,33"
-
-
-def wait_until(condition, timeout: float = 20.0, what: str = "condition"):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        value = condition()
-        if value:
-            return value
-        time.sleep(0.05)
-    raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
 
 
 @pytest.fixture(scope="module")

@@ -6,26 +6,16 @@ from __future__ import annotations
 
 import http.server
 import threading
-import time
 
 import pytest
 
 from sandbox.app.live_bench import CHROMIUM_ARGS, chromium_path
+from tests.waiting import wait_until
 
 CHROMIUM = chromium_path()
 pytestmark = [pytest.mark.browser,
               pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (apt-get install chromium)")]
 playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwright (pip install -e '.[test]')")
-
-
-def wait_until(condition, timeout: float = 20.0, what: str = "condition"):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        value = condition()
-        if value:
-            return value
-        time.sleep(0.05)
-    raise AssertionError(f"timed out waiting for {what}")
 
 
 @pytest.fixture(scope="module")

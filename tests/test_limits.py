@@ -3,7 +3,6 @@ placed, goals that cannot fit, outlines of thousands of vertices."""
 
 import math
 import threading
-import time
 
 import numpy as np
 import pytest
@@ -13,15 +12,9 @@ from sandbox.model.config import Config, ConfigError
 from sandbox.model.simulation import Simulation
 from sandbox.model.world import World
 from sandbox.shapes import ShapeError
+from tests.waiting import wait_until
 
 SLIVER = np.array([[-120.0, 0.0], [120.0, 0.0], [0.0, 0.3]])  # at 60 boxes, 125 m long: mostly outside 16 m
-
-
-def wait_until(condition, timeout: float) -> None:
-    deadline = time.time() + timeout
-    while not condition():
-        assert time.time() < deadline, "timed out"
-        time.sleep(0.01)
 
 
 def test_populations_that_cannot_be_placed_are_refused_with_the_numbers():

@@ -13,7 +13,6 @@ import sys
 import textwrap
 import time
 
-import numpy as np
 import pytest
 
 from sandbox.commands import main
@@ -21,6 +20,7 @@ from sandbox.model import watchdog
 from sandbox.model.config import Config
 from sandbox.model.programs import ProgramError, load_program
 from sandbox.model.simulation import Simulation
+from tests.waiting import wait_until
 
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 PAPER = "the paper's controller"
@@ -71,16 +71,6 @@ PROGRAMS = textwrap.dedent('''
         def update(self, observation):
             return np.zeros(observation.lights_shape)
 ''')
-
-
-def wait_until(condition, timeout: float = 60.0, what: str = "condition"):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        value = condition()
-        if value:
-            return value
-        time.sleep(0.02)
-    raise AssertionError(f"timed out waiting for {what}")
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import http.client
 import socket
-import time
 from pathlib import Path
 
 import pytest
@@ -22,34 +21,11 @@ from sandbox.app.access import Access, Grant
 from sandbox.app.gate import WRITTEN_FOR
 from sandbox.model.config import Config
 from tests.viser_wire import RawClient
+from tests.waiting import wait_until, wait_until_steady
 
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 TOKEN = "classroom-secret-42"
 TRIANGLE = b"0 0\n6 0\n3 5\n"
-
-
-def wait_until(condition, timeout: float = 20.0, what: str = "condition"):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        value = condition()
-        if value:
-            return value
-        time.sleep(0.01)
-    raise AssertionError(f"timed out waiting for {what}")
-
-
-def wait_until_steady(read, quiet: float = 0.3, timeout: float = 20.0):
-    """Wait until ``read()`` has not changed for ``quiet`` seconds."""
-    deadline = time.time() + timeout
-    value, since = read(), time.time()
-    while time.time() < deadline:
-        time.sleep(0.02)
-        now = read()
-        if now != value:
-            value, since = now, time.time()
-        elif time.time() - since >= quiet:
-            return value
-    raise AssertionError("still changing")
 
 
 def make_app(**kwargs):

@@ -21,7 +21,11 @@ class RawClient:
     def __init__(self, port: int, headers: dict[str, str] | None = None, host: str = "127.0.0.1", path: str = "/"):
         self.ws = websockets.sync.client.connect(f"ws://{host}:{port}{path}", additional_headers=headers or {},
                                                  subprotocols=[SUBPROTOCOL], origin=None, max_size=None,
-                                                 open_timeout=10)
+                                                 open_timeout=10,
+                                                 # Unbounded: a test that reads nothing for a while must not
+                                                 # stall the reader, or close() waits 10 s for a close
+                                                 # frame stuck behind unread frames.
+                                                 max_queue=None)
 
     def send(self, message_type: str, **fields: Any) -> None:
         self.ws.send(msgspec.msgpack.encode({"type": message_type, **fields}))
