@@ -102,7 +102,7 @@ def test_an_unchanged_frame_sends_only_nothing(snapshot):
     sent = set(scene.sent)
     assert ("/swarm/robots", "points") in sent and ("/swarm/headings", "points") in sent
     assert ("/caption", "text") in sent
-    assert ("/swarm/boxes", "points") not in sent and ("/arena/lights", "image") not in sent
+    assert ("/swarm/boxes", "points") not in sent and ("/arena/lit", "points") not in sent
     assert built  # the first frame did build and send
 
 
@@ -112,3 +112,29 @@ def test_caption_names_the_case_and_the_step(snapshot):
     assert case_name("heart", {"flare": 1.5}) == "heart + flare 1.5"
     text = caption(snapshot)
     assert text.startswith("circle | step ") and "cycle 0" in text and "% in goal" in text
+
+
+def test_lit_lights_are_points_sent_with_the_bodies(snapshot):
+    """The lit lights travel as points in the frame's own messages (a texture is decoded later
+    than the points it came with), in the grid picture's colours."""
+    from sandbox.app import palette as pal
+
+    scene = FakeScene()
+    view = SceneView(scene, snapshot)
+    lit = view.handles["lit"]
+    cfg = snapshot.world_config
+    on = snapshot.intensities > 0
+    assert on.any() and lit.visible
+    assert len(lit.points) == on.sum() and len(lit.colors) == on.sum()
+    # Each point lies in its light's cell.
+    cells = np.floor((lit.points[:, :2].astype(float) + cfg.arena_size / 2) / cfg.light_pitch).astype(int)
+    assert {tuple(c) for c in cells} == {tuple(c) for c in np.argwhere(on)}
+    picture = pal.light_grid_image(snapshot.intensities, cell_pixels=8, top_first=False)
+    ix, iy = cells[0]
+    np.testing.assert_array_equal(lit.colors[0], picture[iy * 8 + 4, ix * 8 + 4])
+    scene.sent.clear()
+    dark = dataclasses.replace(snapshot, intensities=np.zeros_like(snapshot.intensities), lights_key=("dark",))
+    view.update(dark)
+    assert not lit.visible and ("/arena/lights", "image") not in scene.sent
+    view.set_show_field(True, snapshot)
+    assert not lit.visible, "the heat map hides the lights"

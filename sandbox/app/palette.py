@@ -62,6 +62,17 @@ def light_grid_image(intensities: np.ndarray, cell_pixels: int = CELL_PIXELS, pe
 _HEAT_LUT: np.ndarray | None = None
 
 
+def lit_cells(intensities: np.ndarray, pitch: float, peak: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """The lights that are on, as ((k, 2) centres in metres from the grid's corner, (k, 3) uint8
+    colours): the same colours as :func:`light_grid_image`, cell by cell, for the lights above zero."""
+    level = np.clip(np.asarray(intensities, dtype=float) / (peak if peak > 0 else 1.0), 0.0, 1.0)
+    ix, iy = np.nonzero(level > 0)
+    centres = (np.stack([ix, iy], axis=1) + 0.5) * pitch
+    off, on = np.array(LIGHT_OFF, float), np.array(LIGHT_ON, float)
+    colours = (off + level[ix, iy, None] * (on - off)).astype(np.uint8)
+    return centres, colours
+
+
 def _heat_lut() -> np.ndarray:
     global _HEAT_LUT
     if _HEAT_LUT is None:

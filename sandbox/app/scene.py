@@ -2,13 +2,19 @@
 
 Layout (z up, arena on z = 0, camera above looking down):
 
-- ``/arena/lights``   the 64 x 64 light grid as one PNG texture (a few KB)
+- ``/arena/lights``   the 64 x 64 light grid, every light off, as one PNG texture (sent once)
+- ``/arena/lit``      the lights that are on: one square point per light, in its colour
 - ``/arena/field``    the sensed luminosity as a heat map (toggle)
 - ``/arena/walls``, ``/arena/box_wall``   outer wall and the box-only wall
 - ``/goal``, ``/light_outline``   goal outline and current light outline
 - ``/swarm/robots``, ``/swarm/headings``, ``/swarm/boxes``   point clouds
 - ``/inspect/*``   the followed robot (the shape being drawn is :mod:`.draw_view`'s ``/draw/*``)
 - ``/caption``   what is running: case, strategies, step (also in recordings)
+
+One frame is one instant: the lit lights travel with the bodies, outline and
+caption in the same batch of messages, and the page applies a batch in one
+go. (They were a PNG texture, which the page decodes asynchronously and
+shows later than the points: the lit band trailed the robots by 2-5 cells.)
 
 Every viewer receives every update, so the moving parts are sent compactly
 (see :class:`CompactSender`): half-precision points relative to the arena's
@@ -30,7 +36,7 @@ from sandbox.app import palette as pal
 from sandbox.app.snapshot import Snapshot, caption
 from sandbox.model.config import Config
 
-Z_FIELD, Z_LIGHTS, Z_BOXES, Z_ROBOTS, Z_MARKS, Z_LINES, Z_TOP = -0.01, 0.0, 0.02, 0.04, 0.05, 0.08, 0.12
+Z_FIELD, Z_LIGHTS, Z_LIT, Z_BOXES, Z_ROBOTS, Z_MARKS, Z_LINES, Z_TOP = -0.01, 0.0, 0.01, 0.02, 0.04, 0.05, 0.08, 0.12
 
 
 def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0) -> tuple[np.ndarray, np.ndarray, float]:
@@ -140,10 +146,14 @@ class SceneView:
                 pass
         self.handles = {}
         placeholder = np.zeros((8, 8, 3), np.uint8)
-        # The light grid as one PNG texture: a few KB per change, where one colour per light was 12 KB.
+        # The grid of lights, all off, as one PNG texture sent once; the lit ones are square points over
+        # it, sent with the bodies (a PNG is decoded later than the points it came with).
         self.handles["lights"] = sc.add_image(
-            "/arena/lights", self._light_picture(snap), s, s, format="png", position=(c, c, Z_LIGHTS),
+            "/arena/lights", self._light_picture(cfg), s, s, format="png", position=(c, c, Z_LIGHTS),
             cast_shadow=False, receive_shadow=False, visible=not self.show_field)
+        self.handles["lit"] = sc.add_point_cloud(
+            "/arena/lit", self._points(1), np.zeros((1, 3), np.uint8), point_size=self._lit_size(cfg),
+            point_shape="square", point_shading="flat", position=(c, c, Z_LIT), visible=False)
         self.handles["field"] = sc.add_image(
             "/arena/field", placeholder, s, s, format="png", position=(c, c, Z_FIELD),
             cast_shadow=False, receive_shadow=False, visible=self.show_field)
@@ -191,7 +201,7 @@ class SceneView:
                 self._build(snap)
             h = self.handles
             if snap.lights_key != self._lights_key:
-                h["lights"].image = self._light_picture(snap)
+                self._show_lit(snap)
                 self._lights_key = snap.lights_key
             if self.show_field and snap.field is not None and snap.lights_key != self._field_key:
                 h["field"].image = pal.field_image(snap.field, top_first=False)
@@ -239,13 +249,37 @@ class SceneView:
                 self._field_key = snap.lights_key
             self.handles["field"].visible = self.show_field
             self.handles["lights"].visible = not self.show_field
+            self._show_lit(snap)
+
+    def _show_lit(self, snap: Snapshot) -> None:
+        """The lit lights as square points (none: the node hides; under the heat map too)."""
+        cfg = snap.world_config
+        centres, colours = pal.lit_cells(snap.intensities, cfg.light_pitch, max(cfg.light_intensity, 1e-9))
+        h = self.handles["lit"]
+        if len(centres):
+            # Centred on the part of the cell that the texture's seam (its left and bottom pixel) leaves.
+            seam = cfg.light_pitch / (2 * self._cell_pixels(cfg))
+            h.points = self._points(len(centres), centres + seam - cfg.arena_size / 2.0)
+            h.colors = colours
+        visible = bool(len(centres)) and not self.show_field
+        if h.visible != visible:
+            h.visible = visible
 
     @staticmethod
-    def _light_picture(snap: Snapshot) -> np.ndarray:
-        cfg = snap.world_config
-        cells = max(2, LIGHT_TEXTURE_PIXELS // cfg.lights_per_side)
-        return pal.light_grid_image(snap.intensities, cell_pixels=cells, peak=max(cfg.light_intensity, 1e-9),
-                                    top_first=False)
+    def _cell_pixels(cfg: Config) -> int:
+        return max(2, LIGHT_TEXTURE_PIXELS // cfg.lights_per_side)
+
+    @classmethod
+    def _lit_size(cls, cfg: Config) -> float:
+        """A lit light's square: the cell less the texture's seam, as a radius (points are sized by
+        half their width)."""
+        return 0.5 * cfg.light_pitch * (1.0 - 1.0 / cls._cell_pixels(cfg))
+
+    @classmethod
+    def _light_picture(cls, cfg: Config) -> np.ndarray:
+        """The grid with every light off."""
+        dark = np.zeros((cfg.lights_per_side,) * 2)
+        return pal.light_grid_image(dark, cell_pixels=cls._cell_pixels(cfg), top_first=False)
 
     @staticmethod
     def _points(n: int, xy: np.ndarray | None = None) -> np.ndarray:
