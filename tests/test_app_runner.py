@@ -16,13 +16,14 @@ from sandbox.model.config import Config
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 
 
-def wait_until(condition, timeout=30.0):  # generous: a loaded machine (a sweep beside the tests) is slow
+def wait_until(condition, timeout=30.0, what="condition"):  # generous: a loaded machine is slow
     deadline = time.time() + timeout
     while time.time() < deadline:
-        if condition():
-            return True
+        value = condition()
+        if value:
+            return value
         time.sleep(0.01)
-    raise AssertionError("timed out")
+    raise AssertionError(f"timed out waiting for {what}")
 
 
 def settled_step(runner, quiet=0.3, timeout=10.0):
@@ -190,6 +191,31 @@ def test_upload_validation_leaves_the_simulation_alone(app):
     assert app.panel.shape.use_shape_file("box.svg", svg, client)
     assert app.panel.shape.use_shape_file("t.wkt", b"POLYGON((0 0, 4 0, 4 3, 0 0))", client)
     wait_until(lambda: app.runner.latest.shape_name == "t.wkt")
+
+
+def test_a_paper_case_starts_the_case_and_the_dropdown_shows_what_runs(app):
+    """Issue 24, item 2: picking a case resets the world with it (same seed, step 0); the dropdown
+    shows the case that runs, or custom."""
+    from sandbox.app.panel.strategies import CUSTOM
+
+    runner, folder = app.runner, app.panel.strategies
+    client = FakeClient()
+    assert folder.case.value == "circle"
+    wait_until(lambda: runner.latest.step > 200, what="the circle to run a while")
+    seed, world = runner.latest.seed, runner.latest.world_key
+    folder.use_case("star-switch", client)
+    snap = wait_until(lambda: runner.latest.world_key != world and runner.latest, what="a new world")
+    assert snap.shape_name == "star" and snap.strategies["switch"] == 0.25 and snap.seed == seed
+    assert snap.step < 50, "a case starts from step 0"
+    wait_until(lambda: app.panel.update(runner.latest, force=True) or folder.case.value == "star-switch")
+    assert app.panel.metrics.marks[-1] == (0, "case star-switch")
+    # A strategy changed by hand: no longer one of the seven.
+    folder.controls["no_corners"][0].value = True
+    wait_until(lambda: app.panel.update(runner.latest, force=True) or folder.case.value == "star-switch-nocorners",
+               what="the case with no corners")
+    folder.controls["switch"][0].value = False
+    wait_until(lambda: app.panel.update(runner.latest, force=True) or folder.case.value == CUSTOM, what="custom")
+    assert not client.notes, client.notes
 
 
 def test_metrics_csv_and_frames(app):

@@ -28,13 +28,13 @@ class MetricsFolder:
         self._charted: tuple | None = None  # what the charts last showed
         self._charted_at = 0.0
 
-    def mark(self, what: str) -> None:
-        """Remember a change, to show on the charts where it happened."""
+    def mark(self, what: str, step: int | None = None) -> None:
+        """Remember a change, to show on the charts where it happened (``step`` None: now)."""
         if what == "reset":
             self.marks = []
             self.marks.append((0, what))
         else:
-            self.marks.append((self.runner.latest.step, what))
+            self.marks.append((self.runner.latest.step if step is None else step, what))
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
