@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.runner import Runner
-from sandbox.app.scene import CHARGE_STEPS, POINT_GRID, CompactSender, SceneView, _charge_steps
+from sandbox.app.scene import POINT_GRID, CompactSender, SceneView
 from sandbox.app.snapshot import caption, case_name
 from sandbox.model.config import Config
 
@@ -82,11 +82,18 @@ def test_points_are_half_precision_on_a_grid_exact_to_the_walls():
     assert SceneView._points(2, resting + 0.003).tobytes() == SceneView._points(2, resting - 0.003).tobytes()
 
 
-def test_charge_colours_change_in_visible_steps():
+def test_colours_and_counts_use_the_same_charge_classes():
+    """Issue 24, item 3: a robot is drawn green, amber or red by the classes the page counts."""
+    from sandbox.app import palette as pal
+
     capacity = 20.0
-    steps = _charge_steps(np.array([0.0, 0.2, 0.35, 19.9, 20.0]), capacity)
-    np.testing.assert_allclose(steps, [0.0, 0.0, 0.625, 20.0, 20.0])  # steps of 20 / 32 = 0.625
-    assert len(np.unique(_charge_steps(np.linspace(0, capacity, 1000), capacity))) == CHARGE_STEPS + 1
+    charges = np.array([0.0, 1e-6, 5.0, 10.0, 10.01, 20.0])
+    colours = [tuple(c) for c in pal.robot_colours(charges, capacity)]
+    assert colours == [pal.ROBOT_EMPTY, pal.ROBOT_LOW, pal.ROBOT_LOW, pal.ROBOT_LOW, pal.ROBOT_CHARGED,
+                       pal.ROBOT_CHARGED]
+    assert pal.charge_counts(charges, capacity) == (2, 3, 1)
+    assert [name for name, _, _ in pal.CHARGE_CLASSES] == ["charged", "low", "empty"]
+    assert "half" in pal.CHARGE_CLASSES[0][2]  # the legend states the threshold
 
 
 def test_an_unchanged_frame_sends_only_nothing(snapshot):

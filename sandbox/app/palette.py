@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model.robots import charge_colours
-
 # RGB, 0..255.
 BACKGROUND = (24, 26, 32)
 LIGHT_OFF = (58, 61, 70)
@@ -23,6 +21,15 @@ BOX_WALL = (150, 160, 185)
 ARENA_WALL = (205, 210, 220)
 HEADING_MARK = (20, 22, 28)
 SELECTED = (190, 90, 255)
+#: A robot's colour says which of three charge classes it is in, and the page counts the same classes:
+#: charged (more than CHARGED_ABOVE of a full store), low (some charge, up to that), empty (none: it
+#: cannot move). One threshold for the colour, the legend and the count, so they cannot disagree.
+ROBOT_CHARGED = (46, 204, 64)
+ROBOT_LOW = (255, 165, 0)
+ROBOT_EMPTY = (230, 40, 40)
+CHARGED_ABOVE = 0.5
+CHARGE_CLASSES = (("charged", ROBOT_CHARGED, "more than half full"), ("low", ROBOT_LOW, "some charge, half or less"),
+                  ("empty", ROBOT_EMPTY, "no charge, cannot move"))
 SENSOR_COLOURS = np.array([[255, 255, 255], [90, 90, 90], [64, 200, 255], [255, 140, 30]], dtype=np.uint8)
 
 #: Pixels per light cell in the light-grid texture (cells stay crisp even with
@@ -30,9 +37,26 @@ SENSOR_COLOURS = np.array([[255, 255, 255], [90, 90, 90], [64, 200, 255], [255, 
 CELL_PIXELS = 8
 
 
+def charge_class(charges: np.ndarray, capacity: float) -> np.ndarray:
+    """(n,) index into CHARGE_CLASSES: 0 charged (more than CHARGED_ABOVE of ``capacity``), 1 low
+    (above zero), 2 empty."""
+    c = np.asarray(charges, dtype=float)
+    charged = c > CHARGED_ABOVE * capacity if capacity > 0 else np.ones(c.shape, bool)
+    return np.where(charged, 0, np.where(c > 0, 1, 2))
+
+
+def charge_counts(charges: np.ndarray, capacity: float) -> tuple[int, int, int]:
+    """How many robots are charged, low and empty: the robots drawn green, amber and red."""
+    counts = np.bincount(charge_class(charges, capacity), minlength=3)
+    return int(counts[0]), int(counts[1]), int(counts[2])
+
+
+_ROBOT_COLOURS = np.array([ROBOT_CHARGED, ROBOT_LOW, ROBOT_EMPTY], dtype=np.uint8)
+
+
 def robot_colours(charges: np.ndarray, capacity: float) -> np.ndarray:
-    """(n, 3) uint8: green when full, red when empty, blended between (the engine's colours)."""
-    return np.round(charge_colours(np.asarray(charges, dtype=float), capacity) * 255).astype(np.uint8)
+    """(n, 3) uint8: the colour of each robot's charge class (green charged, amber low, red empty)."""
+    return _ROBOT_COLOURS[charge_class(charges, capacity)]
 
 
 def box_colours(in_goal: np.ndarray) -> np.ndarray:

@@ -90,16 +90,6 @@ LIGHT_TEXTURE_PIXELS = 512
 #: centre, a fifth of a pixel with the whole arena in view, and coarse enough that sub-centimetre
 #: jitter of resting boxes sends nothing.
 POINT_GRID = 1.0 / 64.0
-#: Robot colours are sent in this many charge steps: a change of colour
-#: nobody can see is not worth a message to every viewer.
-CHARGE_STEPS = 32
-
-
-def _charge_steps(charges: np.ndarray, capacity: float) -> np.ndarray:
-    step = capacity / CHARGE_STEPS if capacity > 0 else 1.0
-    return np.round(np.asarray(charges, dtype=float) / step) * step
-
-
 class CompactSender:
     """Assigns a handle's property only when its value changed since it was
     last sent: each assignment is a message to every viewer."""
@@ -217,8 +207,7 @@ class SceneView:
             send = self._sent.send
             if n:
                 send(h["robots"], "points", self._points(n, snap.robot_positions - centre))
-                send(h["robots"], "colors", pal.robot_colours(_charge_steps(snap.robot_charges, cfg.capacity),
-                                                                cfg.capacity))
+                send(h["robots"], "colors", pal.robot_colours(snap.robot_charges, cfg.capacity))
                 front = 0.6 * cfg.robot_radius * np.stack([np.cos(snap.robot_headings),
                                                             np.sin(snap.robot_headings)], axis=1)
                 send(h["headings"], "points", self._points(n, snap.robot_positions - centre + front))
