@@ -354,7 +354,8 @@ def test_charts_are_sent_only_when_new_and_thinned():
     folder = MetricsFolder(None, runner)
     folder.text, folder.chart_goal, folder.chart_dist, folder.chart_charged = Chart(), Chart(), Chart(), Chart()
     snap = SimpleNamespace(sample=SimpleNamespace(fraction_in_goal=0.5, mean_outside_distance=1.0, charged_robots=3,
-                                                  boxes_escaped=0), world_config=SimpleNamespace(robots=10))
+                                                  boxes_escaped=0), world_config=SimpleNamespace(robots=10, capacity=20.0),
+                           robot_charges=np.array([0.0, 5.0, 15.0]))
     folder.update(snap)
     sent = Chart.sends
     assert len(folder.chart_goal.data[0]) == CHART_POINTS and folder.chart_goal.data[0][-1] == 499_900
