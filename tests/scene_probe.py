@@ -42,29 +42,35 @@ INIT_SCRIPT = """
   });
   window.__THREE_DEVTOOLS__ = hook;
 
-  // The drawn objects of one node: points or instanced meshes, with their local xy and colours.
+  // The drawn objects of each node: point clouds, or the instanced meshes of batched meshes (one per
+  // chunk of the boxes), with their local x, y (and, for a mesh instance, its turn about z).
   probe.find = (scene) => {
     const found = {};
     scene.traverse((o) => {
-      if (!(o.isPoints || o.isInstancedMesh || o.isMesh)) return;
+      if (!(o.isPoints || o.isInstancedMesh2 || o.isMesh)) return;
       const v = o.position.clone();
       o.getWorldPosition(v);
       for (const [name, z] of Object.entries(NODES)) {
-        if (Math.abs(v.y - z) < 1e-4 && !found[name]) found[name] = o;
+        if (Math.abs(v.y - z) < 1e-4) (found[name] = found[name] || []).push(o);
       }
     });
     return found;
   };
   const shown = (o) => { for (let p = o; p; p = p.parent) if (!p.visible) return false; return true; };
-  probe.xy = (o) => {
-    if (!o || !shown(o)) return [];
-    if (o.isInstancedMesh) {
-      const out = [], m = o.instanceMatrix.array;
-      for (let i = 0; i < o.count; i++) out.push([m[16 * i + 12], m[16 * i + 13], m[16 * i + 14]]);
-      return out;
+  probe.xy = (objects) => {
+    const out = [];
+    for (const o of objects || []) {
+      if (!shown(o)) continue;
+      if (o.isInstancedMesh2) {
+        for (let i = 0; i < o.instancesCount; i++) {
+          const m = o.getMatrixAt(i).elements;
+          out.push([m[12], m[13], Math.atan2(m[1], m[0])]);
+        }
+      } else if (o.isPoints) {
+        const a = o.geometry.attributes.position;
+        for (let i = 0; i < a.count; i++) out.push([a.getX(i), a.getY(i)]);
+      }
     }
-    const a = o.geometry.attributes.position, out = [];
-    for (let i = 0; i < a.count; i++) out.push([a.getX(i), a.getY(i)]);
     return out;
   };
   probe.read = (scene) => {

@@ -12,6 +12,7 @@ import time
 import numpy as np
 import pytest
 
+from sandbox.app.hexagons import ANGLE_TOLERANCE
 from sandbox.app.live_bench import CHROMIUM_ARGS, chromium_path
 from tests import scene_probe
 
@@ -50,13 +51,14 @@ def open_page(browser, app, size=(1280, 800)):
 # ------------------------------------------------------------------ drift
 class SentFrames:
     """Every snapshot the app publishes, found by the robots the page draws for it: its step, the
-    light cells lit then and the centres of those cells (about the arena's centre, as the page)."""
+    light cells lit then, the centres of those cells and the boxes (positions as the page gets them,
+    about the arena's centre, sorted; and their angles)."""
 
     def __init__(self, app):
         from sandbox.app.scene import SceneView
 
         self._points = SceneView._points
-        self.by_robots: dict[bytes, tuple[int, frozenset, np.ndarray]] = {}
+        self.by_robots: dict[bytes, dict] = {}
         self._lock = threading.Lock()
         app.runner.subscribe(self.take)
 
@@ -65,12 +67,20 @@ class SentFrames:
         c = cfg.arena_size / 2.0
         key = self._points(len(snap.robot_positions), snap.robot_positions - c)[:, :2].tobytes()
         cells = np.argwhere(snap.intensities > 0)
+        boxes = self._points(len(snap.box_positions), snap.box_positions - c)[:, :2].astype(float)
+        order = np.lexsort(boxes.T[::-1])
         with self._lock:
-            self.by_robots[key] = (snap.step, frozenset(map(tuple, cells)), (cells + 0.5) * cfg.light_pitch - c)
+            self.by_robots[key] = dict(step=snap.step, lit=frozenset(map(tuple, cells)),
+                                       lit_centres=(cells + 0.5) * cfg.light_pitch - c, boxes=boxes[order],
+                                       angles=snap.box_angles[order])
 
-    def find(self, robots: np.ndarray) -> tuple[int, frozenset, np.ndarray] | None:
+    def find(self, robots: np.ndarray) -> dict | None:
         with self._lock:
             return self.by_robots.get(robots.astype(np.float16).tobytes())
+
+
+def sorted_rows(rows: np.ndarray) -> np.ndarray:
+    return rows[np.lexsort(rows[:, :2].T[::-1])] if len(rows) else rows
 
 
 def lit_cells(lit: np.ndarray, config) -> frozenset:
@@ -84,6 +94,12 @@ def cell_centres(lit: np.ndarray, config) -> np.ndarray:
     the part of the cell the grid's seam leaves)."""
     c = config.arena_size / 2.0
     return (np.floor((lit[:, :2] + c) / config.light_pitch) + 0.5) * config.light_pitch - c
+
+
+def hexagons_turned(drawn: np.ndarray, angles: np.ndarray) -> float:
+    from sandbox.app.hexagons import turned
+
+    return max((turned(np.array([d]), np.array([a])) for d, a in zip(drawn, angles)), default=0.0)
 
 
 def band_offset(lit: np.ndarray, robots: np.ndarray, centre: np.ndarray, pitch: float) -> float | None:
@@ -129,17 +145,21 @@ def test_the_lights_are_drawn_with_the_robots_of_the_same_step(browser):
         app.stop()
 
     centre = np.full(2, config.centre - config.arena_size / 2.0)
-    mismatched, drifts, offsets = [], [], []
+    mismatched, drifts, offsets, boxes_elsewhere, turned = [], [], [], [], 0.0
     for sample in samples:
         robots, lit = scene_probe.array(sample, "robots"), scene_probe.array(sample, "lit")
         sent_then = sent.find(robots[:, :2])
         if sent_then is None:
             continue
-        step, sent_lit, sent_centres = sent_then
-        if lit_cells(lit, config) != sent_lit:
-            mismatched.append(step)
+        if lit_cells(lit, config) != sent_then["lit"]:
+            mismatched.append(sent_then["step"])
+        boxes = sorted_rows(scene_probe.array(sample, "boxes"))
+        if len(boxes) != len(sent_then["boxes"]) or not np.array_equal(boxes[:, :2], sent_then["boxes"]):
+            boxes_elsewhere.append(sent_then["step"])
+        else:
+            turned = max(turned, hexagons_turned(boxes[:, 2], sent_then["angles"]))
         drawn = band_offset(cell_centres(lit, config), robots, centre, config.light_pitch)
-        true = band_offset(sent_centres, robots, centre, config.light_pitch)
+        true = band_offset(sent_then["lit_centres"], robots, centre, config.light_pitch)
         if drawn is not None and true is not None:
             drifts.append(abs(drawn - true))
             offsets.append(drawn)
@@ -147,7 +167,9 @@ def test_the_lights_are_drawn_with_the_robots_of_the_same_step(browser):
     print(f"\n{len(samples)} frames drawn over steps {step0:,}-{step1:,} ({frames} frames sent in all, "
           f"{(step1 - step0) / max(len(samples), 1):.0f} steps per frame drawn); drift measured in {len(drifts)} "
           f"frames: worst {worst:.2f} m; robots riding the band sit {np.mean(offsets):+.2f} m from it on "
-          f"average (worst {np.max(np.abs(offsets)):.2f} m)")
+          f"average (worst {np.max(np.abs(offsets)):.2f} m); hexagons turned at most {turned:.1f} degrees off")
+    assert not boxes_elsewhere, f"boxes of another step drawn with the robots of steps {boxes_elsewhere[:10]}"
+    assert turned <= ANGLE_TOLERANCE + 0.01
     assert len(drifts) >= max(20, 0.8 * len(samples)), "most drawn frames should be of a step the app sent"
     assert not mismatched, f"lights of another step drawn with the robots of steps {mismatched[:10]}"
     assert worst <= config.light_pitch, f"the band drawn is {worst:.2f} m from where it was"

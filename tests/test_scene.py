@@ -109,7 +109,7 @@ def test_an_unchanged_frame_sends_only_nothing(snapshot):
     sent = set(scene.sent)
     assert ("/swarm/robots", "points") in sent and ("/swarm/headings", "points") in sent
     assert ("/caption", "text") in sent
-    assert ("/swarm/boxes", "points") not in sent and ("/arena/lit", "points") not in sent
+    assert not any(path.startswith("/swarm/boxes") for path, _ in sent) and ("/arena/lit", "points") not in sent
     assert built  # the first frame did build and send
 
 
@@ -145,3 +145,58 @@ def test_lit_lights_are_points_sent_with_the_bodies(snapshot):
     assert not lit.visible and ("/arena/lights", "image") not in scene.sent
     view.set_show_field(True, snapshot)
     assert not lit.visible, "the heat map hides the lights"
+
+
+# ------------------------------------------------------------------ hexagons
+def test_a_box_is_the_recordings_hexagon():
+    from sandbox.app.hexagons import hexagon, wxyz
+
+    vertices, faces = hexagon(0.25)
+    assert vertices.shape == (7, 3) and faces.shape == (6, 3)
+    np.testing.assert_allclose(np.hypot(*vertices[1:, :2].T), 0.25, atol=1e-6)
+    np.testing.assert_allclose(vertices[1, :2], [0.25, 0.0], atol=1e-7)  # a corner at angle 0, as frames.py
+    a, b, c = vertices[faces[0]]
+    assert np.cross(b - a, c - a)[2] > 0  # faces up
+    q = wxyz(np.array([np.pi / 2]))[0]  # a quarter turn about z
+    np.testing.assert_allclose(q, [np.cos(np.pi / 4), 0, 0, np.sin(np.pi / 4)], atol=1e-6)
+
+
+def test_boxes_are_chunked_by_distance_and_resting_chunks_send_nothing():
+    """Issue 24, item 6: hexagons cost 31 bytes a box where a disc cost 9, so a chunk that rests sends
+    nothing, and a box turned less than the tolerance is not sent again."""
+    from sandbox.app.hexagons import ANGLE_TOLERANCE, CHUNK, REGROUP, Hexagons
+
+    rng = np.random.default_rng(3)
+    m = 4 * CHUNK + 7
+    points = np.zeros((m, 3), np.float16)
+    points[:, :2] = np.round(rng.uniform(-8, 8, (m, 2)) * 64) / 64
+    angles = rng.uniform(0, 2 * np.pi, m)
+    colours = np.zeros((m, 3), np.uint8)
+    scene = FakeScene()
+    boxes = Hexagons(scene, "/swarm/boxes", m, 0.25, (32, 32, 0.02), CompactSender())
+    boxes.update(points, angles, colours, np.zeros(2))  # built; the first regroup by distance
+    boxes.update(points, angles, colours, np.zeros(2))
+    shown = np.concatenate([idx for _, idx, _ in boxes.chunks])
+    assert sorted(shown) == list(range(m)) and [len(idx) for _, idx, _ in boxes.chunks] == [CHUNK] * 4 + [7]
+    # Nearer boxes in earlier chunks.
+    far = [np.hypot(*points[idx, :2].astype(float).T).max() for _, idx, _ in boxes.chunks]
+    near = [np.hypot(*points[idx, :2].astype(float).T).min() for _, idx, _ in boxes.chunks]
+    assert all(f <= n for f, n in zip(far, near[1:]))
+    for _ in range(3):  # frames until the next regrouping
+        boxes.update(points, angles, colours, np.zeros(2))
+    scene.sent.clear()
+    boxes.update(points, angles, colours, np.zeros(2))
+    assert scene.sent == [], "nothing moved: nothing sent"
+    # One box moves and another turns a little, a third turns a lot.
+    handle, idx, _ = boxes.chunks[2]
+    moved, slight, much = idx[0], boxes.chunks[3][1][0], boxes.chunks[1][1][0]
+    points[moved, 0] += np.float16(0.25)
+    angles[slight] += np.radians(ANGLE_TOLERANCE / 2)
+    angles[much] += np.radians(2 * ANGLE_TOLERANCE)
+    boxes.update(points, angles, colours, np.zeros(2))
+    sent = sorted((path, prop) for path, prop in scene.sent)
+    paths = {boxes.chunks[k][0]._path for k in (1, 2)}
+    assert {path for path, _ in sent} == paths and len(sent) == 2, sent
+    assert (boxes.chunks[2][0]._path, "batched_positions") in sent
+    assert (boxes.chunks[1][0]._path, "batched_wxyzs") in sent
+    assert REGROUP > 4  # no regrouping in between

@@ -49,8 +49,9 @@ def _swatch(draw: ImageDraw.ImageDraw, kind: str, colour, x: int, y: int) -> Non
         draw.ellipse([x - 9, y - 9, x + 9, y + 9], fill=colour)
     elif kind == "ring":
         draw.ellipse([x - 9, y - 9, x + 9, y + 9], outline=colour, width=3)
-    elif kind == "box":  # the live scene draws a hexagonal box as a disc of the same area
-        draw.ellipse([x - 9, y - 9, x + 9, y + 9], fill=colour)
+    elif kind == "box":  # a hexagon, as the floor shows a box
+        a = np.arange(6) * np.pi / 3
+        draw.polygon([(x + 10 * np.cos(t), y + 10 * np.sin(t)) for t in a], fill=colour)
     else:
         draw.line([x - 14, y, x + 14, y], fill=colour, width=4)
 

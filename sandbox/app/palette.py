@@ -6,6 +6,8 @@ Pure numpy: nothing here imports viser or touches a running simulation.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 # RGB, 0..255.
@@ -62,6 +64,45 @@ def robot_colours(charges: np.ndarray, capacity: float) -> np.ndarray:
 def box_colours(in_goal: np.ndarray) -> np.ndarray:
     """(m, 3) uint8: pink when the box centre is inside the goal, white otherwise."""
     return np.where(np.asarray(in_goal, dtype=bool)[:, None], np.uint8(BOX_IN), np.uint8(BOX_OUT)).astype(np.uint8)
+
+
+# ------------------------------------------------------- lit meshes in the page
+# The page draws meshes lit (an even ambient light, sandbox.app.scene) and tone-mapped (three.js's ACES
+# filmic curve, React Three Fiber's default); points, lines and pictures it draws as they are. A mesh's
+# colour is therefore chosen so that what the page shows is the palette's colour (as near as the curve
+# lets: its brightest white is about 226 of 255).
+_ACES_IN = np.array([[0.59719, 0.35458, 0.04823], [0.07600, 0.90834, 0.01566], [0.02840, 0.13383, 0.83777]])
+_ACES_OUT = np.array([[1.60475, -0.53108, -0.07367], [-0.10208, 1.10813, -0.00605], [-0.00327, -0.07276, 1.07602]])
+
+
+def _srgb(linear: np.ndarray) -> np.ndarray:
+    c = np.clip(np.asarray(linear, dtype=float), 0.0, 1.0)
+    return np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055)
+
+
+def shown_on_mesh(rgb: tuple | np.ndarray) -> np.ndarray:
+    """The colour (0..255 floats) the page shows for a mesh given colour ``rgb``: taken as linear
+    light (viser hands instance colours to three.js as they are), lit to itself, then three.js's
+    ACESFilmicToneMapping (exposure 1), then sRGB. Measured: (255, 92, 168) shows as (231, 181, 209)."""
+    v = _ACES_IN @ (np.asarray(rgb, dtype=float) / 255.0 / 0.6)
+    v = (v * (v + 0.0245786) - 0.000090537) / (v * (0.983729 * v + 0.4329510) + 0.238081)
+    return 255.0 * _srgb(_ACES_OUT @ v)
+
+
+@functools.cache
+def mesh_colour(rgb: tuple) -> tuple[int, int, int]:
+    """The colour to give a mesh so the page shows ``rgb`` (or the nearest it can)."""
+    from scipy.optimize import least_squares
+
+    target = np.asarray(rgb, dtype=float)
+    fit = least_squares(lambda x: shown_on_mesh(x) - target, np.clip(target, 1, 254), bounds=(0.0, 255.0))
+    return tuple(int(v) for v in np.round(fit.x))
+
+
+def box_mesh_colours(in_goal: np.ndarray) -> np.ndarray:
+    """(m, 3) uint8: :func:`box_colours` for the page's hexagons (lit meshes: see :func:`mesh_colour`)."""
+    inside, outside = np.uint8(mesh_colour(BOX_IN)), np.uint8(mesh_colour(BOX_OUT))
+    return np.where(np.asarray(in_goal, dtype=bool)[:, None], inside, outside).astype(np.uint8)
 
 
 def light_grid_image(intensities: np.ndarray, cell_pixels: int = CELL_PIXELS, peak: float = 1.0,
