@@ -175,6 +175,31 @@ def test_upload_validation_leaves_the_simulation_alone(app):
     wait_until(lambda: app.runner.latest.shape_name == "t.wkt")
 
 
+def test_a_paper_case_starts_the_case_and_the_dropdown_shows_what_runs(app):
+    """Issue 24, item 2: picking a case resets the world with it (same seed, step 0); the dropdown
+    shows the case that runs, or custom."""
+    from sandbox.app.panel.strategies import CUSTOM
+
+    runner, folder = app.runner, app.panel.strategies
+    client = FakeClient()
+    assert folder.case.value == "circle"
+    wait_until(lambda: runner.latest.step > 200, what="the circle to run a while")
+    seed, world = runner.latest.seed, runner.latest.world_key
+    folder.use_case("star-switch", client)
+    snap = wait_until(lambda: runner.latest.world_key != world and runner.latest, what="a new world")
+    assert snap.shape_name == "star" and snap.strategies["switch"] == 0.25 and snap.seed == seed
+    assert snap.step < 50, "a case starts from step 0"
+    wait_until(lambda: app.panel.update(runner.latest, force=True) or folder.case.value == "star-switch")
+    assert app.panel.metrics.marks[-1] == (0, "case star-switch")
+    # A strategy changed by hand: no longer one of the seven.
+    folder.controls["no_corners"][0].value = True
+    wait_until(lambda: app.panel.update(runner.latest, force=True) or folder.case.value == "star-switch-nocorners",
+               what="the case with no corners")
+    folder.controls["switch"][0].value = False
+    wait_until(lambda: app.panel.update(runner.latest, force=True) or folder.case.value == CUSTOM, what="custom")
+    assert not client.notes, client.notes
+
+
 def test_metrics_csv_and_frames(app):
     wait_until(lambda: app.frames_drawn > 5 and len(app.runner.series()) >= 2)
     lines = app.panel.metrics.csv().splitlines()
@@ -311,7 +336,8 @@ def test_charts_are_sent_only_when_new_and_thinned():
     folder = MetricsFolder(None, runner)
     folder.text, folder.chart_goal, folder.chart_dist, folder.chart_charged = Chart(), Chart(), Chart(), Chart()
     snap = SimpleNamespace(sample=SimpleNamespace(fraction_in_goal=0.5, mean_outside_distance=1.0, charged_robots=3,
-                                                  boxes_escaped=0), world_config=SimpleNamespace(robots=10))
+                                                  boxes_escaped=0), world_config=SimpleNamespace(robots=10, capacity=20.0),
+                           robot_charges=np.array([0.0, 5.0, 15.0]))
     folder.update(snap)
     sent = Chart.sends
     assert len(folder.chart_goal.data[0]) == CHART_POINTS and folder.chart_goal.data[0][-1] == 499_900

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.runner import Runner
-from sandbox.app.scene import CHARGE_STEPS, POINT_GRID, CompactSender, SceneView, _charge_steps
+from sandbox.app.scene import POINT_GRID, CompactSender, SceneView
 from sandbox.app.snapshot import caption, case_name
 from sandbox.model.config import Config
 
@@ -82,11 +82,18 @@ def test_points_are_half_precision_on_a_grid_exact_to_the_walls():
     assert SceneView._points(2, resting + 0.003).tobytes() == SceneView._points(2, resting - 0.003).tobytes()
 
 
-def test_charge_colours_change_in_visible_steps():
+def test_colours_and_counts_use_the_same_charge_classes():
+    """Issue 24, item 3: a robot is drawn green, amber or red by the classes the page counts."""
+    from sandbox.app import palette as pal
+
     capacity = 20.0
-    steps = _charge_steps(np.array([0.0, 0.2, 0.35, 19.9, 20.0]), capacity)
-    np.testing.assert_allclose(steps, [0.0, 0.0, 0.625, 20.0, 20.0])  # steps of 20 / 32 = 0.625
-    assert len(np.unique(_charge_steps(np.linspace(0, capacity, 1000), capacity))) == CHARGE_STEPS + 1
+    charges = np.array([0.0, 1e-6, 5.0, 10.0, 10.01, 20.0])
+    colours = [tuple(c) for c in pal.robot_colours(charges, capacity)]
+    assert colours == [pal.ROBOT_EMPTY, pal.ROBOT_LOW, pal.ROBOT_LOW, pal.ROBOT_LOW, pal.ROBOT_CHARGED,
+                       pal.ROBOT_CHARGED]
+    assert pal.charge_counts(charges, capacity) == (2, 3, 1)
+    assert [name for name, _, _ in pal.CHARGE_CLASSES] == ["charged", "low", "empty"]
+    assert "half" in pal.CHARGE_CLASSES[0][2]  # the legend states the threshold
 
 
 def test_an_unchanged_frame_sends_only_nothing(snapshot):
@@ -102,7 +109,7 @@ def test_an_unchanged_frame_sends_only_nothing(snapshot):
     sent = set(scene.sent)
     assert ("/swarm/robots", "points") in sent and ("/swarm/headings", "points") in sent
     assert ("/caption", "text") in sent
-    assert ("/swarm/boxes", "points") not in sent and ("/arena/lights", "image") not in sent
+    assert not any(path.startswith("/swarm/boxes") for path, _ in sent) and ("/arena/lit", "points") not in sent
     assert built  # the first frame did build and send
 
 
@@ -112,3 +119,84 @@ def test_caption_names_the_case_and_the_step(snapshot):
     assert case_name("heart", {"flare": 1.5}) == "heart + flare 1.5"
     text = caption(snapshot)
     assert text.startswith("circle | step ") and "cycle 0" in text and "% in goal" in text
+
+
+def test_lit_lights_are_points_sent_with_the_bodies(snapshot):
+    """The lit lights travel as points in the frame's own messages (a texture is decoded later
+    than the points it came with), in the grid picture's colours."""
+    from sandbox.app import palette as pal
+
+    scene = FakeScene()
+    view = SceneView(scene, snapshot)
+    lit = view.handles["lit"]
+    cfg = snapshot.world_config
+    on = snapshot.intensities > 0
+    assert on.any() and lit.visible
+    assert len(lit.points) == on.sum() and len(lit.colors) == on.sum()
+    # Each point lies in its light's cell.
+    cells = np.floor((lit.points[:, :2].astype(float) + cfg.arena_size / 2) / cfg.light_pitch).astype(int)
+    assert {tuple(c) for c in cells} == {tuple(c) for c in np.argwhere(on)}
+    picture = pal.light_grid_image(snapshot.intensities, cell_pixels=8, top_first=False)
+    ix, iy = cells[0]
+    np.testing.assert_array_equal(lit.colors[0], picture[iy * 8 + 4, ix * 8 + 4])
+    scene.sent.clear()
+    dark = dataclasses.replace(snapshot, intensities=np.zeros_like(snapshot.intensities), lights_key=("dark",))
+    view.update(dark)
+    assert not lit.visible and ("/arena/lights", "image") not in scene.sent
+    view.set_show_field(True, snapshot)
+    assert not lit.visible, "the heat map hides the lights"
+
+
+# ------------------------------------------------------------------ hexagons
+def test_a_box_is_the_recordings_hexagon():
+    from sandbox.app.hexagons import hexagon, wxyz
+
+    vertices, faces = hexagon(0.25)
+    assert vertices.shape == (7, 3) and faces.shape == (6, 3)
+    np.testing.assert_allclose(np.hypot(*vertices[1:, :2].T), 0.25, atol=1e-6)
+    np.testing.assert_allclose(vertices[1, :2], [0.25, 0.0], atol=1e-7)  # a corner at angle 0, as frames.py
+    a, b, c = vertices[faces[0]]
+    assert np.cross(b - a, c - a)[2] > 0  # faces up
+    q = wxyz(np.array([np.pi / 2]))[0]  # a quarter turn about z
+    np.testing.assert_allclose(q, [np.cos(np.pi / 4), 0, 0, np.sin(np.pi / 4)], atol=1e-6)
+
+
+def test_boxes_are_chunked_by_distance_and_resting_chunks_send_nothing():
+    """Issue 24, item 6: hexagons cost 31 bytes a box where a disc cost 9, so a chunk that rests sends
+    nothing, and a box turned less than the tolerance is not sent again."""
+    from sandbox.app.hexagons import ANGLE_TOLERANCE, CHUNK, REGROUP, Hexagons
+
+    rng = np.random.default_rng(3)
+    m = 4 * CHUNK + 7
+    points = np.zeros((m, 3), np.float16)
+    points[:, :2] = np.round(rng.uniform(-8, 8, (m, 2)) * 64) / 64
+    angles = rng.uniform(0, 2 * np.pi, m)
+    colours = np.zeros((m, 3), np.uint8)
+    scene = FakeScene()
+    boxes = Hexagons(scene, "/swarm/boxes", m, 0.25, (32, 32, 0.02), CompactSender())
+    boxes.update(points, angles, colours, np.zeros(2))  # built; the first regroup by distance
+    boxes.update(points, angles, colours, np.zeros(2))
+    shown = np.concatenate([idx for _, idx, _ in boxes.chunks])
+    assert sorted(shown) == list(range(m)) and [len(idx) for _, idx, _ in boxes.chunks] == [CHUNK] * 4 + [7]
+    # Nearer boxes in earlier chunks.
+    far = [np.hypot(*points[idx, :2].astype(float).T).max() for _, idx, _ in boxes.chunks]
+    near = [np.hypot(*points[idx, :2].astype(float).T).min() for _, idx, _ in boxes.chunks]
+    assert all(f <= n for f, n in zip(far, near[1:]))
+    for _ in range(3):  # frames until the next regrouping
+        boxes.update(points, angles, colours, np.zeros(2))
+    scene.sent.clear()
+    boxes.update(points, angles, colours, np.zeros(2))
+    assert scene.sent == [], "nothing moved: nothing sent"
+    # One box moves and another turns a little, a third turns a lot.
+    handle, idx, _ = boxes.chunks[2]
+    moved, slight, much = idx[0], boxes.chunks[3][1][0], boxes.chunks[1][1][0]
+    points[moved, 0] += np.float16(0.25)
+    angles[slight] += np.radians(ANGLE_TOLERANCE / 2)
+    angles[much] += np.radians(2 * ANGLE_TOLERANCE)
+    boxes.update(points, angles, colours, np.zeros(2))
+    sent = sorted((path, prop) for path, prop in scene.sent)
+    paths = {boxes.chunks[k][0]._path for k in (1, 2)}
+    assert {path for path, _ in sent} == paths and len(sent) == 2, sent
+    assert (boxes.chunks[2][0]._path, "batched_positions") in sent
+    assert (boxes.chunks[1][0]._path, "batched_wxyzs") in sent
+    assert REGROUP > 4  # no regrouping in between

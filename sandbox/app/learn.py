@@ -28,8 +28,8 @@ it climbs toward brighter light, overshoots a little, and settles where the
 light is brightest. It cannot see other robots, boxes or where it is.
 
 **Powered by light.** The same light charges the robot's store; moving and
-living spend it. Colour shows charge: **green** full, **red** empty. An empty
-robot stops until light reaches it again.
+living spend it. Colour shows charge: **green** more than half full, **amber**
+half or less, **red** empty. An empty robot stops until light reaches it again.
 
 *This is the authors' program (profile* authors-code*); the paper's text
 describes photocells on the body's axes and a motor that follows the

@@ -23,8 +23,8 @@ def legend_picture() -> np.ndarray:
     rows = [
         ("cell", pal.LIGHT_ON, "light on"),
         ("cell", pal.LIGHT_OFF, "light off"),
-        ("robots", None, "robot: green charged ... red empty"),
-        ("disc", pal.SELECTED, "robot you follow (ring)"),
+        *(("disc", colour, f"robot {name}: {words}") for name, colour, words in pal.CHARGE_CLASSES),
+        ("ring", pal.SELECTED, "robot you follow (ring)"),
         ("box", pal.BOX_IN, "box in the goal"),
         ("box", pal.BOX_OUT, "box outside the goal"),
         ("line", pal.GOAL_LINE, "goal outline"),
@@ -45,14 +45,13 @@ def legend_picture() -> np.ndarray:
 def _swatch(draw: ImageDraw.ImageDraw, kind: str, colour, x: int, y: int) -> None:
     if kind == "cell":
         draw.rectangle([x - 10, y - 10, x + 10, y + 10], fill=colour, outline=pal.CELL_EDGE)
-    elif kind == "robots":
-        for k, charge in enumerate((20.0, 10.0, 0.0)):
-            c = tuple(int(v) for v in pal.robot_colours(np.array([charge]), 20.0)[0])
-            draw.ellipse([x - 16 + 11 * k, y - 6, x - 4 + 11 * k, y + 6], fill=c)
     elif kind == "disc":
-        draw.ellipse([x - 9, y - 9, x + 9, y + 9], outline=colour, width=3)
-    elif kind == "box":  # the live scene draws a hexagonal box as a disc of the same area
         draw.ellipse([x - 9, y - 9, x + 9, y + 9], fill=colour)
+    elif kind == "ring":
+        draw.ellipse([x - 9, y - 9, x + 9, y + 9], outline=colour, width=3)
+    elif kind == "box":  # a hexagon, as the floor shows a box
+        a = np.arange(6) * np.pi / 3
+        draw.polygon([(x + 10 * np.cos(t), y + 10 * np.sin(t)) for t in a], fill=colour)
     else:
         draw.line([x - 14, y, x + 14, y], fill=colour, width=4)
 

@@ -6,9 +6,9 @@ Pure numpy: nothing here imports viser or touches a running simulation.
 
 from __future__ import annotations
 
-import numpy as np
+import functools
 
-from sandbox.model.robots import charge_colours
+import numpy as np
 
 # RGB, 0..255.
 BACKGROUND = (24, 26, 32)
@@ -23,6 +23,15 @@ BOX_WALL = (150, 160, 185)
 ARENA_WALL = (205, 210, 220)
 HEADING_MARK = (20, 22, 28)
 SELECTED = (190, 90, 255)
+#: A robot's colour says which of three charge classes it is in, and the page counts the same classes:
+#: charged (more than CHARGED_ABOVE of a full store), low (some charge, up to that), empty (none: it
+#: cannot move). One threshold for the colour, the legend and the count, so they cannot disagree.
+ROBOT_CHARGED = (46, 204, 64)
+ROBOT_LOW = (255, 165, 0)
+ROBOT_EMPTY = (230, 40, 40)
+CHARGED_ABOVE = 0.5
+CHARGE_CLASSES = (("charged", ROBOT_CHARGED, "more than half full"), ("low", ROBOT_LOW, "some charge, half or less"),
+                  ("empty", ROBOT_EMPTY, "no charge, cannot move"))
 SENSOR_COLOURS = np.array([[255, 255, 255], [90, 90, 90], [64, 200, 255], [255, 140, 30]], dtype=np.uint8)
 
 #: Pixels per light cell in the light-grid texture (cells stay crisp even with
@@ -30,14 +39,70 @@ SENSOR_COLOURS = np.array([[255, 255, 255], [90, 90, 90], [64, 200, 255], [255, 
 CELL_PIXELS = 8
 
 
+def charge_class(charges: np.ndarray, capacity: float) -> np.ndarray:
+    """(n,) index into CHARGE_CLASSES: 0 charged (more than CHARGED_ABOVE of ``capacity``), 1 low
+    (above zero), 2 empty."""
+    c = np.asarray(charges, dtype=float)
+    charged = c > CHARGED_ABOVE * capacity if capacity > 0 else np.ones(c.shape, bool)
+    return np.where(charged, 0, np.where(c > 0, 1, 2))
+
+
+def charge_counts(charges: np.ndarray, capacity: float) -> tuple[int, int, int]:
+    """How many robots are charged, low and empty: the robots drawn green, amber and red."""
+    counts = np.bincount(charge_class(charges, capacity), minlength=3)
+    return int(counts[0]), int(counts[1]), int(counts[2])
+
+
+_ROBOT_COLOURS = np.array([ROBOT_CHARGED, ROBOT_LOW, ROBOT_EMPTY], dtype=np.uint8)
+
+
 def robot_colours(charges: np.ndarray, capacity: float) -> np.ndarray:
-    """(n, 3) uint8: green when full, red when empty, blended between (the engine's colours)."""
-    return np.round(charge_colours(np.asarray(charges, dtype=float), capacity) * 255).astype(np.uint8)
+    """(n, 3) uint8: the colour of each robot's charge class (green charged, amber low, red empty)."""
+    return _ROBOT_COLOURS[charge_class(charges, capacity)]
 
 
 def box_colours(in_goal: np.ndarray) -> np.ndarray:
     """(m, 3) uint8: pink when the box centre is inside the goal, white otherwise."""
     return np.where(np.asarray(in_goal, dtype=bool)[:, None], np.uint8(BOX_IN), np.uint8(BOX_OUT)).astype(np.uint8)
+
+
+# ------------------------------------------------------- lit meshes in the page
+# The page draws meshes lit (an even ambient light, sandbox.app.scene) and tone-mapped (three.js's ACES
+# filmic curve, React Three Fiber's default); points, lines and pictures it draws as they are. A mesh's
+# colour is therefore chosen so that what the page shows is the palette's colour (as near as the curve
+# lets: its brightest white is about 226 of 255).
+_ACES_IN = np.array([[0.59719, 0.35458, 0.04823], [0.07600, 0.90834, 0.01566], [0.02840, 0.13383, 0.83777]])
+_ACES_OUT = np.array([[1.60475, -0.53108, -0.07367], [-0.10208, 1.10813, -0.00605], [-0.00327, -0.07276, 1.07602]])
+
+
+def _srgb(linear: np.ndarray) -> np.ndarray:
+    c = np.clip(np.asarray(linear, dtype=float), 0.0, 1.0)
+    return np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055)
+
+
+def shown_on_mesh(rgb: tuple | np.ndarray) -> np.ndarray:
+    """The colour (0..255 floats) the page shows for a mesh given colour ``rgb``: taken as linear
+    light (viser hands instance colours to three.js as they are), lit to itself, then three.js's
+    ACESFilmicToneMapping (exposure 1), then sRGB. Measured: (255, 92, 168) shows as (231, 181, 209)."""
+    v = _ACES_IN @ (np.asarray(rgb, dtype=float) / 255.0 / 0.6)
+    v = (v * (v + 0.0245786) - 0.000090537) / (v * (0.983729 * v + 0.4329510) + 0.238081)
+    return 255.0 * _srgb(_ACES_OUT @ v)
+
+
+@functools.cache
+def mesh_colour(rgb: tuple) -> tuple[int, int, int]:
+    """The colour to give a mesh so the page shows ``rgb`` (or the nearest it can)."""
+    from scipy.optimize import least_squares
+
+    target = np.asarray(rgb, dtype=float)
+    fit = least_squares(lambda x: shown_on_mesh(x) - target, np.clip(target, 1, 254), bounds=(0.0, 255.0))
+    return tuple(int(v) for v in np.round(fit.x))
+
+
+def box_mesh_colours(in_goal: np.ndarray) -> np.ndarray:
+    """(m, 3) uint8: :func:`box_colours` for the page's hexagons (lit meshes: see :func:`mesh_colour`)."""
+    inside, outside = np.uint8(mesh_colour(BOX_IN)), np.uint8(mesh_colour(BOX_OUT))
+    return np.where(np.asarray(in_goal, dtype=bool)[:, None], inside, outside).astype(np.uint8)
 
 
 def light_grid_image(intensities: np.ndarray, cell_pixels: int = CELL_PIXELS, peak: float = 1.0,
@@ -60,6 +125,17 @@ def light_grid_image(intensities: np.ndarray, cell_pixels: int = CELL_PIXELS, pe
 
 
 _HEAT_LUT: np.ndarray | None = None
+
+
+def lit_cells(intensities: np.ndarray, pitch: float, peak: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """The lights that are on, as ((k, 2) centres in metres from the grid's corner, (k, 3) uint8
+    colours): the same colours as :func:`light_grid_image`, cell by cell, for the lights above zero."""
+    level = np.clip(np.asarray(intensities, dtype=float) / (peak if peak > 0 else 1.0), 0.0, 1.0)
+    ix, iy = np.nonzero(level > 0)
+    centres = (np.stack([ix, iy], axis=1) + 0.5) * pitch
+    off, on = np.array(LIGHT_OFF, float), np.array(LIGHT_ON, float)
+    colours = (off + level[ix, iy, None] * (on - off)).astype(np.uint8)
+    return centres, colours
 
 
 def _heat_lut() -> np.ndarray:

@@ -2,13 +2,20 @@
 
 Layout (z up, arena on z = 0, camera above looking down):
 
-- ``/arena/lights``   the 64 x 64 light grid as one PNG texture (a few KB)
+- ``/arena/lights``   the 64 x 64 light grid, every light off, as one PNG texture (sent once)
+- ``/arena/lit``      the lights that are on: one square point per light, in its colour
 - ``/arena/field``    the sensed luminosity as a heat map (toggle)
 - ``/arena/walls``, ``/arena/box_wall``   outer wall and the box-only wall
 - ``/goal``, ``/light_outline``   goal outline and current light outline
-- ``/swarm/robots``, ``/swarm/headings``, ``/swarm/boxes``   point clouds
+- ``/swarm/robots``, ``/swarm/headings``   point clouds
+- ``/swarm/boxes/*``  the boxes as hexagons, in chunks (:mod:`.hexagons`)
 - ``/inspect/*``   the followed robot (the shape being drawn is :mod:`.draw_view`'s ``/draw/*``)
 - ``/caption``   what is running: case, strategies, step (also in recordings)
+
+One frame is one instant: the lit lights travel with the bodies, outline and
+caption in the same batch of messages, and the page applies a batch in one
+go. (They were a PNG texture, which the page decodes asynchronously and
+shows later than the points: the lit band trailed the robots by 2-5 cells.)
 
 Every viewer receives every update, so the moving parts are sent compactly
 (see :class:`CompactSender`): half-precision points relative to the arena's
@@ -27,28 +34,38 @@ from typing import Any
 import numpy as np
 
 from sandbox.app import palette as pal
+from sandbox.app.hexagons import Hexagons
 from sandbox.app.snapshot import Snapshot, caption
 from sandbox.model.config import Config
 
-Z_FIELD, Z_LIGHTS, Z_BOXES, Z_ROBOTS, Z_MARKS, Z_LINES, Z_TOP = -0.01, 0.0, 0.02, 0.04, 0.05, 0.08, 0.12
+Z_FIELD, Z_LIGHTS, Z_LIT, Z_BOXES, Z_ROBOTS, Z_MARKS, Z_LINES, Z_TOP = -0.01, 0.0, 0.01, 0.02, 0.04, 0.05, 0.08, 0.12
 
 
-def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0) -> tuple[np.ndarray, np.ndarray, float]:
+#: The construction view shows this many times the construction area's side: the area, the pile and
+#: the band's last sweeps over it (the action of a class demo; the arena is 4x wider and mostly empty).
+CONSTRUCTION_VIEW = 1.4
+
+
+def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, *,
+                    whole: bool = True) -> tuple[np.ndarray, np.ndarray, float]:
     """Camera position, look-at point and vertical field of view (radians) that
-    frame the whole arena from straight above (tilted a hair so orbiting works),
-    in a view ``aspect`` (width / height) wide: high enough for the arena's
-    height and, in a narrow view, for its width."""
-    c = config.arena_size / 2.0
+    frame the whole arena (or, ``whole`` False, the construction area) from
+    straight above (tilted a hair so orbiting works), in a view ``aspect``
+    (width / height) wide: high enough for its height and, in a narrow view,
+    for its width."""
+    if whole:
+        c, half = config.arena_size / 2.0, config.arena_size * 0.56  # arena plus a margin
+    else:
+        c, half = config.centre, config.construction_size * CONSTRUCTION_VIEW / 2.0
     fov = np.radians(fov_deg)
-    half = config.arena_size * 0.56  # arena plus a margin
     height = half / np.tan(fov / 2.0) / min(1.0, max(aspect, 0.1))
     return np.array([c, c - 1e-3 * height, height]), np.array([c, c, 0.0]), float(fov)
 
 
-def frame_arena(client: Any, config: Config) -> None:
-    """Point one viewer's camera at the whole arena, for its own window's shape."""
+def frame_arena(client: Any, config: Config, whole: bool = True) -> None:
+    """Point one viewer's camera at the whole arena (or the construction area), for its own window's shape."""
     aspect = float(getattr(client.camera, "aspect", 0.0) or 1.4)
-    position, look_at, fov = top_down_camera(config, aspect)
+    position, look_at, fov = top_down_camera(config, aspect, whole=whole)
     with client.atomic():
         client.camera.fov = fov
         client.camera.position = tuple(position)
@@ -76,24 +93,12 @@ def configure_scene(server: Any, config: Config) -> None:
     server.initial_camera.far = float(position[2] * 4)
 
 
-#: A circle of this many circumradii has a regular hexagon's area (3 sqrt(3) / 2 pi) ** 0.5.
-HEXAGON_AREA_RADIUS = float(np.sqrt(3 * np.sqrt(3) / (2 * np.pi)))
 #: Texture size of the light grid (pixels per side, about): crisp cells with seams at any usual zoom.
 LIGHT_TEXTURE_PIXELS = 512
 #: Moving points are sent on a grid this fine (m): exact in half precision up to 32 m from the
 #: centre, a fifth of a pixel with the whole arena in view, and coarse enough that sub-centimetre
 #: jitter of resting boxes sends nothing.
 POINT_GRID = 1.0 / 64.0
-#: Robot colours are sent in this many charge steps: a change of colour
-#: nobody can see is not worth a message to every viewer.
-CHARGE_STEPS = 32
-
-
-def _charge_steps(charges: np.ndarray, capacity: float) -> np.ndarray:
-    step = capacity / CHARGE_STEPS if capacity > 0 else 1.0
-    return np.round(np.asarray(charges, dtype=float) / step) * step
-
-
 class CompactSender:
     """Assigns a handle's property only when its value changed since it was
     last sent: each assignment is a message to every viewer."""
@@ -102,11 +107,17 @@ class CompactSender:
         self._last: dict[tuple[int, str], Any] = {}
 
     def send(self, handle: Any, prop: str, value: Any) -> bool:
+        if not self.remember(handle, prop, value):
+            return False
+        setattr(handle, prop, value)
+        return True
+
+    def remember(self, handle: Any, prop: str, value: Any) -> bool:
+        """Note that the viewers have ``value`` (a node was just made with it); False if they had it."""
         key = (id(handle), prop)
         fingerprint = value.tobytes() if isinstance(value, np.ndarray) else value
         if self._last.get(key) == fingerprint:
             return False
-        setattr(handle, prop, value)
         self._last[key] = fingerprint
         return True
 
@@ -126,6 +137,7 @@ class SceneView:
         self._outline_bytes: bytes | None = None
         self._n: tuple[int, int] | None = None
         self.handles: dict[str, Any] = {}
+        self.hexagons: Hexagons | None = None
         self.update(snapshot)
 
     # ------------------------------------------------------------ static
@@ -133,17 +145,22 @@ class SceneView:
         cfg = snap.world_config
         s, c = cfg.arena_size, cfg.arena_size / 2.0
         sc = self.scene
-        for h in self.handles.values():
+        for h in [*self.handles.values(), *([self.hexagons] if self.hexagons else [])]:
             try:
                 h.remove()
             except Exception:
                 pass
         self.handles = {}
+        self._sent = CompactSender()
         placeholder = np.zeros((8, 8, 3), np.uint8)
-        # The light grid as one PNG texture: a few KB per change, where one colour per light was 12 KB.
+        # The grid of lights, all off, as one PNG texture sent once; the lit ones are square points over
+        # it, sent with the bodies (a PNG is decoded later than the points it came with).
         self.handles["lights"] = sc.add_image(
-            "/arena/lights", self._light_picture(snap), s, s, format="png", position=(c, c, Z_LIGHTS),
+            "/arena/lights", self._light_picture(cfg), s, s, format="png", position=(c, c, Z_LIGHTS),
             cast_shadow=False, receive_shadow=False, visible=not self.show_field)
+        self.handles["lit"] = sc.add_point_cloud(
+            "/arena/lit", self._points(1), np.zeros((1, 3), np.uint8), point_size=self._lit_size(cfg),
+            point_shape="square", point_shading="flat", position=(c, c, Z_LIT), visible=False)
         self.handles["field"] = sc.add_image(
             "/arena/field", placeholder, s, s, format="png", position=(c, c, Z_FIELD),
             cast_shadow=False, receive_shadow=False, visible=self.show_field)
@@ -153,9 +170,8 @@ class SceneView:
             "/arena/box_wall", pal.closed_segments(pal.square(cfg.centre, cfg.construction_size / 2.0), Z_LINES),
             pal.BOX_WALL, thickness=0.1)
         n, m = len(snap.robot_positions), len(snap.box_positions)
-        # Discs need no rotation: a robot is a round point, its heading a dark dot near its front rim,
-        # a box a round point of its hexagon's area. (viser draws a point of size d as wide as an
-        # object 2d wide, so sizes are radii.)
+        # A robot is a round point, its heading a dark dot near its front rim (viser draws a point of
+        # size d as wide as an object 2d wide, so sizes are radii); a box a hexagon (sandbox.app.hexagons).
         r = cfg.robot_radius
         self.handles["robots"] = sc.add_point_cloud(
             "/swarm/robots", self._points(max(n, 1)), np.zeros((max(n, 1), 3), np.uint8), point_size=r, point_shape="circle",
@@ -163,9 +179,7 @@ class SceneView:
         self.handles["headings"] = sc.add_point_cloud(
             "/swarm/headings", self._points(max(n, 1)), pal.HEADING_MARK, point_size=0.3 * r,
             point_shape="circle", point_shading="flat", position=(c, c, Z_MARKS), visible=n > 0)
-        self.handles["boxes"] = sc.add_point_cloud(
-            "/swarm/boxes", self._points(max(m, 1)), np.zeros((max(m, 1), 3), np.uint8),
-            point_size=HEXAGON_AREA_RADIUS * cfg.box_circumradius, point_shape="circle", point_shading="flat", position=(c, c, Z_BOXES), visible=m > 0)
+        self.hexagons = Hexagons(sc, "/swarm/boxes", m, cfg.box_circumradius, (c, c, Z_BOXES), self._sent)
         self.handles["caption"] = sc.add_label("/caption", caption(snap), position=(0.0, s + 0.8, Z_TOP),
                                                anchor="bottom-left", font_screen_scale=1.2)
         empty = np.zeros((1, 2, 3), np.float32)
@@ -177,7 +191,6 @@ class SceneView:
             "/inspect/sensors", np.zeros((4, 3), np.float32), pal.SENSOR_COLOURS, point_size=0.09,
             point_shape="circle", visible=False)
         self._built_for = _geometry_key(cfg, n, m)
-        self._sent = CompactSender()
         self._lights_key = self._field_key = self._goal_key = None
         self._outline_bytes = None
         self._n = (n, m)
@@ -191,7 +204,7 @@ class SceneView:
                 self._build(snap)
             h = self.handles
             if snap.lights_key != self._lights_key:
-                h["lights"].image = self._light_picture(snap)
+                self._show_lit(snap)
                 self._lights_key = snap.lights_key
             if self.show_field and snap.field is not None and snap.lights_key != self._field_key:
                 h["field"].image = pal.field_image(snap.field, top_first=False)
@@ -207,14 +220,13 @@ class SceneView:
             send = self._sent.send
             if n:
                 send(h["robots"], "points", self._points(n, snap.robot_positions - centre))
-                send(h["robots"], "colors", pal.robot_colours(_charge_steps(snap.robot_charges, cfg.capacity),
-                                                                cfg.capacity))
+                send(h["robots"], "colors", pal.robot_colours(snap.robot_charges, cfg.capacity))
                 front = 0.6 * cfg.robot_radius * np.stack([np.cos(snap.robot_headings),
                                                             np.sin(snap.robot_headings)], axis=1)
                 send(h["headings"], "points", self._points(n, snap.robot_positions - centre + front))
             if m:
-                send(h["boxes"], "points", self._points(m, snap.box_positions - centre))
-                send(h["boxes"], "colors", pal.box_colours(snap.box_in_goal))
+                self.hexagons.update(self._points(m, snap.box_positions - centre), snap.box_angles,
+                                     pal.box_mesh_colours(snap.box_in_goal), np.full(2, cfg.centre - centre))
             send(h["caption"], "text", caption(snap))
             robot = snap.robot
             if robot is not None:
@@ -239,13 +251,37 @@ class SceneView:
                 self._field_key = snap.lights_key
             self.handles["field"].visible = self.show_field
             self.handles["lights"].visible = not self.show_field
+            self._show_lit(snap)
+
+    def _show_lit(self, snap: Snapshot) -> None:
+        """The lit lights as square points (none: the node hides; under the heat map too)."""
+        cfg = snap.world_config
+        centres, colours = pal.lit_cells(snap.intensities, cfg.light_pitch, max(cfg.light_intensity, 1e-9))
+        h = self.handles["lit"]
+        if len(centres):
+            # Centred on the part of the cell that the texture's seam (its left and bottom pixel) leaves.
+            seam = cfg.light_pitch / (2 * self._cell_pixels(cfg))
+            h.points = self._points(len(centres), centres + seam - cfg.arena_size / 2.0)
+            h.colors = colours
+        visible = bool(len(centres)) and not self.show_field
+        if h.visible != visible:
+            h.visible = visible
 
     @staticmethod
-    def _light_picture(snap: Snapshot) -> np.ndarray:
-        cfg = snap.world_config
-        cells = max(2, LIGHT_TEXTURE_PIXELS // cfg.lights_per_side)
-        return pal.light_grid_image(snap.intensities, cell_pixels=cells, peak=max(cfg.light_intensity, 1e-9),
-                                    top_first=False)
+    def _cell_pixels(cfg: Config) -> int:
+        return max(2, LIGHT_TEXTURE_PIXELS // cfg.lights_per_side)
+
+    @classmethod
+    def _lit_size(cls, cfg: Config) -> float:
+        """A lit light's square: the cell less the texture's seam, as a radius (points are sized by
+        half their width)."""
+        return 0.5 * cfg.light_pitch * (1.0 - 1.0 / cls._cell_pixels(cfg))
+
+    @classmethod
+    def _light_picture(cls, cfg: Config) -> np.ndarray:
+        """The grid with every light off."""
+        dark = np.zeros((cfg.lights_per_side,) * 2)
+        return pal.light_grid_image(dark, cell_pixels=cls._cell_pixels(cfg), top_first=False)
 
     @staticmethod
     def _points(n: int, xy: np.ndarray | None = None) -> np.ndarray:

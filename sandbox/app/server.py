@@ -97,9 +97,11 @@ class App:
 
     def _on_frame(self, snap: Snapshot) -> None:
         with self._frame_lock:
+            # The scene and the panel's read-outs of one snapshot in one batch: the page applies a
+            # batch at once, so what it shows comes from one step.
             with self.server.atomic():
                 self.view.update(snap)
-            self.panel.update(snap)
+                self.panel.update(snap)
             self.panel.on_frame_drawn()
             self.frames_drawn += 1
 

@@ -73,15 +73,29 @@ class Snapshot:
 def case_name(shape: str, strategies: dict) -> str:
     """The goal and its strategies in words: the paper's case name when they
     are one of its seven cases, else e.g. ``heart + flare 1.5``."""
-    from sandbox.model.config import CASES, STRATEGY_NAMES
+    from sandbox.model.config import STRATEGY_NAMES
 
     active = {name: float(strategies.get(name, 0.0)) for name in STRATEGY_NAMES if strategies.get(name, 0.0) > 0}
     words = {"flare": "flare", "switch": "switch", "no_corners": "no corners", "chase": "chase"}
     described = " + ".join([shape, *(f"{words[k]} {v:g}" for k, v in active.items())])
+    name = running_case(shape, strategies)
+    if name is None:
+        return described
+    return name if name == described else f"{name} ({described})"
+
+
+def running_case(shape: str, strategies: dict, family: str = "scaled") -> str | None:
+    """The paper's case that runs: its goal, exactly its strategies (the others off) and the paper's
+    scaled outline; None when what runs is not one of the seven."""
+    from sandbox.model.config import CASES, STRATEGY_NAMES
+
+    if family != "scaled":
+        return None
+    active = {name: float(strategies.get(name, 0.0)) for name in STRATEGY_NAMES if strategies.get(name, 0.0) > 0}
     for name, case in CASES.items():
         if case["shape"] == shape and active == {k: float(v) for k, v in case.items() if k != "shape"}:
-            return name if name == described else f"{name} ({described})"
-    return described
+            return name
+    return None
 
 
 def caption(snap: Snapshot) -> str:

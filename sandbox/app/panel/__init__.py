@@ -39,7 +39,8 @@ class Panel:
         self.run = RunFolder(gui, runner, show_field=lambda on: view.set_show_field(on, runner.latest),
                              after_reset=self._after_reset)
         self.shape = ShapeFolder(gui, runner, server.scene, on_change=self.metrics.mark)
-        self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark)
+        self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark,
+                                           reset=self.run.reset)
         self.advice = AdviceFolder(gui, runner, use=self.strategies.use)
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)

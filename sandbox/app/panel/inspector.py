@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 import viser
 
+from sandbox.app import palette as pal
 from sandbox.app.scene import frame_arena
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.robots import PHOTOCELLS
@@ -57,6 +58,8 @@ class InspectorFolder:
         self.text.content = self._text(snap)
         cap = snap.world_config.capacity
         self.charge_bar.value = float(100.0 * snap.robot.charge / cap) if cap > 0 else 0.0
+        # The bar in the robot's own colour on the floor (viser's names for them).
+        self.charge_bar.color = ("green", "orange", "red")[int(pal.charge_class([snap.robot.charge], cap)[0])]
         self.charge_bar.visible = True
         if self.followers:
             self._follow_with_cameras(snap)

@@ -11,6 +11,7 @@ import numpy as np
 import viser
 import viser.uplot
 
+from sandbox.app import palette as pal
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.metrics import SampleWriter
 
@@ -28,13 +29,13 @@ class MetricsFolder:
         self._charted: tuple | None = None  # what the charts last showed
         self._charted_at = 0.0
 
-    def mark(self, what: str) -> None:
-        """Remember a change, to show on the charts where it happened."""
+    def mark(self, what: str, step: int | None = None) -> None:
+        """Remember a change, to show on the charts where it happened (``step`` None: now)."""
         if what == "reset":
             self.marks = []
             self.marks.append((0, what))
         else:
-            self.marks.append((self.runner.latest.step, what))
+            self.marks.append((self.runner.latest.step if step is None else step, what))
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -56,8 +57,8 @@ class MetricsFolder:
                 (x, x), ({"label": "step"}, {"label": "stray distance", "stroke": "#40c8ff", "width": 2}),
                 title="Mean distance of stray boxes (m)", scales={"x": {"time": False}}, **common)
             self.chart_charged = gui.add_uplot(
-                (x, x), ({"label": "step"}, {"label": "charged", "stroke": "#2ecc40", "width": 2}),
-                title="Charged robots", scales={"x": {"time": False}}, **common)
+                (x, x), ({"label": "step"}, {"label": "with charge", "stroke": "#2ecc40", "width": 2}),
+                title="Robots with any charge (green or amber)", scales={"x": {"time": False}}, **common)
             self.download_csv = gui.add_button("Download CSV", icon=viser.Icon.FILE_SPREADSHEET,
                                                hint="The metrics time series of this run")
 
@@ -106,10 +107,11 @@ class MetricsFolder:
     @staticmethod
     def _text(snap: Snapshot) -> str:
         s = snap.sample
-        n = snap.world_config.robots
+        charged, low, empty = pal.charge_counts(snap.robot_charges, snap.world_config.capacity)
         return (f"**In goal** {100 * s.fraction_in_goal:.1f} % &nbsp; "
                 f"**stray distance** {s.mean_outside_distance:.2f} m  \n"
-                f"**Charged robots** {s.charged_robots} / {n} &nbsp; **escaped boxes** {s.boxes_escaped}")
+                f"**Robots** {charged} charged (green, more than half full), {low} low (amber), "
+                f"{empty} empty (red) &nbsp; **escaped boxes** {s.boxes_escaped}")
 
 
 def chart_indices(n: int, points: int) -> np.ndarray:

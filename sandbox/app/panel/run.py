@@ -75,12 +75,25 @@ class RunFolder:
             self._show_field(self.show_field.value)
 
     def _reset(self, seed: int | None, client: Any) -> None:
+        self.reset(client, seed)
+
+    def reset(self, client: Any, seed: int | None = None, *, on_done: Callable[[Any], None] | None = None,
+              on_error: Callable[[BaseException], None] | None = None) -> None:
+        """A new world (``seed`` None: the same seed); a refusal or a cancel is told to ``client``."""
+
         def failed(exc: BaseException) -> None:
             cancelled = type(exc).__name__ == "BuildCancelled"
             (notify if cancelled else notify_error)(client, "Reset cancelled" if cancelled else "Reset refused",
                                                     str(exc))
+            if on_error:
+                on_error(exc)
 
-        self.runner.reset(seed, on_done=lambda _: self._after_reset(client), on_error=failed)
+        def done(result: Any) -> None:
+            self._after_reset(client)
+            if on_done:
+                on_done(result)
+
+        self.runner.reset(seed, on_done=done, on_error=failed)
 
     def _building(self, fraction: float | None) -> None:
         """Progress of a world being built (None: done)."""

@@ -114,10 +114,13 @@ class ShapeFolder:
         self.use(vertices, safe, client)
         return True
 
-    def use(self, vertices, name: str, client: Any, announce: bool = True) -> None:
-        """Hand the goal to the simulation; it may still refuse one that does not fit the arena."""
+    def use(self, vertices, name: str, client: Any, announce: bool = True, quiet: bool = False) -> None:
+        """Hand the goal to the simulation; it may still refuse one that does not fit the arena.
+        ``quiet``: part of another action (a paper case), which says what it did itself."""
 
         def used(notes: list[str]) -> None:
+            if quiet:
+                return
             self._on_change(f"shape {name}")
             if announce:
                 size = "" if vertices is None else f" ({len(vertices)} vertices)"

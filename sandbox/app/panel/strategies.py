@@ -1,6 +1,10 @@
 """The Strategies folder: the paper's seven cases in one control, the outline
 the band follows (and why), then a checkbox and an amount per strategy,
-generated from their declaration (:data:`sandbox.model.config.STRATEGIES`)."""
+generated from their declaration (:data:`sandbox.model.config.STRATEGIES`).
+
+Picking a paper case starts it: a new world (the same seed) with the case's
+goal and strategies, from step 0, so cases compare from the same start. The
+dropdown always shows the case that runs, or ``custom``."""
 
 from __future__ import annotations
 
@@ -10,28 +14,32 @@ from typing import Any, Callable
 import viser
 
 from sandbox.app.panel.common import notify, notify_error
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.snapshot import Snapshot, running_case
 from sandbox.model.config import CASES, STRATEGIES, param
 from sandbox.model.notes import strategy_effect_note
 from sandbox.model.simulation import Simulation
 from sandbox.shapes import shape_vertices
 
-CHOOSE = "(pick one)"
+#: What the Paper case dropdown shows when the goal, the strategies or the outline are not one of the seven.
+CUSTOM = "custom"
 
 
 class StrategiesFolder:
     def __init__(self, gui: Any, runner: Any, use_shape: Callable[[Any, str, Any], None],
-                 on_change: Callable[[str], None]):
+                 on_change: Callable[..., None], reset: Callable[..., None]):
         self.gui, self.runner = gui, runner
-        self._use_shape, self._on_change = use_shape, on_change
+        self._use_shape, self._on_change, self._reset = use_shape, on_change, reset
         self.controls: dict[str, tuple[Any, Any]] = {}
         self._outline_shown = ""
+        #: A case picked and on its way to the simulation: the dropdown keeps showing it meanwhile.
+        self._starting: str | None = None
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
         with gui.add_folder("Strategies"):
-            self.case = gui.add_dropdown("Paper case", (CHOOSE, *CASES), initial_value=CHOOSE,
-                                         hint="One of the paper's seven cases: its goal shape and strategies at once")
+            self.case = gui.add_dropdown("Paper case", (*CASES, CUSTOM), initial_value=self._running(snap),
+                                         hint="Start one of the paper's seven cases from step 0 (same seed). "
+                                              "custom: your own goal or strategies")
             self.outline = gui.add_dropdown("Outline", param("outline").choices, initial_value=snap.config.outline,
                                             hint="auto: the paper's scaled outline when the goal's centre lies deep "
                                                  "inside it, else the goal's edge at a distance (offset)")
@@ -48,8 +56,12 @@ class StrategiesFolder:
 
         @self.case.on_update
         def _(event: viser.GuiEvent) -> None:
+            if event.client is None:
+                return  # this panel showing what runs, not a pick
             if self.case.value in CASES:
                 self.use_case(self.case.value, event.client)
+            else:  # custom is what the dropdown says, not something to pick
+                self.case.value = self._running(self.runner.latest)
 
         @self.outline.on_update
         def _(event: viser.GuiEvent) -> None:
@@ -60,6 +72,13 @@ class StrategiesFolder:
         text = self._outline_text(snap)
         if text != self._outline_shown:
             self.outline_status.content = self._outline_shown = text
+        running = self._running(snap)
+        if self._starting is None and self.case.value != running:
+            self.case.value = running
+
+    @staticmethod
+    def _running(snap: Snapshot) -> str:
+        return running_case(snap.shape_name, snap.strategies, snap.family) or CUSTOM
 
     @staticmethod
     def _outline_text(snap: Snapshot) -> str:
@@ -102,14 +121,27 @@ class StrategiesFolder:
         self.runner.set_outline(outline, on_done=done, on_error=refused)
 
     def use_case(self, name: str, client: Any) -> None:
-        """The case's goal and strategies (the others off), in one go."""
+        """Start the case: its goal, its strategies (the others off) and the paper's outline, in a new
+        world with the same seed, from step 0."""
         case = CASES[name]
         strategies = {s.name: float(case.get(s.name, 0.0)) for s in STRATEGIES}
-        self._use_shape(shape_vertices(case["shape"]), case["shape"], client)
-        self.runner.post(functools.partial(Simulation.set_strategies, **strategies),
-                         on_error=lambda exc: notify_error(client, "Case not used", str(exc)))
+        self._starting = name
+
+        def started(_: Any = None) -> None:
+            self._starting = None
+            self._on_change(f"case {name}", 0)  # the first step of the new world
+
+        def failed(exc: BaseException) -> None:
+            self._starting = None
+            notify_error(client, "Case not started", str(exc))
+
+        # In this order, in the simulation's queue: the goal, the paper's outline and the strategies,
+        # then the new world (the reset says why if it cannot be built).
+        self._use_shape(shape_vertices(case["shape"]), case["shape"], client, quiet=True)
+        self.runner.update_config({"outline": "auto", **strategies}, on_error=failed)
+        self._reset(client, on_done=started, on_error=lambda exc: setattr(self, "_starting", None))
+        self.outline.value = "auto"
         self._show_strategies(strategies)
-        self._on_change(f"case {name}")
 
     def _changed(self, name: str, client: Any) -> None:
         if getattr(self, "_quiet", False):
