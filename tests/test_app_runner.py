@@ -349,3 +349,17 @@ def test_charts_are_sent_only_when_new_and_thinned():
 def test_the_live_app_runs_without_a_deadline():
     r = Runner(SMALL, shape=None, playing=False)
     assert r.sim.controller.deadline is None
+
+
+def test_a_recording_is_named_after_what_runs_and_when():
+    from datetime import datetime
+    from types import SimpleNamespace
+
+    from sandbox.app.panel.recording import recording_name
+
+    when = datetime(2026, 12, 1, 9, 5)
+    case = SimpleNamespace(shape_name="star", strategies={"switch": 0.25, "flare": 0.0}, family="scaled")
+    assert recording_name(case, when) == "phototaxis-star-switch-2026-12-01-0905.html"
+    drawn = SimpleNamespace(shape_name="my L (v2).svg", strategies={"chase": 2.0}, family="offset")
+    assert recording_name(drawn, when) == "phototaxis-my-L-v2-chase-2026-12-01-0905.html"
+    assert recording_name(None, when) == "phototaxis-run-2026-12-01-0905.html"
