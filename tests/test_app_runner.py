@@ -363,3 +363,13 @@ def test_a_recording_is_named_after_what_runs_and_when():
     drawn = SimpleNamespace(shape_name="my L (v2).svg", strategies={"chase": 2.0}, family="offset")
     assert recording_name(drawn, when) == "phototaxis-my-L-v2-chase-2026-12-01-0905.html"
     assert recording_name(None, when) == "phototaxis-run-2026-12-01-0905.html"
+
+
+def test_strategy_tooltips_are_short_plain_words():
+    """Issue 24, item 8: at most two lines (about 200 characters) and no config names."""
+    from sandbox.model.config import STRATEGIES, param_names
+
+    for s in STRATEGIES:
+        assert 0 < len(s.tip) <= 200, s.name
+        assert s.label in s.tip, f"{s.name}: the tip names the panel's label"
+        assert not any(name in s.tip for name in param_names() if "_" in name), s.tip

@@ -47,9 +47,9 @@ class StrategiesFolder:
             gui.add_markdown("Changes reach the running simulation at the next controller update; no reset.")
             for s in STRATEGIES:
                 value = getattr(snap.config, s.name)
-                on = gui.add_checkbox(s.label, value > 0, hint=s.help)
+                on = gui.add_checkbox(s.label, value > 0, hint=s.tip or s.help)
                 amount = gui.add_slider(f"{s.label} amount", s.step, s.high, s.step,
-                                        float(value if value > 0 else s.on_value), hint=s.help)
+                                        float(value if value > 0 else s.on_value), hint=s.tip or s.help)
                 self.controls[s.name] = (on, amount)
                 on.on_update(lambda event, n=s.name: self._changed(n, event.client))
                 amount.on_update(lambda event, n=s.name: self._changed(n, event.client))
