@@ -112,8 +112,8 @@ class StrategiesFolder:
 
         def done(notes: list[str]) -> None:
             self._on_change(f"outline {outline}")
-            for note in notes:
-                notify(client, "About this goal", note[0].upper() + note[1:] + ".", "blue")
+            if notes:  # one notice for the action
+                notify(client, "Outline changed", ". ".join(n[0].upper() + n[1:] for n in notes) + ".", "blue")
 
         def refused(exc: BaseException) -> None:
             notify_error(client, "Outline not changed", str(exc))
