@@ -349,3 +349,50 @@ def test_charts_are_sent_only_when_new_and_thinned():
 def test_the_live_app_runs_without_a_deadline():
     r = Runner(SMALL, shape=None, playing=False)
     assert r.sim.controller.deadline is None
+
+
+def test_a_recording_is_named_after_what_runs_and_when():
+    from datetime import datetime
+    from types import SimpleNamespace
+
+    from sandbox.app.panel.recording import recording_name
+
+    when = datetime(2026, 12, 1, 9, 5)
+    case = SimpleNamespace(shape_name="star", strategies={"switch": 0.25, "flare": 0.0}, family="scaled")
+    assert recording_name(case, when) == "phototaxis-star-switch-2026-12-01-0905.html"
+    drawn = SimpleNamespace(shape_name="my L (v2).svg", strategies={"chase": 2.0}, family="offset")
+    assert recording_name(drawn, when) == "phototaxis-my-L-v2-chase-2026-12-01-0905.html"
+    assert recording_name(None, when) == "phototaxis-run-2026-12-01-0905.html"
+
+
+def test_strategy_tooltips_are_short_plain_words():
+    """Issue 24, item 8: at most two lines (about 200 characters) and no config names."""
+    from sandbox.model.config import STRATEGIES, param_names
+
+    for s in STRATEGIES:
+        assert 0 < len(s.tip) <= 200, s.name
+        assert s.label in s.tip, f"{s.name}: the tip names the panel's label"
+        assert not any(name in s.tip for name in param_names() if "_" in name), s.tip
+
+
+def test_classroom_waits_at_step_0_and_frames_the_construction_area():
+    """Issue 24, item 5: serve --classroom starts paused at step 0 and frames new pages on the
+    construction area; the View buttons frame one page's camera on either."""
+    from sandbox.app.panel.run import CONSTRUCTION, WHOLE_ARENA
+    from sandbox.app.scene import top_down_camera
+    from sandbox.app.server import App, free_port
+
+    app = App(SMALL, port=free_port(), fps=60, steps_per_frame=2, playing=False, whole_arena=False).start()
+    try:
+        frames_pass(app.runner, 10)
+        assert app.runner.latest.step == 0 and not app.runner.latest.playing
+        whole_height = top_down_camera(SMALL)[0][2]
+        assert app.server.initial_camera.position[2] < 0.5 * whole_height  # the 16 m area, not the 64 m arena
+        page = FakeClient()
+        app.panel.run.frame(page, WHOLE_ARENA)
+        assert page.camera.position[2] == pytest.approx(top_down_camera(SMALL, 1.0)[0][2])
+        app.panel.run.frame(page, CONSTRUCTION)
+        assert page.camera.position[2] == pytest.approx(top_down_camera(SMALL, 1.0, whole=False)[0][2])
+        assert page.camera.position[2] < 0.5 * whole_height
+    finally:
+        app.stop()

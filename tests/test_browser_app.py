@@ -10,6 +10,7 @@ makes the tests slower, not flaky. Only ``wait_until`` sleeps, between two looks
 from __future__ import annotations
 
 import io
+import re
 from pathlib import Path
 
 import numpy as np
@@ -514,6 +515,8 @@ def test_recording_downloads_a_standalone_page(app, browser, page, tmp_path):
     wait_until(lambda: app.frames_drawn > frames + 10, what="some frames")
     with page.expect_download(timeout=60_000) as info:
         click_button(page, "Stop and download")
+    # Named after what runs and when (the app's default world is the circle).
+    assert re.fullmatch(r"phototaxis-circle-\d{4}-\d\d-\d\d-\d{4}\.html", info.value.suggested_filename)
     path = tmp_path / "recording.html"
     info.value.save_as(path)
     html = path.read_text()

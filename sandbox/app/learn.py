@@ -21,9 +21,10 @@ from sandbox.shapes import shape_vertices
 INTRO = """\
 **Phototaxis.** Each robot has four photocells at the corners of its body
 (front-left, front-right, back-left, back-right). Every 50 steps it reads
-them and sets its motors once: forward speed *k_drive x (front pair - back
-pair)*, turn rate *k_turn x (front-left - front-right)*; it then coasts on
-that command until the next reading (or until it bumps into something). So
+them and sets its motors once: the brighter its front pair than its back
+pair, the faster it drives; the brighter its front-left than its
+front-right, the faster it turns left. It then coasts on that command until
+the next reading (or until it bumps into something). So
 it climbs toward brighter light, overshoots a little, and settles where the
 light is brightest. It cannot see other robots, boxes or where it is.
 
@@ -31,9 +32,10 @@ light is brightest. It cannot see other robots, boxes or where it is.
 living spend it. Colour shows charge: **green** more than half full, **amber**
 half or less, **red** empty. An empty robot stops until light reaches it again.
 
-*This is the authors' program (profile* authors-code*); the paper's text
-describes photocells on the body's axes and a motor that follows the
-command continuously: choose* paper-text *under Population and physics.*
+This is how the authors' program works (the profile called authors-code).
+The paper's text describes photocells on the body's axes and a motor that
+follows the command all the time: pick the profile paper-text under
+Population and physics to see it.
 """
 
 CYCLE = """\
@@ -42,15 +44,17 @@ of the goal shape (yellow cells; orange line). The outline shrinks toward the
 centre, the robots ride the bright band inward and bulldoze the boxes (white)
 into the goal (blue line; boxes inside turn **pink**). It holds at its
 smallest size, then grows back to the edge to spread the robots out, and the
-cycle repeats. The controller never looks at robots or boxes: it is open loop.
+cycle repeats. The paper's controller never looks at robots or boxes: it is open loop.
 The grey square is a wall that stops boxes but lets robots through.
 """
 
 STRATEGIES = """\
 **Strategies** (switch them in *Strategies*; they act at the next update):
 
-- **Flare** pushes each convex corner out, more for sharper corners, so
-  robots reach into corners instead of rounding them off.
+- **Flare** pushes the outline's corners out, more for sharper corners, so
+  robots reach into corners instead of rounding them off. As in the
+  authors' program, every corner is pushed out, a star's inner corners too
+  (the paper's text pushes only the outer, convex ones).
 - **Switch to circle** uses a circle for the outer part of the cycle, which
   spreads robots evenly instead of letting them bunch at far vertices.
 - **No corners** leaves the band lights nearest the corners dark, so robots

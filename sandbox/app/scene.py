@@ -78,7 +78,7 @@ def _geometry_key(cfg: Config, n: int, m: int) -> tuple:
             n, m)
 
 
-def configure_scene(server: Any, config: Config) -> None:
+def configure_scene(server: Any, config: Config, whole: bool = True) -> None:
     """z up, flat true colours (no shading lights, an even ambient light) and a
     top-down initial camera framing the arena. Also recorded into replays."""
     server.scene.set_up_direction("+z")
@@ -86,11 +86,13 @@ def configure_scene(server: Any, config: Config) -> None:
     server.scene.configure_default_lights(False)
     server.scene.configure_environment_map(None)
     server.scene.add_light_ambient("/ambient", intensity=3.14159)
-    position, look_at, fov = top_down_camera(config)
+    position, look_at, fov = top_down_camera(config, whole=whole)
     server.initial_camera.position = tuple(position)
     server.initial_camera.look_at = tuple(look_at)
     server.initial_camera.fov = fov
-    server.initial_camera.far = float(position[2] * 4)
+    # Far enough for the whole arena's framing even when a page starts on the construction area
+    # (the View buttons switch; a nearer far plane left the floor unseen from above the arena).
+    server.initial_camera.far = float(top_down_camera(config)[0][2] * 4)
 
 
 #: Texture size of the light grid (pixels per side, about): crisp cells with seams at any usual zoom.

@@ -44,10 +44,12 @@ class App:
                  fps: float = 30.0, steps_per_frame: int = 25, playing: bool = True, verbose: bool = False,
                  process: bool = True, keep_running: bool = False, idle_pause_seconds: float = IDLE_PAUSE_SECONDS,
                  controller: str | None = None, allow_programs: bool = False, access: Access | None = None,
-                 program_time_limit: float = DEFAULT_LIMIT):
+                 program_time_limit: float = DEFAULT_LIMIT, whole_arena: bool = True):
         if isinstance(shape, str) and shape == "from-config":
             shape = shape_vertices(config.shape)  # raises ShapeError before any server starts
         self.config = config
+        #: What a new page's camera frames: the whole arena, or (classroom) the construction area.
+        self.whole_arena = whole_arena
         #: Who may connect and what each page may do (sandbox.app.access); shared beyond this machine,
         #: control needs the token in :attr:`url`.
         self.access = access or Access.for_server(host, allow_programs=allow_programs)
@@ -93,7 +95,7 @@ class App:
         # Dock the panel beside the canvas so the arena is never hidden behind it.
         server.gui.main_panel.dock_right()
         server.gui.main_panel.set_width(420)
-        configure_scene(server, self.config)
+        configure_scene(server, self.config, whole=self.whole_arena)
 
     def _on_frame(self, snap: Snapshot) -> None:
         with self._frame_lock:
@@ -121,7 +123,7 @@ class App:
             while time.monotonic() < deadline:
                 aspect = client.camera.aspect
                 if aspect and aspect != fitted:
-                    frame_arena(client, self.runner.latest.world_config)
+                    frame_arena(client, self.runner.latest.world_config, whole=self.whole_arena)
                     fitted = aspect
                 time.sleep(0.25)
 
@@ -193,6 +195,10 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                         "0.0.0.0 shares it on the network)")
     p.add_argument("--port", type=int, default=8080, help="port to listen on (default 8080; the next free one if taken)")
     p.add_argument("--paused", action="store_true", help="start paused")
+    p.add_argument("--classroom", action="store_true",
+                   help="for a class: wait at step 0 until someone presses Play, and frame each new page on the "
+                        "construction area, where the boxes are built (the Run folder's View buttons switch to "
+                        "the whole arena)")
     p.add_argument("--steps-per-frame", type=int, default=25, metavar="N",
                    help="speed: world steps between two frames (default 25: 750 steps/s, 25x real time; "
                         "100: as fast as the machine can)")
@@ -242,7 +248,7 @@ def serve_command(args: argparse.Namespace) -> int:
         raise UserError(str(exc)) from None
     try:
         app = App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
-                  playing=not args.paused, keep_running=args.keep_running, controller=controller_from_args(args)[0],
+                  playing=not (args.paused or args.classroom), whole_arena=not args.classroom, keep_running=args.keep_running, controller=controller_from_args(args)[0],
                   access=access, program_time_limit=program_time_limit(args))
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None

@@ -70,24 +70,34 @@ class Strategy:
     high: float  # the largest amount allowed (0 is off)
     step: float  # the panel slider's step, and its smallest amount
     help: str
+    #: The panel's tooltip: at most two short lines in plain words (help is the full reference).
+    tip: str = ""
 
 
 STRATEGIES = (
     Strategy("flare", "Flare", 1.75, 10.0, 0.05,
              "flare amount f (0 = off; 1.75 when switched on): corners pushed out by max(1, 90 f / angle), "
-             "see flare_mode"),
+             "see flare_mode",
+             tip="Pushes the outline's corners out, sharp ones most, so robots reach into corners. "
+                 "Flare amount: how far (1.75 when switched on)."),
     Strategy("switch", "Switch to circle", 0.25, 1.0, 0.05,
-             "switch to a circle (0 = off; 0.25 when on): see switch_mode for what the amount means"),
+             "switch to a circle (0 = off; 0.25 when on): see switch_mode for what the amount means",
+             tip="Grows back as a circle, so robots spread evenly instead of bunching at far points. "
+                 "Switch to circle amount: how soon (0.25 when switched on)."),
     Strategy("no_corners", "No corners", 0.5, 0.95, 0.05,
              "fraction of band lights nearest convex corners that stay off (0 = off; 0.5 when on; at most "
-             "0.95: at 1 the whole band would be dark)"),
+             "0.95: at 1 the whole band would be dark)",
+             tip="Leaves the lights nearest the corners dark, so robots do not pile up in sharp points. "
+                 "No corners amount: the share left dark."),
     Strategy("chase", "Chase stray boxes", 2.0, 10.0, 0.25,
              "closed loop (senses the boxes, as an overhead camera would): the outline is the goal grown by "
              "the same distance all round; it dilates only until it is this many metres beyond the farthest "
              "stray box; near the goal it presses in where boxes spill out and goes dark where the goal lacks "
              "boxes, and the smallest outline is held while boxes keep arriving; a run of fixed length ends in a "
              "hold, its dilations turning back in time and its last cycle timed to end just before its last "
-             "step (0 = off, open loop; 2.0 when on)"),
+             "step (0 = off, open loop; 2.0 when on)",
+             tip="Closed loop: watches the boxes and turns back just past the farthest stray one. "
+                 "Chase stray boxes amount: how far past it, in metres."),
 )
 STRATEGY_NAMES = tuple(s.name for s in STRATEGIES)
 #: The value a strategy takes when it is switched on without an amount.

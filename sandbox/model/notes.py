@@ -62,8 +62,10 @@ def goal_fit_notes(config: Config, sizing: Sizing) -> list[str]:
     box = outlines.overreach(config, sizing.polygon(sizing.largest))
     if box is None:
         return []
-    return [f"the goal's largest outline spans {outlines.describe_box(box)}, past the "
-            f"{config.arena_size:g} m arena's walls: the lights there do not exist"]
+    x0, x1, y0, y1 = box
+    beyond = max(-x0, -y0, x1 - config.arena_size, y1 - config.arena_size)
+    return [f"at its largest the band reaches {beyond:.1f} m past the {config.arena_size:g} m arena's walls, "
+            f"where there are no lights: it is cut short there"]
 
 
 def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | None, chase: float = 0.0,

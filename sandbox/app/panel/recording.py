@@ -3,15 +3,29 @@ that replays without a server."""
 
 from __future__ import annotations
 
+import datetime as _dt
+import re
 import threading
 import time
 from typing import Any
 
 import viser
 
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.snapshot import Snapshot, running_case
 
 MAX_RECORD_SECONDS = 120.0
+
+
+def recording_name(snap: Snapshot | None, when: _dt.datetime) -> str:
+    """The downloaded file's name: what runs (the paper's case, or the goal's name and its
+    strategies) and when, so that a class's recordings do not all overwrite one file."""
+    if snap is None:
+        what = "run"
+    else:
+        what = running_case(snap.shape_name, snap.strategies, snap.family) or "-".join(
+            [snap.shape_name.rsplit(".", 1)[0], *sorted(k for k, v in snap.strategies.items() if v > 0)])
+    what = re.sub(r"[^A-Za-z0-9_]+", "-", what).strip("-")[:60] or "run"
+    return f"phototaxis-{what}-{when:%Y-%m-%d-%H%M}.html"
 
 
 class RecordFolder:
@@ -21,6 +35,7 @@ class RecordFolder:
         self._finished_html: str | None = None
         self._lock = threading.Lock()
         self._started = self._last_time = 0.0
+        self._snap: Snapshot | None = None
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -36,10 +51,11 @@ class RecordFolder:
                 self.start()
                 return
             html = self.stop()
-            event.client.send_file_download("phototaxis-recording.html", html.encode("utf-8"),
+            event.client.send_file_download(recording_name(self._snap, _dt.datetime.now()), html.encode("utf-8"),
                                             save_immediately=True)
 
     def update(self, snap: Snapshot) -> None:
+        self._snap = snap
         if self.recorder is not None:
             self.status.content = f"Recording: {time.perf_counter() - self._started:.0f} s"
 

@@ -9,7 +9,13 @@ import viser
 
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.runner import FASTEST
+from sandbox.app.scene import frame_arena
 from sandbox.app.snapshot import Snapshot
+
+CONSTRUCTION = "Construction area"
+WHOLE_ARENA = "Whole arena"
+#: The View buttons: each frames the clicking page's own camera.
+VIEWS = (CONSTRUCTION, WHOLE_ARENA)
 
 
 class RunFolder:
@@ -37,6 +43,9 @@ class RunFolder:
             self.show_field = gui.add_checkbox("Show sensed light", False,
                                                hint="Show the luminosity field the robots sense, as a heat map, "
                                                     "instead of the light grid")
+            self.view = gui.add_button_group("View", VIEWS,
+                                             hint="Frame your own view on where the boxes are built, or on the "
+                                                  "whole arena (other pages keep theirs)")
             self.status = gui.add_markdown(self._status_text(snap))
             self.cancel = gui.add_button("Cancel building", icon=viser.Icon.X, visible=False,
                                          hint="Stop building the new world; the current one goes on")
@@ -69,10 +78,19 @@ class RunFolder:
         def _(event: viser.GuiEvent) -> None:
             runner.set_speed(int(self.speed.value))
 
+        @self.view.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self.frame(event.client, self.view.value)
+
         @self.show_field.on_update
         def _(event: viser.GuiEvent) -> None:
             runner.want_field = bool(self.show_field.value)  # the next snapshots carry the field
             self._show_field(self.show_field.value)
+
+    def frame(self, client: Any, view: str) -> None:
+        """Frame one page's camera on the construction area or the whole arena (View buttons)."""
+        if client is not None:
+            frame_arena(client, self.runner.latest.world_config, whole=view == WHOLE_ARENA)
 
     def _reset(self, seed: int | None, client: Any) -> None:
         self.reset(client, seed)

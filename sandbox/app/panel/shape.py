@@ -122,11 +122,12 @@ class ShapeFolder:
             if quiet:
                 return
             self._on_change(f"shape {name}")
-            if announce:
-                size = "" if vertices is None else f" ({len(vertices)} vertices)"
-                notify(client, "Goal changed", f"Using {name}{size}.", "green")
-            for note in notes:
-                notify(client, "About this goal", note[0].upper() + note[1:] + ".", "blue")
+            # One notice for the action: what is used, then what to know about it.
+            said = [f"Using {name}" + ("" if vertices is None else f" ({len(vertices)} vertices)")] if announce else []
+            said += [note[0].upper() + note[1:] for note in notes]
+            if said:
+                notify(client, "Goal changed" if announce else "About this goal", ". ".join(said) + ".",
+                       "green" if announce else "blue")
 
         def refused(exc: BaseException) -> None:
             notify_error(client, "Shape not used", str(exc))

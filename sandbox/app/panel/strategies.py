@@ -47,9 +47,9 @@ class StrategiesFolder:
             gui.add_markdown("Changes reach the running simulation at the next controller update; no reset.")
             for s in STRATEGIES:
                 value = getattr(snap.config, s.name)
-                on = gui.add_checkbox(s.label, value > 0, hint=s.help)
+                on = gui.add_checkbox(s.label, value > 0, hint=s.tip or s.help)
                 amount = gui.add_slider(f"{s.label} amount", s.step, s.high, s.step,
-                                        float(value if value > 0 else s.on_value), hint=s.help)
+                                        float(value if value > 0 else s.on_value), hint=s.tip or s.help)
                 self.controls[s.name] = (on, amount)
                 on.on_update(lambda event, n=s.name: self._changed(n, event.client))
                 amount.on_update(lambda event, n=s.name: self._changed(n, event.client))
@@ -112,8 +112,8 @@ class StrategiesFolder:
 
         def done(notes: list[str]) -> None:
             self._on_change(f"outline {outline}")
-            for note in notes:
-                notify(client, "About this goal", note[0].upper() + note[1:] + ".", "blue")
+            if notes:  # one notice for the action
+                notify(client, "Outline changed", ". ".join(n[0].upper() + n[1:] for n in notes) + ".", "blue")
 
         def refused(exc: BaseException) -> None:
             notify_error(client, "Outline not changed", str(exc))
