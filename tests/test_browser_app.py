@@ -515,8 +515,10 @@ def test_recording_downloads_a_standalone_page(app, browser, page, tmp_path):
     wait_until(lambda: app.frames_drawn > frames + 10, what="some frames")
     with page.expect_download(timeout=60_000) as info:
         click_button(page, "Stop and download")
-    # Named after what runs and when (the app's default world is the circle).
-    assert re.fullmatch(r"phototaxis-circle-\d{4}-\d\d-\d\d-\d{4}\.html", info.value.suggested_filename)
+    # Named after what runs (the goal the earlier tests left) and when.
+    name = info.value.suggested_filename
+    assert re.fullmatch(r"phototaxis-[A-Za-z0-9_-]+-\d{4}-\d\d-\d\d-\d{4}\.html", name), name
+    assert app.runner.latest.shape_name.rsplit(".", 1)[0].replace(" ", "-") in name, name
     path = tmp_path / "recording.html"
     info.value.save_as(path)
     html = path.read_text()
