@@ -37,6 +37,11 @@ TITLE = "Phototaxis sandbox"
 IDLE_PAUSE_SECONDS = 60.0
 
 
+#: For this long after a page connects, each change of its window's shape fits its camera to the
+#: arena again (s): the page lays itself out, slowly on a loaded machine.
+FIT_SECONDS = 30.0
+
+
 class App:
     """A live simulation served to browsers. ``start()`` it, ``stop()`` it."""
 
@@ -116,13 +121,16 @@ class App:
         if self.auto_paused:
             self.auto_paused = False
             self.runner.set_playing(True)
-        # Fit the arena to this viewer's window once it has told its shape (its first
-        # camera reports come while the page lays itself out).
+        # Fit the arena to this viewer's window as it tells its shape: its camera reports come while the
+        # page lays itself out, and on a loaded machine the last one many seconds later. A page that
+        # follows a robot has its camera moved by the inspector instead.
         def fit() -> None:
-            fitted, deadline = None, time.monotonic() + 4.0
-            while time.monotonic() < deadline:
+            fitted, deadline = None, time.monotonic() + FIT_SECONDS
+            while time.monotonic() < deadline and client.client_id in self.server.get_clients():
                 aspect = client.camera.aspect
-                if aspect and aspect != fitted:
+                panel = getattr(self, "panel", None)  # a page may connect while the panel is built
+                following = panel is not None and client.client_id in panel.inspector.followers
+                if aspect and aspect != fitted and not following:
                     frame_arena(client, self.runner.latest.world_config, whole=self.whole_arena)
                     fitted = aspect
                 time.sleep(0.25)
