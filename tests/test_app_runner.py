@@ -128,6 +128,7 @@ def test_floor_point():
 # ------------------------------------------------------- the app, no browser
 class FakeClient:
     def __init__(self):
+        self.client_id = -1  # never one of the server's: what the app starts for a page ends at once
         self.notes = []
         self.camera = type("Camera", (), {"update_timestamp": 1.0, "aspect": 1.0, "position": None,
                                           "look_at": None, "fov": None})()
