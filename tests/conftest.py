@@ -22,3 +22,11 @@ def pytest_xdist_auto_num_workers(config) -> int:
 
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     return max(1, min(4, cores))
+
+
+def pytest_collection_modifyitems(config, items) -> None:
+    """Browser tests share one page per module and build on what the earlier ones left: each module
+    runs in one worker, in order (--dist loadgroup). Every other test goes wherever a worker is free."""
+    for item in items:
+        if item.get_closest_marker("browser") is not None:
+            item.add_marker(pytest.mark.xdist_group(item.module.__name__))
