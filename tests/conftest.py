@@ -30,3 +30,15 @@ def pytest_collection_modifyitems(config, items) -> None:
     for item in items:
         if item.get_closest_marker("browser") is not None:
             item.add_marker(pytest.mark.xdist_group(item.module.__name__))
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """One headless Chromium for a browser test module (see tests/browsing.py)."""
+    from sandbox.app.live_bench import CHROMIUM_ARGS
+    from tests.browsing import CHROMIUM, playwright_api
+
+    with playwright_api.sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield browser
+        browser.close()

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import json
-import time
 
 
 from sandbox.experiments.advise import Candidate, Ranked, candidates, rank, table
 from sandbox.model.config import Config
 from sandbox.shapes import shape_vertices
+from tests.waiting import wait_until
 
 TINY = Config(robots=20, boxes=40, update_every=10, hold_steps=5)
 
@@ -60,9 +60,7 @@ def test_the_pages_advice_runs_beside_the_simulation_and_its_best_is_used():
         folder = AdviceFolder(_Gui(), runner, use=lambda o, s, client: used.append((o, s)), seeds=1, steps=300)
         folder.build(runner.latest)
         folder.begin(client=None)
-        deadline = time.time() + 120
-        while folder.running and time.time() < deadline:
-            time.sleep(0.05)
+        wait_until(lambda: not folder.running, timeout=120, what="the advice's trials")
         assert not folder.running and len(folder.results) == len(candidates(TINY, shape_vertices("l-shape")))
         assert folder.status.content.startswith("| rank |") and not folder.use_best.disabled
         folder.apply_best(client=None)

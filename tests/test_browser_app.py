@@ -16,13 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sandbox.app.live_bench import CHROMIUM_ARGS, chromium_path
+from tests.browsing import BROWSER_MARKS
 from tests.waiting import frames_pass, paused_step, wait_until
 
-CHROMIUM = chromium_path()
-pytestmark = [pytest.mark.browser,
-              pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (apt-get install chromium)")]
-playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwright (pip install -e '.[test]')")
+pytestmark = BROWSER_MARKS
 
 SQUARE = b"0 0\n4 0\n4 4\n0 4\n"
 BOWTIE = b"0 0\n4 4\n4 0\n0 4\n"  # crosses itself
@@ -59,14 +56,6 @@ def app():
     app.start()
     yield app
     app.stop()
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with playwright_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        yield browser
-        browser.close()
 
 
 @pytest.fixture(scope="module")

@@ -10,25 +10,13 @@ import threading
 import time
 
 import numpy as np
-import pytest
 
 from sandbox.app.hexagons import ANGLE_TOLERANCE
-from sandbox.app.live_bench import CHROMIUM_ARGS, chromium_path
 from tests import scene_probe
+from tests.browsing import BROWSER_MARKS
 from tests.waiting import wait_until
 
-CHROMIUM = chromium_path()
-pytestmark = [pytest.mark.browser,
-              pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (apt-get install chromium)")]
-playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwright (pip install -e '.[test]')")
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with playwright_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        yield browser
-        browser.close()
+pytestmark = BROWSER_MARKS
 
 
 def open_page(browser, app, size=(1280, 800)):

@@ -16,13 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sandbox.app.live_bench import CHROMIUM_ARGS, chromium_path
+from tests.browsing import BROWSER_MARKS
 from tests.waiting import wait_until
 
-CHROMIUM = chromium_path()
-pytestmark = [pytest.mark.browser,
-              pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (apt-get install chromium)")]
-playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwright (pip install -e '.[test]')")
+pytestmark = BROWSER_MARKS
 
 SHOTS = os.environ.get("PHOTOTAXIS_SHOTS")
 #: Each drawing, from the first action to Close and use, should take a designer less than this (s).
@@ -47,14 +44,6 @@ def app():
     app.start()
     yield app
     app.stop()
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with playwright_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        yield browser
-        browser.close()
 
 
 def open_page(app, browser, width: int, height: int):
@@ -140,7 +129,8 @@ def zoom_in(page, client, height: float) -> None:
             last[0] = None
         return resting and z <= height
 
-    wait_until(lambda: (time.sleep(0.25), low_and_resting())[1], 60, what="the camera zoomed in and at rest")
+    # Polled every 0.25 s: a camera that has not moved in that time is at rest.
+    wait_until(low_and_resting, 60, what="the camera zoomed in and at rest", poll=0.25)
 
 
 def to_screen(page, x: float, y: float) -> tuple[float, float]:

@@ -9,13 +9,10 @@ import threading
 
 import pytest
 
-from sandbox.app.live_bench import CHROMIUM_ARGS, chromium_path
+from tests.browsing import BROWSER_MARKS
 from tests.waiting import wait_until
 
-CHROMIUM = chromium_path()
-pytestmark = [pytest.mark.browser,
-              pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (apt-get install chromium)")]
-playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwright (pip install -e '.[test]')")
+pytestmark = BROWSER_MARKS
 
 
 @pytest.fixture(scope="module")
@@ -27,14 +24,6 @@ def app():
     app.start()
     yield app
     app.stop()
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with playwright_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        yield browser
-        browser.close()
 
 
 @pytest.fixture

@@ -22,6 +22,7 @@ from sandbox.experiments.stats import PAPER_PAIRS, default_pairs, describe
 from sandbox.experiments.storage import ResultStore
 from sandbox.experiments.trials import Trial
 from sandbox.model.config import Config
+from tests.waiting import wait_until
 
 SMALL = ["--robots", "40", "--boxes", "80", "--steps", "2500"]
 CASES = "square,square-flare"  # a pair the paper compares
@@ -290,15 +291,13 @@ def test_sigterm_keeps_finished_trials_and_resume_runs_the_rest(tmp_path, capsys
     import signal
     import subprocess
     import sys
-    import time
 
     out = tmp_path / "run"
     argv = ["sweep", "--cases", "square", "--trials", "3", "--workers", "1", "--no-progress", "--no-report",
             "--robots", "40", "--boxes", "80", "--steps", "4000", "--out", str(out)]
     proc = subprocess.Popen([sys.executable, "-m", "sandbox", *argv], stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 120
-    while not list(out.glob("trials/square/seed-*.json")) and time.monotonic() < deadline and proc.poll() is None:
-        time.sleep(0.05)
+    wait_until(lambda: list(out.glob("trials/square/seed-*.json")) or proc.poll() is not None, timeout=120,
+               what="a first finished trial")
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
