@@ -35,8 +35,6 @@ from sandbox.shapes import shape_vertices
 TITLE = "Phototaxis sandbox"
 #: With no browser connected for this long, the app stops stepping (unless --keep-running).
 IDLE_PAUSE_SECONDS = 60.0
-
-
 #: For this long after a page connects, each change of its window's shape fits its camera to the
 #: arena again (s): the page lays itself out, slowly on a loaded machine.
 FIT_SECONDS = 30.0
@@ -256,8 +254,9 @@ def serve_command(args: argparse.Namespace) -> int:
         raise UserError(str(exc)) from None
     try:
         app = App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
-                  playing=not (args.paused or args.classroom), whole_arena=not args.classroom, keep_running=args.keep_running, controller=controller_from_args(args)[0],
-                  access=access, program_time_limit=program_time_limit(args))
+                  playing=not (args.paused or args.classroom), whole_arena=not args.classroom,
+                  keep_running=args.keep_running, controller=controller_from_args(args)[0], access=access,
+                  program_time_limit=program_time_limit(args))
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
 
