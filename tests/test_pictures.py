@@ -52,3 +52,17 @@ def test_switch_picture_shows_a_circle_where_the_star_was():
     assert r_star.std() > 0.1 * r_star.mean()
     assert not np.array_equal(plain, switched)
     assert learn.strategies_picture().shape[0] > 3 * 200  # three rows of two
+
+
+def test_box_mesh_colours_are_what_the_page_needs_to_show_the_box_colours():
+    """The hexagons are lit meshes: their colours are the bounded least-squares solutions of
+    shown_on_mesh(x) = box colour, solved here again (the app does not import scipy.optimize)."""
+    from scipy.optimize import least_squares
+
+    for shown, given in ((pal.BOX_IN, pal.BOX_IN_MESH), (pal.BOX_OUT, pal.BOX_OUT_MESH)):
+        target = np.asarray(shown, dtype=float)
+        fit = least_squares(lambda x: pal.shown_on_mesh(x) - target, np.clip(target, 1, 254), bounds=(0.0, 255.0))
+        assert tuple(int(v) for v in np.round(fit.x)) == given
+    # Measured in the page: the mesh colour (255, 92, 168) shows as (231, 181, 209).
+    assert np.allclose(pal.shown_on_mesh((255, 92, 168)), (231, 181, 209), atol=1.5)
+    assert pal.box_mesh_colours(np.array([True, False])).tolist() == [list(pal.BOX_IN_MESH), list(pal.BOX_OUT_MESH)]

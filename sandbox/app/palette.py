@@ -6,7 +6,6 @@ Pure numpy: nothing here imports viser or touches a running simulation.
 
 from __future__ import annotations
 
-import functools
 
 import numpy as np
 
@@ -89,19 +88,17 @@ def shown_on_mesh(rgb: tuple | np.ndarray) -> np.ndarray:
     return 255.0 * _srgb(_ACES_OUT @ v)
 
 
-@functools.cache
-def mesh_colour(rgb: tuple) -> tuple[int, int, int]:
-    """The colour to give a mesh so the page shows ``rgb`` (or the nearest it can)."""
-    from scipy.optimize import least_squares
-
-    target = np.asarray(rgb, dtype=float)
-    fit = least_squares(lambda x: shown_on_mesh(x) - target, np.clip(target, 1, 254), bounds=(0.0, 255.0))
-    return tuple(int(v) for v in np.round(fit.x))
+#: The colours to give the page's lit hexagon meshes so that they show BOX_IN and BOX_OUT (or the
+#: nearest the page can show): the bounded least-squares solutions of shown_on_mesh(x) = colour, solved
+#: once (tests/test_pictures.py solves them again) rather than at every start: scipy.optimize alone
+#: takes 0.9 s to import.
+BOX_IN_MESH = (255, 17, 80)
+BOX_OUT_MESH = (255, 255, 255)
 
 
 def box_mesh_colours(in_goal: np.ndarray) -> np.ndarray:
-    """(m, 3) uint8: :func:`box_colours` for the page's hexagons (lit meshes: see :func:`mesh_colour`)."""
-    inside, outside = np.uint8(mesh_colour(BOX_IN)), np.uint8(mesh_colour(BOX_OUT))
+    """(m, 3) uint8: :func:`box_colours` for the page's hexagons (lit meshes: see :data:`BOX_IN_MESH`)."""
+    inside, outside = np.uint8(BOX_IN_MESH), np.uint8(BOX_OUT_MESH)
     return np.where(np.asarray(in_goal, dtype=bool)[:, None], inside, outside).astype(np.uint8)
 
 

@@ -62,7 +62,7 @@ class ProcessRunner(FramePublisher):
 
     def __init__(self, config: Config, *, shape: Any = "from-config", seed: int | None = None,
                  fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, chart_every: int = 100,
-                 program_time_limit: float = watchdog.DEFAULT_LIMIT):
+                 program_time_limit: float = watchdog.DEFAULT_LIMIT, wait: bool = True):
         self.fps = float(fps)
         self.steps_per_frame = int(steps_per_frame)
         self.playing = bool(playing)
@@ -90,17 +90,32 @@ class ProcessRunner(FramePublisher):
         self._latest: Snapshot | None = None
         self._latest_ready = threading.Condition()
         self._stop = threading.Event()
+        self._ready_lock = threading.Lock()
         self._started = False
         self._context = multiprocessing.get_context("spawn")  # fresh interpreter, same on every OS
         #: The goal as last given (a name, or vertices as drawn): a restarted child gets it back unchanged,
         #: since the program's largest outline depends on the size a shape was drawn at.
         self._shape = shape
-        self._launch(config, shape, seed)
+        self._spawn(config, shape, seed)
+        if wait:
+            self.ready()
+
+    def ready(self) -> None:
+        """Wait for the child's first frame. Built with ``wait=False``, a runner starts its child and
+        returns at once, so that the caller can build other things while the child starts (it loads
+        numba's compiled kernels and builds the world: about a second); call this before using it."""
+        with self._ready_lock:
+            if self._awaiting_first_frame:
+                self._await_first_frame()
 
     # ------------------------------------------------------------ process
     def _launch(self, config: Config, shape: Any, seed: int | None) -> None:
         """Start a child with these settings and wait for its first frame. A child never gets a
         light program back: whatever ran before a crash may have caused it."""
+        self._spawn(config, shape, seed)
+        self._await_first_frame()
+
+    def _spawn(self, config: Config, shape: Any, seed: int | None) -> None:
         self._commands = self._context.Queue()
         receive, send = self._context.Pipe(duplex=False)
         settings = dict(config=config, shape=shape, seed=seed, fps=self.fps, steps_per_frame=self.steps_per_frame,
@@ -113,6 +128,10 @@ class ProcessRunner(FramePublisher):
         self._receive = receive
         with self._series_lock:
             self._series, self._series_world = [], None
+        self._awaiting_first_frame = True
+
+    def _await_first_frame(self) -> None:
+        self._awaiting_first_frame = False
         message = self._read(timeout=START_TIMEOUT)
         while message is not None and message[0] != "frame":  # its last words, say
             self._take_guarded(message)
@@ -242,6 +261,7 @@ class ProcessRunner(FramePublisher):
 
     # ------------------------------------------------------------ control
     def start(self) -> "ProcessRunner":
+        self.ready()
         self._thread = threading.Thread(target=self._receive_loop, name="phototaxis-receiver", daemon=True)
         self._thread.start()
         self._started = True
@@ -360,6 +380,8 @@ class ProcessRunner(FramePublisher):
     # -------------------------------------------------------------- state
     @property
     def latest(self) -> Snapshot:
+        if self._latest is None:
+            self.ready()  # built with wait=False and not yet asked
         assert self._latest is not None
         return self._latest
 

@@ -21,6 +21,7 @@ from typing import Any
 
 from sandbox.app.access import WATCH, Access, is_loopback_host, is_shared
 from sandbox.app.gate import start_server
+from sandbox.app.icons import read_icons_once
 from sandbox.app.panel import Panel
 from sandbox.app.process import ProcessRunner
 from sandbox.app.runner import Runner, wait_for
@@ -57,14 +58,16 @@ class App:
         #: control needs the token in :attr:`url`.
         self.access = access or Access.for_server(host, allow_programs=allow_programs)
         kind = ProcessRunner if process else Runner
+        # The simulation process starts (about a second) while the server and the panel are built.
         self.runner = kind(config, shape=shape, fps=fps, steps_per_frame=steps_per_frame, playing=playing,
-                           program_time_limit=program_time_limit)
+                           program_time_limit=program_time_limit, **({"wait": False} if process else {}))
         try:
             self.server, self.gate = start_server(self.access, host=host, port=port, label=TITLE, verbose=verbose)
         except BaseException:
             self.runner.stop()  # do not leave the simulation process behind
             raise
         try:
+            read_icons_once()
             self._configure_page()
             self.view = SceneView(self.server.scene, self.runner.latest)
             # Loading a program runs a Python file on this machine: the page offers it only where a
