@@ -1,17 +1,46 @@
-"""The command line as a user runs it: exit codes, one-line errors, JSON and traces."""
+"""The command line as a user runs it: exit codes, one-line errors, JSON and traces.
 
+The commands run in this process (``sandbox.commands.main``, as ``python -m sandbox``
+calls it), so that each one does not pay a fresh interpreter's second of imports;
+the last test runs the real ``python -m sandbox`` and ``phototaxis`` in processes
+of their own.
+"""
+
+import contextlib
 import csv
+import io
 import json
+import os
+import shutil
 import subprocess
 import sys
+from dataclasses import dataclass
+from pathlib import Path
 
 import pytest
 
 SMALL = ["--robots", "10", "--boxes", "20", "--steps", "300", "--metrics-every", "100", "--no-progress"]
 
 
-def phototaxis(*args: str, cwd=None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "sandbox", *args], capture_output=True, text=True, timeout=120, cwd=cwd)
+@dataclass
+class Finished:
+    """What a command left: as subprocess.CompletedProcess has it."""
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def phototaxis(*args: str) -> Finished:
+    """``phototaxis ARGS`` in this process: its exit code and what it printed."""
+    from sandbox.commands import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(list(args))
+        except SystemExit as exc:  # argparse's usage errors, as the interpreter would end
+            code = exc.code if isinstance(exc.code, int) else 1
+    return Finished(code, out.getvalue(), err.getvalue())
 
 
 def test_run_json_has_the_promised_keys(tmp_path):
@@ -96,6 +125,18 @@ def test_help_lists_commands():
     assert out.returncode == 0
     for command in ("run", "bench", "serve", "sweep", "report", "record"):
         assert command in out.stdout
+
+
+def test_the_installed_commands_run_in_their_own_processes():
+    """``python -m sandbox`` and the ``phototaxis`` script: exit codes and streams as a shell sees them."""
+    module = [sys.executable, "-m", "sandbox"]
+    script = shutil.which("phototaxis", path=str(Path(sys.executable).parent) + os.pathsep + os.environ["PATH"])
+    for command in filter(None, [module, script and [script]]):
+        done = subprocess.run([*command, "run", *SMALL, "--json"], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        assert json.loads(done.stdout)["steps"] == 300
+    bad = subprocess.run([*module, "run", *SMALL, "--robots", "many"], capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "whole number" in bad.stderr and "Traceback" not in bad.stderr
 
 
 @pytest.mark.parametrize("name, text", [("deep.json", "[" * 100_000 + "]" * 100_000),
