@@ -86,6 +86,10 @@ def test_darken_near():
     centres = np.array([[0.0, 0.0], [0.7, 0.0], [0.9, 0.0]])
     on = sculpt.darken_near(np.ones(3, dtype=bool), centres, np.array([[0.0, 0.0]]), 0.8)
     assert on.tolist() == [False, False, True]
+    # Lights already off stay off; the lit ones far from every point stay lit.
+    on = sculpt.darken_near(np.array([True, False, False]), centres, np.array([[0.9, 0.0]]), 0.5)
+    assert on.tolist() == [True, False, False]
+    assert sculpt.darken_near(np.zeros(3, dtype=bool), centres, np.array([[5.0, 0.0]]), 0.5).tolist() == [False] * 3
 
 
 def _hold_steps(hold: Hold, arrivals, out_of_reach) -> int:
@@ -368,3 +372,18 @@ def test_with_chase_no_corners_darkens_only_while_dilating():
     c.phase = "dilating"
     c._redraw()
     assert int(c.intensities.sum()) == lit - math.ceil(lit / 2)
+
+
+def test_a_held_band_is_computed_once_and_gives_what_a_fresh_one_gives():
+    boxes = np.array([[2.2, 0.0], [2.2, 0.1], [0.0, 0.0]])
+    in_goal = np.array([False, False, True])
+    sculpt._BANDS.clear()
+    first = sculpt.sculpt(SQUARE, 0.5, boxes, in_goal, BOX_AREA)
+    assert len(sculpt._BANDS) == 1
+    first.outline[:] = 0.0  # the caller's arrays are its own
+    again = sculpt.sculpt(SQUARE, 0.5, boxes, in_goal, BOX_AREA)
+    assert len(sculpt._BANDS) == 1
+    sculpt._BANDS.clear()
+    fresh = sculpt.sculpt(SQUARE, 0.5, boxes, in_goal, BOX_AREA)
+    assert np.array_equal(again.outline, fresh.outline) and np.array_equal(again.dark, fresh.dark)
+    assert np.abs(fresh.outline).max() > 0

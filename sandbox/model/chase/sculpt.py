@@ -3,6 +3,8 @@ out and dark where the goal lacks them (see :mod:`sandbox.model.chase`)."""
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -72,30 +74,59 @@ def sculpt(goal: np.ndarray, distance: float, boxes: np.ndarray, in_goal: np.nda
 
     ``goal`` is the goal polygon, ``boxes`` the box centres and ``in_goal``
     which of them lie in it. Beyond ``tuning.start`` the plain offset."""
-    band = offset_outline(goal, distance)
     if distance > tuning.start or not len(boxes):
-        return Sculpted(band, np.empty((0, 2)))
-    band = densify(band, tuning.spacing)
-    edge = nearest_on_outline(band, goal)
-    away = band - edge
-    gap = np.hypot(*away.T)
-    outward = away / np.maximum(gap, 1e-12)[:, None]
+        return Sculpted(offset_outline(goal, distance), np.empty((0, 2)))
+    band, edge, gap, outward, full = _band_near_goal(goal, distance, box_area, tuning)
     near = np.hypot(*(boxes[None, :, :] - edge[:, None, :]).transpose(2, 0, 1)) < tuning.near
     spilled = (near & ~in_goal[None, :]).sum(axis=1)
     held = (near & in_goal[None, :]).sum(axis=1)
-    full = full_counts(goal, edge, tuning.near, box_area, tuning.packing)
     missing = full - held
     lacking = (spilled == 0) & ((missing >= tuning.lack) | (missing >= tuning.lack_share * full))
     gap = np.where(spilled >= tuning.spill, np.maximum(gap - tuning.press, tuning.closest), gap)
     return Sculpted(edge + gap[:, None] * outward, band[lacking])
 
 
+#: The last few bands near the goal (see :func:`_band_near_goal`), newest last.
+_BANDS: OrderedDict = OrderedDict()
+_BANDS_KEPT = 8
+_BANDS_LOCK = threading.Lock()  # simulations in threads of one process share it
+
+
+def _band_near_goal(goal: np.ndarray, distance: float, box_area: float, tuning: Sculpting) -> tuple:
+    """The geometry of the band at ``distance`` from the goal that the boxes do not change: its points,
+    their nearest points on the goal's edge, the gap and outward direction between them, and the boxes
+    a full pile holds there. A hold redraws the same band every update: it is computed once."""
+    key = (goal.tobytes(), goal.shape, distance, box_area, tuning)
+    with _BANDS_LOCK:
+        if key in _BANDS:
+            _BANDS.move_to_end(key)
+            return _BANDS[key]
+    band = densify(offset_outline(goal, distance), tuning.spacing)
+    edge = nearest_on_outline(band, goal)
+    away = band - edge
+    gap = np.hypot(*away.T)
+    outward = away / np.maximum(gap, 1e-12)[:, None]
+    full = full_counts(goal, edge, tuning.near, box_area, tuning.packing)
+    for array in (band, edge, gap, outward, full):
+        array.flags.writeable = False  # shared by later calls
+    found = (band, edge, gap, outward, full)
+    with _BANDS_LOCK:
+        _BANDS[key] = found
+        while len(_BANDS) > _BANDS_KEPT:
+            _BANDS.popitem(last=False)
+    return found
+
+
 def darken_near(on: np.ndarray, centres: np.ndarray, points: np.ndarray, radius: float) -> np.ndarray:
     """``on`` with the lights within ``radius`` of any of ``points`` switched off."""
-    if not len(points):
+    lit = np.flatnonzero(on)
+    if not len(points) or not len(lit):
         return on
-    d = np.hypot(*(centres[:, None, :] - points[None, :, :]).transpose(2, 0, 1)).min(axis=1)
-    return on & (d >= radius)
+    # Only the lit lights can change: a band lights a few hundred of the grid's thousands.
+    d = np.hypot(*(centres[lit, None, :] - points[None, :, :]).transpose(2, 0, 1)).min(axis=1)
+    out = np.array(on, dtype=bool)
+    out[lit] = d >= radius
+    return out
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
