@@ -200,3 +200,22 @@ def test_boxes_are_chunked_by_distance_and_resting_chunks_send_nothing():
     assert (boxes.chunks[2][0]._path, "batched_positions") in sent
     assert (boxes.chunks[1][0]._path, "batched_wxyzs") in sent
     assert REGROUP > 4  # no regrouping in between
+
+
+def test_a_portrait_view_frames_the_arena_at_its_top_above_the_panel():
+    """On a phone viser's panel covers the lower half: the arena goes to the top of the view, whole."""
+    import numpy as np
+
+    from sandbox.app.scene import top_down_camera
+    from sandbox.model.config import Config
+
+    config = Config()
+    c, half = config.arena_size / 2, config.arena_size * 0.56
+    for aspect in (1.6, 1.0):  # landscape and square: centred, the square's height fills the view
+        position, look_at, fov = top_down_camera(config, aspect)
+        assert look_at[:2].tolist() == [c, c] and position[2] * np.tan(fov / 2) == pytest.approx(half)
+    position, look_at, fov = top_down_camera(config, 390 / 844)
+    top_of_view = look_at[1] + position[2] * np.tan(fov / 2)
+    width_of_view = 2 * position[2] * np.tan(fov / 2) * 390 / 844
+    assert top_of_view == pytest.approx(c + half) and width_of_view == pytest.approx(2 * half)
+    assert look_at[1] < c - half / 2 and position[1] < look_at[1]  # looking down, tilted a hair forward

@@ -52,14 +52,19 @@ def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, 
     frame the whole arena (or, ``whole`` False, the construction area) from
     straight above (tilted a hair so orbiting works), in a view ``aspect``
     (width / height) wide: high enough for its height and, in a narrow view,
-    for its width."""
+    for its width. A portrait view (a phone) has viser's panel over its lower
+    half: there the framed square sits at the top of the view, not in its middle."""
     if whole:
         c, half = config.arena_size / 2.0, config.arena_size * 0.56  # arena plus a margin
     else:
         c, half = config.centre, config.construction_size * CONSTRUCTION_VIEW / 2.0
     fov = np.radians(fov_deg)
-    height = half / np.tan(fov / 2.0) / min(1.0, max(aspect, 0.1))
-    return np.array([c, c - 1e-3 * height, height]), np.array([c, c, 0.0]), float(fov)
+    aspect = max(aspect, 0.1)
+    height = half / np.tan(fov / 2.0) / min(1.0, aspect)
+    # The view spans 2 half / aspect of floor from top to bottom; moving the look-at point down by
+    # half (1 / aspect - 1) puts the square's top edge at the view's top edge.
+    y = c - (half * (1.0 / aspect - 1.0) if aspect < 1.0 else 0.0)
+    return np.array([c, y - 1e-3 * height, height]), np.array([c, y, 0.0]), float(fov)
 
 
 def frame_arena(client: Any, config: Config, whole: bool = True) -> None:
