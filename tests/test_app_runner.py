@@ -397,3 +397,20 @@ def test_classroom_waits_at_step_0_and_frames_the_construction_area():
         assert page.camera.position[2] < 0.5 * whole_height
     finally:
         app.stop()
+
+
+def test_parameter_tooltips_are_short_plain_words():
+    """Issue 24, item 8: every control of Population and physics has a tooltip of at most two lines
+    (about 200 characters) that names no config field; the full reference stays in --help."""
+    from sandbox.app.panel.parameters import NOT_IN_PARAMETER_FOLDERS
+    from sandbox.app.panel.tips import TIPS, tip
+    from sandbox.model.config import param_names, params
+
+    shown = {p.name: p for p in params() if p.name not in NOT_IN_PARAMETER_FOLDERS}
+    assert set(TIPS) == set(shown), "a tooltip for every control, and none for a control that is gone"
+    config_names = [name for name in param_names() if "_" in name]
+    for name, p in shown.items():
+        text = tip(name, p.rebuild)
+        assert len(text) <= 200, (name, len(text))
+        assert not any(config_name in text for config_name in config_names), (name, text)
+        assert text.endswith("Applies on Reset." if p.rebuild else "Applies at once.")

@@ -12,6 +12,7 @@ import numpy as np
 import viser
 
 from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.panel.tips import tip
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.config import STRATEGY_NAMES, Config, params
 
@@ -62,7 +63,7 @@ class ParametersFolder:
     def _control(self, p: Any, value: Any) -> Any:
         gui = self.gui
         label = _label(p)
-        hint = p.help + (" (applies on reset)" if p.rebuild else " (applies at once)")
+        hint = tip(p.name, p.rebuild)
         if p.choices:
             handle = gui.add_dropdown(label, tuple(p.choices), initial_value=value, hint=hint)
         elif p.type is int:
