@@ -414,3 +414,19 @@ def test_parameter_tooltips_are_short_plain_words():
         assert len(text) <= 200, (name, len(text))
         assert not any(config_name in text for config_name in config_names), (name, text)
         assert text.endswith("Applies on Reset." if p.rebuild else "Applies at once.")
+
+
+def test_the_inspector_says_which_dot_is_which_photocell_and_what_doing_means(runner):
+    """Issue 24, item 8: the panel maps the four dots on the floor to the photocells, in their order."""
+    from sandbox.app import palette as pal
+    from sandbox.app.panel.inspector import InspectorFolder
+
+    runner.select(0)
+    snap = wait_until(lambda: runner.latest.robot is not None and runner.latest)
+    text = InspectorFolder._text(snap)
+    rows = [line for line in text.splitlines() if line.startswith("| front") or line.startswith("| back")]
+    assert [row.split("|")[1:3] for row in rows] == [
+        [f" {name} ", f" {colour} "] for name, colour in zip(("front-left", "front-right", "back-left", "back-right"),
+                                                            pal.SENSOR_COLOUR_NAMES)]
+    assert len(pal.SENSOR_COLOUR_NAMES) == len(pal.SENSOR_COLOURS) == 4
+    assert "**Commanded**" in text and "how it really moves" in text

@@ -374,6 +374,8 @@ def test_parameters_and_inspector(app, page):
     click_button(page, "Follow a random robot")
     wait_until(lambda: app.runner.latest.robot is not None, what="a followed robot")
     page.get_by_text("front-left", exact=True).wait_for(timeout=10_000)
+    page.get_by_text("dark grey", exact=True).wait_for(timeout=10_000)  # which dot on the floor is which
+    page.get_by_text("Commanded", exact=True).wait_for(timeout=10_000)
     click_button(page, "Camera follows (this viewer)")
     client = next(iter(app.server.get_clients().values()))
 

@@ -211,9 +211,10 @@ def test_a_portrait_view_frames_the_arena_at_its_top_above_the_panel():
 
     config = Config()
     c, half = config.arena_size / 2, config.arena_size * 0.56
-    for aspect in (1.6, 1.0):  # landscape and square: centred, the square's height fills the view
+    for aspect in (1.6, 1.0, 0.8):  # landscape, square, a canvas beside the panel: centred, the height fills it
         position, look_at, fov = top_down_camera(config, aspect)
-        assert look_at[:2].tolist() == [c, c] and position[2] * np.tan(fov / 2) == pytest.approx(half)
+        assert look_at[:2].tolist() == [c, c]
+        assert position[2] * np.tan(fov / 2) * min(aspect, 1.0) == pytest.approx(half)
     position, look_at, fov = top_down_camera(config, 390 / 844)
     top_of_view = look_at[1] + position[2] * np.tan(fov / 2)
     width_of_view = 2 * position[2] * np.tan(fov / 2) * 390 / 844

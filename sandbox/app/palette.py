@@ -31,7 +31,10 @@ ROBOT_EMPTY = (230, 40, 40)
 CHARGED_ABOVE = 0.5
 CHARGE_CLASSES = (("charged", ROBOT_CHARGED, "more than half full"), ("low", ROBOT_LOW, "some charge, half or less"),
                   ("empty", ROBOT_EMPTY, "no charge, cannot move"))
+#: The followed robot's four photocell dots on the floor, in the order of its photocells' names
+#: (front-left, front-right, back-left, back-right; or front, back, left, right), and their names.
 SENSOR_COLOURS = np.array([[255, 255, 255], [90, 90, 90], [64, 200, 255], [255, 140, 30]], dtype=np.uint8)
+SENSOR_COLOUR_NAMES = ("white", "dark grey", "blue", "orange")
 
 #: Pixels per light cell in the light-grid texture (cells stay crisp even with
 #: the browser's linear texture filtering because each cell is a flat block).

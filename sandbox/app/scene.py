@@ -46,14 +46,21 @@ Z_FIELD, Z_LIGHTS, Z_LIT, Z_BOXES, Z_ROBOTS, Z_MARKS, Z_LINES, Z_TOP = -0.01, 0.
 CONSTRUCTION_VIEW = 1.4
 
 
+#: Views narrower than this (width / height) are framed for a phone (see :func:`top_down_camera`):
+#: a phone upright is 0.45-0.6; a desktop window's canvas beside the docked panel is rarely below 0.75.
+PHONE_ASPECT = 0.75
+
+
 def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, *,
                     whole: bool = True) -> tuple[np.ndarray, np.ndarray, float]:
     """Camera position, look-at point and vertical field of view (radians) that
     frame the whole arena (or, ``whole`` False, the construction area) from
     straight above (tilted a hair so orbiting works), in a view ``aspect``
     (width / height) wide: high enough for its height and, in a narrow view,
-    for its width. A portrait view (a phone) has viser's panel over its lower
-    half: there the framed square sits at the top of the view, not in its middle."""
+    for its width. A view much taller than wide (narrower than :data:`PHONE_ASPECT`: a phone,
+    where viser lays its panel over the lower half of the page) has the framed square at its top,
+    not in its middle. (The server learns only the canvas's shape, not whether the panel covers
+    it: a desktop window that narrow gets the same framing, whole but high.)"""
     if whole:
         c, half = config.arena_size / 2.0, config.arena_size * 0.56  # arena plus a margin
     else:
@@ -63,7 +70,7 @@ def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, 
     height = half / np.tan(fov / 2.0) / min(1.0, aspect)
     # The view spans 2 half / aspect of floor from top to bottom; moving the look-at point down by
     # half (1 / aspect - 1) puts the square's top edge at the view's top edge.
-    y = c - (half * (1.0 / aspect - 1.0) if aspect < 1.0 else 0.0)
+    y = c - (half * (1.0 / aspect - 1.0) if aspect < PHONE_ASPECT else 0.0)
     return np.array([c, y - 1e-3 * height, height]), np.array([c, y, 0.0]), float(fov)
 
 

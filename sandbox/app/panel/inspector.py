@@ -112,8 +112,10 @@ class InspectorFolder:
         av, aw = r.applied
         cap = snap.world_config.capacity
         state = "moving" if r.charge > 0 else "**out of charge: stopped**"
-        cells = "".join(f"| {name} | {reading:.3f} |\n" for name, reading in zip(names, r.sensors))
-        return ("| photocell | reading |\n|---|---|\n" + cells + "\n"
-                f"**Command** v = {v:+.3f} m/s, w = {w:+.3f} rad/s  \n"
-                f"**Doing** v = {av:+.3f}, w = {aw:+.3f} ({state})  \n"
+        cells = "".join(f"| {name} | {colour} | {reading:.3f} |\n"
+                        for name, colour, reading in zip(names, pal.SENSOR_COLOUR_NAMES, r.sensors))
+        return ("| photocell | its dot on the floor | light it reads |\n|---|---|---|\n" + cells + "\n"
+                f"**Commanded** by its photocells: forward v = {v:+.3f} m/s, turn w = {w:+.3f} rad/s  \n"
+                f"**Doing** v = {av:+.3f}, w = {aw:+.3f} ({state}): how it really moves, other than "
+                f"commanded while it pushes or is pushed, and not at all when empty  \n"
                 f"**Charge** {r.charge:.2f} / {cap:g} &nbsp; at ({r.position[0]:.1f}, {r.position[1]:.1f}) m")
