@@ -43,7 +43,10 @@ class MetricsFolder:
             self.text = gui.add_markdown(self._text(snap))
             x = np.array([0.0, 0.0])
             # x is the world step (not a date: "time": False below).
-            common = dict(height=130, padding=(8, 12, 0, 0), legend={"show": False})
+            # The legend under each chart is uPlot's live one: it shows the values under the pointer.
+            # The y axis asks for a tick every 22 px, so that even a short chart has three or more.
+            common = dict(height=150, padding=(8, 12, 0, 0), legend={"show": True, "live": True},
+                          axes=({"stroke": "#c8cbd2"}, {"stroke": "#c8cbd2", "space": 22}))
             # Changes made from the page show as white dots along the top of the first chart.
             marks = {"label": "change", "stroke": "#ffffff", "width": 0, "points": {"show": True, "size": 9,
                                                                                       "fill": "#ffffff"}}
