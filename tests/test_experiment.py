@@ -135,11 +135,13 @@ def test_local_sweep_outputs_and_resume(tmp_path, capsys):
     assert sweep(out, "--k-turn", "10") == 2
     assert "other parameters" in capsys.readouterr().err
 
-    # The report can be rebuilt elsewhere from the stored trials.
+    # The report can be rebuilt elsewhere from the stored trials (here its tables only).
     dest = tmp_path / "paper"
-    assert commands.main(["report", str(out), "--out", str(dest)]) == 0
-    assert (dest / "report.md").is_file() and not (dest / "trials").exists()
-    assert "| `square` | 3 |" in (dest / "report.md").read_text()
+    assert commands.main(["report", str(out), "--out", str(dest), "--no-figures"]) == 0
+    assert (dest / "report.md").is_file() and not (dest / "trials").exists() and not (dest / "figures").exists()
+    text = (dest / "report.md").read_text()
+    assert "| `square` | 3 |" in text and "Figures not drawn" in text and "## Figure 4" not in text
+    assert (dest / "summary.csv").read_text() == (out / "summary.csv").read_text()
 
 
 @pytest.mark.slow

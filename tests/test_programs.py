@@ -259,22 +259,23 @@ def test_report_against_another_set(tmp_path):
     common = ["--cases", "circle", "--trials", "2", "--steps", "300", "--robots", "8", "--boxes", "10",
               "--workers", "1", "--no-progress", "--no-report"]
     assert main(["sweep", *common, "--out", str(tmp_path / "open")]) == 0
-    build_report(tmp_path / "open", tmp_path / "open-report")
+    build_report(tmp_path / "open", tmp_path / "open-report", figures=False)  # the figures: test_experiment.py
     assert main(["sweep", *common, "--chase", "--out", str(tmp_path / "closed")]) == 0
     report = build_report(tmp_path / "closed", tmp_path / "closed-report", against=tmp_path / "open-report",
-                          against_label="open loop")
+                          against_label="open loop", figures=False)
     text = report.read_text()
     assert "## Beside open loop" in text and "| circle |" in text
     rows = (tmp_path / "closed-report" / "versus.csv").read_text().splitlines()
     assert rows[0].startswith("case,") and rows[1].startswith("circle,")
     # The other set's light energy is what its trials recorded, closed loop or not.
     recorded = [json.loads(p.read_text())["light_energy"] for p in (tmp_path / "closed" / "trials").rglob("*.json")]
-    beside_itself = build_report(tmp_path / "open", tmp_path / "x", against=tmp_path / "closed-report")
+    beside_itself = build_report(tmp_path / "open", tmp_path / "x", against=tmp_path / "closed-report",
+                                 figures=False)
     versus = next(csv.DictReader((tmp_path / "x" / "versus.csv").open()))
     assert float(versus["light_energy_against"]) == pytest.approx(np.mean(recorded))
     assert beside_itself.is_file()
     with pytest.raises(Exception, match="no final.csv"):
-        build_report(tmp_path / "closed", tmp_path / "x", against=tmp_path / "nowhere")
+        build_report(tmp_path / "closed", tmp_path / "x", against=tmp_path / "nowhere", figures=False)
 
 
 def test_an_older_final_csv_without_light_energy():

@@ -34,9 +34,10 @@ def group(results: list[dict], meta: dict) -> dict[str, list[dict]]:
 
 
 def build_report(out: str | Path, dest: str | Path | None = None, against: str | Path | None = None,
-                 against_label: str = "the other set") -> Path:
-    """Write tables, figures and report.md for the sweep in ``out`` into ``dest`` (default ``out``),
-    with the same cases of the report folder ``against`` beside them if given."""
+                 against_label: str = "the other set", figures: bool = True) -> Path:
+    """Write tables, figures (unless ``figures`` is False: they take most of a report's time) and
+    report.md for the sweep in ``out`` into ``dest`` (default ``out``), with the same cases of the
+    report folder ``against`` beside them if given."""
     out = Path(out)
     dest = Path(dest) if dest is not None else out
     store = ResultStore(out)
@@ -48,7 +49,7 @@ def build_report(out: str | Path, dest: str | Path | None = None, against: str |
     if not by_case:
         raise SweepError(f"{out} holds no finished trials yet")
     try:
-        (dest / FIGURES_DIR).mkdir(parents=True, exist_ok=True)
+        (dest / FIGURES_DIR if figures else dest).mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise SweepError(f"cannot write the report to {dest}: {exc.strerror or exc}") from None
 
@@ -61,10 +62,7 @@ def build_report(out: str | Path, dest: str | Path | None = None, against: str |
     _write_final_csv(by_case, dest / "final.csv")
     _write_rows(dest / "summary.csv", [dataclasses.asdict(r) for m in METRICS for r in tables[m]])
     _write_rows(dest / "ks_tests.csv", [dataclasses.asdict(r) for m in METRICS for r in tests[m]])
-    from sandbox.experiments import figures  # matplotlib: only when a report is drawn, not on every command
-
-    figs = {m: figures.plot_metric(by_case, m, dest / FIGURES_DIR / m) for m in METRICS}
-    figs["layouts"] = figures.plot_layouts(by_case, dest / FIGURES_DIR / "final_layouts")
+    figs = _draw_figures(by_case, dest / FIGURES_DIR) if figures else {}
 
     text = _markdown(meta, by_case, tables, first, tests, figs, dest, store.load_failures())
     if against is not None:
@@ -75,6 +73,14 @@ def build_report(out: str | Path, dest: str | Path | None = None, against: str |
     report = dest / "report.md"
     report.write_text(text, encoding="utf-8")
     return report
+
+
+def _draw_figures(by_case: dict[str, list[dict]], folder: Path) -> dict[str, Path]:
+    from sandbox.experiments import figures  # matplotlib: only when a report is drawn, not on every command
+
+    figs = {m: figures.plot_metric(by_case, m, folder / m) for m in METRICS}
+    figs["layouts"] = figures.plot_layouts(by_case, folder / "final_layouts")
+    return figs
 
 
 # ---------------------------------------------------------------- files
@@ -274,16 +280,8 @@ def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: l
             _ks_table(tests["fraction_in_goal"], 3),
             "", "## Table V. Two-sample Kolmogorov–Smirnov tests: mean distance outside the goal", "",
             _ks_table(tests["mean_outside_distance"], 3),
-            "", "## Figure 4. Fraction of boxes in the goal over time", "",
-            f"![fraction in goal]({rel(figs['fraction_in_goal'])})",
-            f"([SVG]({rel(figs['fraction_in_goal'].with_suffix('.svg'))}))",
-            "", "## Figure 5. Mean distance of boxes outside the goal over time", "",
-            f"![mean distance outside]({rel(figs['mean_outside_distance'])})",
-            f"([SVG]({rel(figs['mean_outside_distance'].with_suffix('.svg'))}))",
-            "", "## Figures 6 and 7. Final box layouts", "",
-            "For each case, the trial whose final fraction in goal is nearest the case's median. Green boxes "
-            "are in the goal (black outline), orange ones outside; the dashed square is the construction area.",
-            "", f"![final layouts]({rel(figs['layouts'])})",
+            *(_figures_section(figs, rel) if figs else
+              ["", "Figures not drawn (`--no-figures`): `phototaxis report` without it draws them."]),
             "", "## Files", "",
             "- `summary.csv`: Tables II and III; `ks_tests.csv`: Tables IV and V",
             "- `results.csv`: every sample of every trial; `final.csv`: one row per trial with its final "
@@ -292,12 +290,25 @@ def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: l
     return "\n".join(out)
 
 
+def _figures_section(figs: dict, rel) -> list[str]:
+    return ["", "## Figure 4. Fraction of boxes in the goal over time", "",
+            f"![fraction in goal]({rel(figs['fraction_in_goal'])})",
+            f"([SVG]({rel(figs['fraction_in_goal'].with_suffix('.svg'))}))",
+            "", "## Figure 5. Mean distance of boxes outside the goal over time", "",
+            f"![mean distance outside]({rel(figs['mean_outside_distance'])})",
+            f"([SVG]({rel(figs['mean_outside_distance'].with_suffix('.svg'))}))",
+            "", "## Figures 6 and 7. Final box layouts", "",
+            "For each case, the trial whose final fraction in goal is nearest the case's median. Green boxes "
+            "are in the goal (black outline), orange ones outside; the dashed square is the construction area.",
+            "", f"![final layouts]({rel(figs['layouts'])})"]
+
+
 # ------------------------------------------------------------------ CLI
 
 
 def report_command(args: argparse.Namespace) -> int:
     try:
-        report = build_report(args.dir, args.out, args.against, args.against_label)
+        report = build_report(args.dir, args.out, args.against, args.against_label, figures=not args.no_figures)
     except SweepError as exc:
         raise UserError(str(exc)) from None
     print(report)
@@ -317,5 +328,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         "tests and light energy, e.g. --against static/paper")
     p.add_argument("--against-label", default="open loop", metavar="TEXT",
                    help="what to call that other set in the tables [default: open loop]")
+    p.add_argument("--no-figures", action="store_true",
+                   help="tables, CSV files and report.md only: a few seconds faster, e.g. to look at a sweep "
+                        "that is still running")
     p.set_defaults(func=report_command)
     return p
