@@ -26,10 +26,13 @@ def pytest_xdist_auto_num_workers(config) -> int:
 
 def pytest_collection_modifyitems(config, items) -> None:
     """Browser tests share one page per module and build on what the earlier ones left: each module
-    runs in one worker, in order (--dist loadgroup). Every other test goes wherever a worker is free."""
+    runs in one worker, in order (--dist loadgroup). Every other test goes wherever a worker is free.
+    The slow tests (several seconds each) go first, so that the run does not end with one worker
+    busy on a long test while the others wait."""
     for item in items:
         if item.get_closest_marker("browser") is not None:
             item.add_marker(pytest.mark.xdist_group(item.module.__name__))
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)  # stable: the rest keep their order
 
 
 @pytest.fixture(scope="module")

@@ -127,6 +127,7 @@ def test_help_lists_commands():
         assert command in out.stdout
 
 
+@pytest.mark.slow
 def test_the_installed_commands_run_in_their_own_processes():
     """``python -m sandbox`` and the ``phototaxis`` script: exit codes and streams as a shell sees them."""
     module = [sys.executable, "-m", "sandbox"]

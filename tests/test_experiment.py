@@ -230,6 +230,7 @@ def test_bad_grid_files(tmp_path, capsys, text, message):
     assert message in err and "\n" not in err
 
 
+@pytest.mark.slow
 def test_grid_file_sweeps_any_parameter_over_any_shape(tmp_path):
     (tmp_path / "shapes").mkdir()
     (tmp_path / "shapes" / "tri.txt").write_text("0 0\n4 0\n2 3\n")

@@ -145,6 +145,7 @@ def test_chase_turns_beyond_the_farthest_stray_box_square():
     assert c.senses == frozenset({"boxes"})
 
 
+@pytest.mark.slow
 def test_chase_runs_shorter_cycles():
     """Chase turns back once the band is past the farthest stray box, so its first two cycles end
     sooner than the open loop's, which contracts to the smallest outline every time (measured: step
