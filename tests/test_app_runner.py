@@ -211,11 +211,12 @@ def test_metrics_csv_and_frames(app):
 
 def test_recording_from_the_panel(app):
     app.panel.record.start()
+    assert app.panel.record._floor_legend is not None  # the replay's legend, on the floor while recording
     frames = app.frames_drawn
     wait_until(lambda: app.frames_drawn > frames + 5)
     html = app.panel.record.stop()
     assert "__VISER_EMBED_DATA__" in html
-    assert app.panel.record.recorder is None
+    assert app.panel.record.recorder is None and app.panel.record._floor_legend is None
 
 
 def test_serve_command_line_checks_its_flags(capsys):

@@ -33,6 +33,11 @@ def test_html_replay_is_standalone():
     assert "__VISER_EMBED_DATA__" in html
 
 
+def test_a_replay_carries_its_legend_on_the_floor():
+    """Issue 24, item 9: a replay has no panel, so the legend is a picture in the scene, beside the arena."""
+    assert b"/legend" in record(TINY, ".viser", every=30)
+
+
 def test_command_line(tmp_path, capsys):
     out = tmp_path / "run.gif"
     code = main(["record", "--robots", "5", "--boxes", "8", "--steps", "40", "--every", "20", "--size", "96",

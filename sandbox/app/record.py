@@ -21,7 +21,7 @@ from tqdm import tqdm
 
 from sandbox.app.frames import render
 from sandbox.app.runner import Runner
-from sandbox.app.scene import SceneView, configure_scene
+from sandbox.app.scene import SceneView, add_floor_legend, configure_scene
 from sandbox.app.server import free_port
 from sandbox.app.snapshot import caption
 from sandbox.cli import UserError, add_config_arguments, config_from_args
@@ -147,6 +147,7 @@ def _record_viser(config: Config, kind: str, every: int, fps: float, shape: Any,
         server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
     try:
         configure_scene(server, config)
+        add_floor_legend(server.scene, config)
         serializer = server.get_scene_serializer()
         view = None
         for snap in frames(config, every, shape, progress):

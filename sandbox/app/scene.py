@@ -90,6 +90,24 @@ def _geometry_key(cfg: Config, n: int, m: int) -> tuple:
             n, m)
 
 
+#: Width (m) of the legend drawn on the floor beside the arena's left wall in recordings: a replay has
+#: no panel, so it carries its legend in the scene.
+FLOOR_LEGEND_WIDTH = 16.0
+
+
+def add_floor_legend(scene: Any, config: Config) -> Any:
+    """The legend as a picture on the floor, left of the arena, its top level with the arena's top wall
+    (in view beside the arena in any window wider than 1.3 : 1, as a replay's usually is)."""
+    from sandbox.app.legend import legend_picture
+
+    picture = np.ascontiguousarray(legend_picture()[::-1])  # an image's first row lies at the floor's -y side
+    width = FLOOR_LEGEND_WIDTH
+    height = width * picture.shape[0] / picture.shape[1]
+    position = (-1.0 - width / 2.0, config.arena_size - height / 2.0, Z_LIGHTS)
+    return scene.add_image("/legend", picture, width, height, format="png", position=position,
+                           cast_shadow=False, receive_shadow=False)
+
+
 def configure_scene(server: Any, config: Config, whole: bool = True) -> None:
     """z up, flat true colours (no shading lights, an even ambient light) and a
     top-down initial camera framing the arena. Also recorded into replays."""

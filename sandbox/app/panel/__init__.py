@@ -45,7 +45,7 @@ class Panel:
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
         self.inspector = InspectorFolder(gui, runner, server)
-        self.record = RecordFolder(gui, server)
+        self.record = RecordFolder(gui, server, runner)
         self.folders = (self.run, self.shape, self.advice, self.strategies, self.program, self.metrics,
                         self.inspector, self.record, self.parameters)
         snap = runner.latest

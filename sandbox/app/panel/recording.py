@@ -11,6 +11,7 @@ from typing import Any
 
 import viser
 
+from sandbox.app.scene import add_floor_legend
 from sandbox.app.snapshot import Snapshot, running_case
 
 MAX_RECORD_SECONDS = 120.0
@@ -29,13 +30,14 @@ def recording_name(snap: Snapshot | None, when: _dt.datetime) -> str:
 
 
 class RecordFolder:
-    def __init__(self, gui: Any, server: Any):
-        self.gui, self.server = gui, server
+    def __init__(self, gui: Any, server: Any, runner: Any):
+        self.gui, self.server, self.runner = gui, server, runner
         self.recorder: Any = None
         self._finished_html: str | None = None
         self._lock = threading.Lock()
         self._started = self._last_time = 0.0
         self._snap: Snapshot | None = None
+        self._floor_legend: Any = None
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -61,6 +63,8 @@ class RecordFolder:
 
     def start(self) -> None:
         with self._lock:
+            # The replay has no panel: its legend goes on the floor beside the arena while recording.
+            self._floor_legend = add_floor_legend(self.server.scene, self.runner.latest.world_config)
             self.recorder = self.server.get_scene_serializer()
             self._started = self._last_time = time.perf_counter()
         self.button.label = "Stop and download"
@@ -74,10 +78,16 @@ class RecordFolder:
             html, self._finished_html = self._finished_html, None
         if recorder is not None:
             html = recorder.as_html(dark_mode=True)
+        self._remove_floor_legend()
         self.button.label = "Start recording"
         self.button.icon = viser.Icon.PLAYER_RECORD
         self.status.content = ""
         return html or ""
+
+    def _remove_floor_legend(self) -> None:
+        legend, self._floor_legend = self._floor_legend, None
+        if legend is not None:
+            legend.remove()
 
     def on_frame_drawn(self) -> None:
         """Called after each frame is drawn: advance the recording clock."""
@@ -91,6 +101,7 @@ class RecordFolder:
                 return
             recorder, self.recorder = self.recorder, None
         self._finished_html = recorder.as_html(dark_mode=True)
+        self._remove_floor_legend()
         self.status.content = f"Stopped at {MAX_RECORD_SECONDS:.0f} s: press the button to download."
         self.button.label = "Download recording"
         self.button.icon = viser.Icon.DOWNLOAD
