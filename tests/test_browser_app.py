@@ -341,6 +341,10 @@ def test_upload_valid_and_invalid_files(app, page):
                                    "buffer": b"\x00\x01\x02garbage"}])
     notification(page, "binary file")
     assert app.runner.latest.shape_name == "my-square.txt"
+    # One notice per upload, the panel's: viser's own "File uploaded successfully" is closed by the
+    # server, sooner than its own 4-s auto-close (mantine's default).
+    wait_until(lambda: page.get_by_text("File uploaded successfully").count() == 0, timeout=3.5,
+               what="viser's upload notice to close")
 
 
 def test_download_shape_and_metrics(app, page, tmp_path):

@@ -238,7 +238,10 @@ def test_upload_acknowledgements_reach_only_the_uploader(app):
     transfer = uploader.start_upload(upload, size=len(TRIANGLE), parts=1, name="tri.txt")
     uploader.upload_part(upload, transfer, 0, TRIANGLE)
     wait_until(lambda: app.runner.latest.shape_name == "tri.txt", what="the uploaded goal")
-    assert "FileTransferPartAck" in uploader.received_types(1.0)
+    # The acknowledgement, then the closing of viser's own "uploaded" notice (the panel says what
+    # became of the file: issue 24, item 7).
+    received = uploader.received_types(2.5)
+    assert "FileTransferPartAck" in received and "RemoveNotificationMessage" in received
     newcomer = RawClient(app.port, own_page(app))
     connected(app, newcomer)
     assert "FileTransferPartAck" not in newcomer.received_types(1.5)  # nothing of it in the backlog

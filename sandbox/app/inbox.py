@@ -44,6 +44,11 @@ log = logging.getLogger("sandbox.app.inbox")
 UPLOAD_LIMIT = 1_000_000
 #: viser's client sends a file in parts of this size.
 UPLOAD_PART = 512 * 1024
+#: viser's client shows its own green "File uploaded successfully" once the last part is acknowledged,
+#: even for a file the panel then refuses; the panel says what became of every upload itself, so that
+#: notice is closed, after these many seconds (it appears a frame or more after the acknowledgement,
+#: and closing a notice not yet shown does nothing: once soon, once more for a slow page).
+UPLOAD_NOTICE_CLOSED_AFTER = (0.4, 1.5)
 #: Longest text a text field takes.
 TEXT_LIMIT = 4096
 #: Refusals logged in full per connection; later ones are counted.
@@ -237,6 +242,11 @@ class Inbox:
             "part_count": transfer.part_count, "parts": transfer.parts, "total_bytes": transfer.size,
             "transferred_bytes": transfer.received, "lock": threading.Lock()}
         gui._finish_file_upload(transfer.client_id, transfer_uuid, transfer.component)
+        close = messages.RemoveNotificationMessage(uuid=f"upload-{transfer_uuid}")
+        for seconds in UPLOAD_NOTICE_CLOSED_AFTER:
+            timer = threading.Timer(seconds, self._send, (transfer.client_id, close))
+            timer.daemon = True
+            timer.start()
 
     def _end_upload_in_page(self, client_id: int, message: Any, size: int) -> None:
         """Close the page's own 'Uploading...' notice and free its button (viser's client waits for

@@ -212,8 +212,9 @@ class SceneView:
             "/swarm/headings", self._points(max(n, 1)), pal.HEADING_MARK, point_size=0.3 * r,
             point_shape="circle", point_shading="flat", position=(c, c, Z_MARKS), visible=n > 0)
         self.hexagons = Hexagons(sc, "/swarm/boxes", m, cfg.box_circumradius, (c, c, Z_BOXES), self._sent)
-        self.handles["caption"] = sc.add_label("/caption", caption(snap), position=(0.0, s + 0.8, Z_TOP),
-                                               anchor="bottom-left", font_screen_scale=1.2)
+        # Above the arena's top-right corner: viser stacks its notifications at the page's top left.
+        self.handles["caption"] = sc.add_label("/caption", caption(snap), position=(s, s + 0.8, Z_TOP),
+                                               anchor="bottom-right", font_screen_scale=1.2)
         empty = np.zeros((1, 2, 3), np.float32)
         self.handles["goal"] = sc.add_line_segments("/goal", empty, pal.GOAL_LINE, thickness=0.18)
         self.handles["light_outline"] = sc.add_line_segments("/light_outline", empty, pal.LIGHT_LINE, thickness=0.08)
