@@ -220,3 +220,22 @@ def test_a_portrait_view_frames_the_arena_at_its_top_above_the_panel():
     width_of_view = 2 * position[2] * np.tan(fov / 2) * 390 / 844
     assert top_of_view == pytest.approx(c + half) and width_of_view == pytest.approx(2 * half)
     assert look_at[1] < c - half / 2 and position[1] < look_at[1]  # looking down, tilted a hair forward
+
+
+def test_the_caption_sits_where_every_framing_of_the_page_shows_it(snapshot):
+    """Above the arena's top-right corner, away from viser's notifications (top left); a classroom's
+    pages frame the construction area, so there it sits above the construction wall's corner."""
+    labels = {}
+
+    class LabelScene(FakeScene):
+        def add_label(self, path, text, **kwargs):
+            labels[path] = kwargs
+            return FakeHandle(self.sent, path, visible=True, points=None)
+
+    cfg = snapshot.world_config
+    SceneView(LabelScene(), snapshot)
+    assert labels["/caption"]["position"][:2] == (cfg.arena_size, cfg.arena_size + 0.8)
+    assert labels["/caption"]["anchor"] == "bottom-right"
+    SceneView(LabelScene(), snapshot, caption_over_construction=True)
+    wall = cfg.centre + cfg.construction_size / 2
+    assert labels["/caption"]["position"][:2] == (wall, wall + 0.3)

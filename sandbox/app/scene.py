@@ -157,9 +157,13 @@ class CompactSender:
 class SceneView:
     """Draws snapshots into a viser scene."""
 
-    def __init__(self, scene: Any, snapshot: Snapshot, *, show_field: bool = False):
+    def __init__(self, scene: Any, snapshot: Snapshot, *, show_field: bool = False,
+                 caption_over_construction: bool = False):
         self.scene = scene
         self.show_field = show_field
+        #: Where the caption sits: above the arena's top-right corner, or (classroom, whose pages frame
+        #: the construction area) above the construction wall's, where both framings show it.
+        self.caption_over_construction = caption_over_construction
         self._lock = threading.RLock()
         self._built_for: tuple | None = None
         self._lights_key: tuple | None = None
@@ -212,8 +216,10 @@ class SceneView:
             "/swarm/headings", self._points(max(n, 1)), pal.HEADING_MARK, point_size=0.3 * r,
             point_shape="circle", point_shading="flat", position=(c, c, Z_MARKS), visible=n > 0)
         self.hexagons = Hexagons(sc, "/swarm/boxes", m, cfg.box_circumradius, (c, c, Z_BOXES), self._sent)
-        # Above the arena's top-right corner: viser stacks its notifications at the page's top left.
-        self.handles["caption"] = sc.add_label("/caption", caption(snap), position=(s, s + 0.8, Z_TOP),
+        # Above a top-right corner: viser stacks its notifications at the page's top left.
+        wall = cfg.centre + cfg.construction_size / 2.0
+        corner = (wall, wall + 0.3) if self.caption_over_construction else (s, s + 0.8)
+        self.handles["caption"] = sc.add_label("/caption", caption(snap), position=(*corner, Z_TOP),
                                                anchor="bottom-right", font_screen_scale=1.2)
         empty = np.zeros((1, 2, 3), np.float32)
         self.handles["goal"] = sc.add_line_segments("/goal", empty, pal.GOAL_LINE, thickness=0.18)

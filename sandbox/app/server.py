@@ -69,7 +69,7 @@ class App:
         try:
             read_icons_once()
             self._configure_page()
-            self.view = SceneView(self.server.scene, self.runner.latest)
+            self.view = SceneView(self.server.scene, self.runner.latest, caption_over_construction=not whole_arena)
             # Loading a program runs a Python file on this machine: the page offers it only where a
             # connection may do it (served to this machine, or --allow-programs); the gate decides per page.
             offered = self.access.allow_programs or not is_shared(host)
