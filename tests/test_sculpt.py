@@ -377,13 +377,13 @@ def test_with_chase_no_corners_darkens_only_while_dilating():
 def test_a_held_band_is_computed_once_and_gives_what_a_fresh_one_gives():
     boxes = np.array([[2.2, 0.0], [2.2, 0.1], [0.0, 0.0]])
     in_goal = np.array([False, False, True])
-    sculpt._BANDS.clear()
+    sculpt._band_of.cache_clear()
     first = sculpt.sculpt(SQUARE, 0.5, boxes, in_goal, BOX_AREA)
-    assert len(sculpt._BANDS) == 1
+    assert sculpt._band_of.cache_info().currsize == 1
     first.outline[:] = 0.0  # the caller's arrays are its own
     again = sculpt.sculpt(SQUARE, 0.5, boxes, in_goal, BOX_AREA)
-    assert len(sculpt._BANDS) == 1
-    sculpt._BANDS.clear()
+    assert sculpt._band_of.cache_info()[:2] == (1, 1)  # one hit, one miss: computed once
+    sculpt._band_of.cache_clear()
     fresh = sculpt.sculpt(SQUARE, 0.5, boxes, in_goal, BOX_AREA)
     assert np.array_equal(again.outline, fresh.outline) and np.array_equal(again.dark, fresh.dark)
     assert np.abs(fresh.outline).max() > 0

@@ -240,7 +240,7 @@ def test_upload_acknowledgements_reach_only_the_uploader(app):
     wait_until(lambda: app.runner.latest.shape_name == "tri.txt", what="the uploaded goal")
     # The acknowledgement, then the closing of viser's own "uploaded" notice (the panel says what
     # became of the file: issue 24, item 7).
-    received = uploader.received_types(2.5)
+    received = uploader.received_types(30.0, until=frozenset({"FileTransferPartAck", "RemoveNotificationMessage"}))
     assert "FileTransferPartAck" in received and "RemoveNotificationMessage" in received
     newcomer = RawClient(app.port, own_page(app))
     connected(app, newcomer)

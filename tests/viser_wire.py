@@ -52,11 +52,12 @@ class RawClient:
         self.send("FileTransferPart", source_component_uuid=component, transfer_uuid=transfer, part_index=index,
                   content=content)
 
-    def received_types(self, seconds: float) -> list[str]:
-        """The types of the messages the server sends within ``seconds``."""
+    def received_types(self, seconds: float, until: frozenset[str] = frozenset()) -> list[str]:
+        """The types of the messages the server sends within ``seconds``, or until every type in
+        ``until`` has come (a wait on a condition; without ``until``, a window for what must not come)."""
         types: list[str] = []
         deadline = time.monotonic() + seconds
-        while (left := deadline - time.monotonic()) > 0:
+        while (left := deadline - time.monotonic()) > 0 and not (until and until <= set(types)):
             try:
                 raw = self.ws.recv(timeout=left)
             except TimeoutError:

@@ -6,7 +6,6 @@ Pure numpy: nothing here imports viser or touches a running simulation.
 
 from __future__ import annotations
 
-
 import numpy as np
 
 # RGB, 0..255.

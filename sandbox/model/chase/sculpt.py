@@ -3,8 +3,7 @@ out and dark where the goal lacks them (see :mod:`sandbox.model.chase`)."""
 
 from __future__ import annotations
 
-import threading
-from collections import OrderedDict
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -86,21 +85,17 @@ def sculpt(goal: np.ndarray, distance: float, boxes: np.ndarray, in_goal: np.nda
     return Sculpted(edge + gap[:, None] * outward, band[lacking])
 
 
-#: The last few bands near the goal (see :func:`_band_near_goal`), newest last.
-_BANDS: OrderedDict = OrderedDict()
-_BANDS_KEPT = 8
-_BANDS_LOCK = threading.Lock()  # simulations in threads of one process share it
-
-
 def _band_near_goal(goal: np.ndarray, distance: float, box_area: float, tuning: Sculpting) -> tuple:
     """The geometry of the band at ``distance`` from the goal that the boxes do not change: its points,
     their nearest points on the goal's edge, the gap and outward direction between them, and the boxes
     a full pile holds there. A hold redraws the same band every update: it is computed once."""
-    key = (goal.tobytes(), goal.shape, distance, box_area, tuning)
-    with _BANDS_LOCK:
-        if key in _BANDS:
-            _BANDS.move_to_end(key)
-            return _BANDS[key]
+    goal = np.ascontiguousarray(goal, dtype=float)
+    return _band_of(goal.tobytes(), len(goal), distance, box_area, tuning)
+
+
+@functools.lru_cache(maxsize=8)  # the last few bands: a hold's, and the contraction's last sizes
+def _band_of(goal_bytes: bytes, vertices: int, distance: float, box_area: float, tuning: Sculpting) -> tuple:
+    goal = np.frombuffer(goal_bytes, dtype=float).reshape(vertices, 2)
     band = densify(offset_outline(goal, distance), tuning.spacing)
     edge = nearest_on_outline(band, goal)
     away = band - edge
@@ -109,12 +104,7 @@ def _band_near_goal(goal: np.ndarray, distance: float, box_area: float, tuning: 
     full = full_counts(goal, edge, tuning.near, box_area, tuning.packing)
     for array in (band, edge, gap, outward, full):
         array.flags.writeable = False  # shared by later calls
-    found = (band, edge, gap, outward, full)
-    with _BANDS_LOCK:
-        _BANDS[key] = found
-        while len(_BANDS) > _BANDS_KEPT:
-            _BANDS.popitem(last=False)
-    return found
+    return band, edge, gap, outward, full
 
 
 def darken_near(on: np.ndarray, centres: np.ndarray, points: np.ndarray, radius: float) -> np.ndarray:
