@@ -74,10 +74,14 @@ def test_shape_change_and_selection(runner):
     runner.set_shape(square, "sq")
     wait_until(lambda: runner.latest.shape_name == "sq" and runner.latest.goal_vertices is not None)
     assert len(runner.latest.goal_vertices) == 4
-    runner.select(3)
-    wait_until(lambda: runner.latest.robot is not None)
-    robot = runner.latest.robot
+    runner.follow([7, 3])  # two viewers' robots
+    wait_until(lambda: len(runner.latest.followed) == 2)
+    robot = runner.latest.robot(3)
     assert robot.index == 3 and robot.sensors.shape == (4,) and robot.sensor_points.shape == (4, 2)
+    assert [r.index for r in runner.latest.followed] == [3, 7] and runner.latest.robot(5) is None
+    assert np.array_equal(runner.latest.robot(7).position, runner.latest.robot_positions[7])
+    runner.follow([])
+    wait_until(lambda: runner.latest.followed == ())
 
 
 def test_speed_is_measured(runner):
@@ -286,9 +290,9 @@ def test_a_crashed_simulation_process_is_reported_and_restarted(process_runner):
     r = process_runner
     crashes = []
     r.on_crash(crashes.append)
-    r.select(2)
+    r.follow([2])
     r.reset(9)
-    wait_until(lambda: r.latest.seed == 9 and r.latest.robot is not None)
+    wait_until(lambda: r.latest.seed == 9 and r.latest.robot(2) is not None)
     old = r.process.pid
     os.kill(old, signal.SIGKILL)  # as a crash in the engine would end it
     wait_until(lambda: crashes, timeout=30)
@@ -297,7 +301,7 @@ def test_a_crashed_simulation_process_is_reported_and_restarted(process_runner):
     step = r.latest.step
     wait_until(lambda: r.latest.step > step + 10 or r.latest.step < step, timeout=30)  # running again
     assert r.latest.seed == 9 and r.restarts == 1
-    wait_until(lambda: r.latest.robot is not None and r.latest.robot.index == 2)  # its selection came back
+    wait_until(lambda: r.latest.robot(2) is not None)  # what was followed came back
 
 
 def test_with_no_viewer_for_a_while_the_app_pauses_and_a_viewer_resumes_it():
@@ -310,8 +314,16 @@ def test_with_no_viewer_for_a_while_the_app_pauses_and_a_viewer_resumes_it():
         step = paused_step(a.runner)  # a frame already on its way from the engine may still land
         frames_pass(a.runner)
         assert a.runner.latest.step == step
-        a._on_connect(FakeClient())  # as viser calls it when a browser connects
-        wait_until(lambda: a.runner.playing and a.runner.latest.step > step)
+        from tests.viser_wire import RawClient
+
+        page = RawClient(a.port)  # a browser's websocket: viser calls the app's on-connect
+        try:
+            page.say_hello()
+            wait_until(lambda: a.runner.playing and a.runner.latest.step > step)
+            assert set(a.panel.inspector.viewers) == set(a.server.get_clients())  # its own inspector
+        finally:
+            page.close()
+        wait_until(lambda: not a.panel.inspector.viewers, what="the page's inspector gone with it")
     finally:
         a.stop()
 
@@ -422,9 +434,9 @@ def test_the_inspector_says_which_dot_is_which_photocell_and_what_doing_means(ru
     from sandbox.app import palette as pal
     from sandbox.app.panel.inspector import InspectorFolder
 
-    runner.select(0)
-    snap = wait_until(lambda: runner.latest.robot is not None and runner.latest)
-    text = InspectorFolder._text(snap)
+    runner.follow([0])
+    snap = wait_until(lambda: runner.latest.robot(0) is not None and runner.latest)
+    text = InspectorFolder._text(snap, snap.robot(0))
     rows = [line for line in text.splitlines() if line.startswith("| front") or line.startswith("| back")]
     assert [row.split("|")[1:3] for row in rows] == [
         [f" {name} ", f" {colour} "] for name, colour in zip(("front-left", "front-right", "back-left", "back-right"),

@@ -376,7 +376,7 @@ def test_parameters_and_inspector(app, page):
     gain.press("Tab")
     wait_until(lambda: app.runner.latest.world_config.k_turn == 15, what="the live gain")
     click_button(page, "Follow a random robot")
-    wait_until(lambda: app.runner.latest.robot is not None, what="a followed robot")
+    wait_until(lambda: app.runner.latest.followed, what="a followed robot")
     page.get_by_text("front-left", exact=True).wait_for(timeout=10_000)
     page.get_by_text("dark grey", exact=True).wait_for(timeout=10_000)  # which dot on the floor is which
     page.get_by_text("Commanded", exact=True).wait_for(timeout=10_000)
@@ -384,12 +384,12 @@ def test_parameters_and_inspector(app, page):
     client = next(iter(app.server.get_clients().values()))
 
     def camera_on_robot():
-        robot = app.runner.latest.robot
+        robot = app.runner.latest.robot(app.panel.inspector.viewers[client.client_id].robot)
         return robot is not None and np.hypot(*(client.camera.look_at[:2] - robot.position)) < 1.5
 
     wait_until(camera_on_robot, what="the camera to follow the robot")
     click_button(page, "Stop following")
-    wait_until(lambda: app.runner.selected is None, what="stop following")
+    wait_until(lambda: app.runner.followed == (), what="stop following")
     wait_until(lambda: np.hypot(*(client.camera.look_at[:2] - 32.0)) < 1.0, what="the whole arena again")
 
 
@@ -487,16 +487,32 @@ def test_second_browser_and_disconnect(app, browser, page):
         wait_until(lambda: second.camera.position[2] > first.camera.position[2] * 1.2, what="the narrow view to back off")
     except AssertionError as exc:
         raise AssertionError(f"{exc} ({cameras()})") from None
-    # Following a robot with the camera is one viewer's choice, not everybody's.
+    # Following a robot, and with the camera, is one viewer's choice, not everybody's (issue 24, item 8).
+    viewers = app.panel.inspector.viewers
+    click_button(page, "Follow a random robot")
+    wait_until(lambda: viewers[first.client_id].robot is not None, what="the first viewer's robot")
+    mine = viewers[first.client_id].robot
+    page.get_by_text(f"Following robot {mine} (click another, or stop).", exact=True).wait_for(timeout=10_000)
     click_button(other, "Follow a random robot")
-    wait_until(lambda: app.runner.latest.robot is not None, what="a followed robot")
+    wait_until(lambda: viewers[second.client_id].robot is not None, what="the second viewer's robot")
+    theirs = viewers[second.client_id].robot
+    other.get_by_text(f"Following robot {theirs} (click another, or stop).", exact=True).wait_for(timeout=10_000)
+    wait_until(lambda: {r.index for r in app.runner.latest.followed} == {mine, theirs}, what="both robots followed")
+    assert viewers[first.client_id].robot == mine  # the second's choice left the first's alone
+    if theirs != mine:
+        assert page.get_by_text(f"Following robot {theirs} ", exact=False).count() == 0
     click_button(other, "Camera follows (this viewer)")
     wait_until(lambda: second.camera.position[2] < 20, what="the second viewer's camera to follow")
     panel_refreshes(app, 3)  # the panel moves the cameras that follow, at each refresh
     assert second.camera.position[2] < 20 and first.camera.position[2] > 40, cameras()  # the first sees the arena
     click_button(other, "Stop following")
+    wait_until(lambda: viewers[second.client_id].robot is None, what="the second to stop following")
+    assert viewers[first.client_id].robot == mine  # still following its own
     other.close()
     wait_until(lambda: len(app.server.get_clients()) == 1, what="one client again")
+    wait_until(lambda: [r.index for r in app.runner.latest.followed] == [mine], what="the first's robot alone")
+    click_button(page, "Stop following")
+    wait_until(lambda: app.runner.followed == (), what="nobody following")
     steps = app.runner.latest.step
     wait_until(lambda: app.runner.latest.step > steps + 20, what="the simulation to keep running")
     assert not app.runner.errors

@@ -15,7 +15,7 @@ from __future__ import annotations
 import logging
 import time
 from collections import deque
-from typing import Any, Callable, Protocol, runtime_checkable
+from typing import Any, Callable, Iterable, Protocol, runtime_checkable
 
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.metrics import Sample
@@ -67,7 +67,8 @@ class SimulationRunner(Protocol):
 
     playing: bool
     steps_per_frame: int
-    selected: int | None
+    #: The robots the viewers follow: the snapshots carry their photocells (``Snapshot.followed``).
+    followed: tuple[int, ...]
     want_field: bool
     errors: list
 
@@ -99,7 +100,7 @@ class SimulationRunner(Protocol):
 
     def set_speed(self, steps_per_frame: int) -> None: ...
 
-    def select(self, index: int | None) -> None: ...
+    def follow(self, indices: Iterable[int]) -> None: ...
 
     def step_once(self, n: int = 1) -> None: ...
 

@@ -29,7 +29,7 @@ import threading
 import time
 import traceback
 from collections import deque
-from typing import Any, Callable
+from typing import Any, Callable, Iterable
 
 import numpy as np
 
@@ -69,7 +69,7 @@ class ProcessRunner(FramePublisher):
         self.chart_every = int(chart_every)
         self.program_time_limit = float(program_time_limit)
         FramePublisher.__init__(self)
-        self.selected: int | None = None
+        self.followed: tuple[int, ...] = ()
         self._want_field = False
         self.restarts = 0
         #: Why the simulation cannot run any more (too many crashes in a row), or None.
@@ -140,8 +140,8 @@ class ProcessRunner(FramePublisher):
             self._end_child(kill=True)
             raise SimulationCrashed(self._last_words or "the simulation process did not start")
         self._take(message)
-        for name, value in (("selected", self.selected), ("want_field", self._want_field)):
-            if value is not None and value is not False:
+        for name, value in (("followed", self.followed), ("want_field", self._want_field)):
+            if value:  # what differs from a fresh runner's
                 self._control(name, value)
         if self._started:
             self._control("start")
@@ -317,9 +317,9 @@ class ProcessRunner(FramePublisher):
         self.steps_per_frame = max(1, int(steps_per_frame))
         self._control("speed", self.steps_per_frame)
 
-    def select(self, index: int | None) -> None:
-        self.selected = index
-        self._control("selected", index)
+    def follow(self, indices: Iterable[int]) -> None:
+        self.followed = tuple(sorted({int(i) for i in indices}))
+        self._control("followed", self.followed)
 
     @property
     def want_field(self) -> bool:
@@ -464,8 +464,8 @@ def _apply_control(runner: Runner, name: str, *args: Any) -> None:
         runner.set_playing(args[0])
     elif name == "speed":
         runner.set_speed(args[0])
-    elif name == "selected":
-        runner.select(args[0])
+    elif name == "followed":
+        runner.follow(args[0])
     elif name == "want_field":
         runner.want_field = args[0]
         runner.wake()

@@ -16,7 +16,7 @@ import queue
 import threading
 import time
 from collections import deque
-from typing import Any, Callable
+from typing import Any, Callable, Iterable
 
 import numpy as np
 
@@ -75,7 +75,8 @@ class Runner(FramePublisher):
         self.steps_per_frame = int(steps_per_frame)
         self.playing = bool(playing)
         self.chart_every = int(chart_every)
-        self.selected: int | None = None
+        #: The robots the viewers follow (each viewer its own), whose photocells the snapshots carry.
+        self.followed: tuple[int, ...] = ()
         #: Whether snapshots should carry the luminosity field (costly: only for the heat map).
         self.want_field = False
         self.program_name = PAPER_PROGRAM
@@ -152,8 +153,9 @@ class Runner(FramePublisher):
     def set_speed(self, steps_per_frame: int) -> None:
         self.steps_per_frame = max(1, int(steps_per_frame))
 
-    def select(self, index: int | None) -> None:
-        self.selected = index
+    def follow(self, indices: Iterable[int]) -> None:
+        """Carry these robots' photocells, commands and charge in the snapshots (the inspectors' robots)."""
+        self.followed = tuple(sorted({int(i) for i in indices}))
         self._wake.set()
 
     def step_once(self, n: int = 1) -> None:
@@ -387,19 +389,16 @@ class Runner(FramePublisher):
     def _snapshot(self) -> None:
         sim = self.sim
         self._frame += 1
-        robot = None
-        sel = self.selected
-        if sel is not None and 0 <= sel < sim.world.n_robots:
-            robot = RobotView(
-                index=sel,
-                position=sim.robot_positions[sel].copy(),
-                heading=float(sim.robot_headings[sel]),
-                sensors=sim.robot_sensors[sel].copy(),
-                sensor_points=sim.sensor_points(sel).copy(),
-                command=sim.robot_commands[sel].copy(),
-                applied=sim.robot_velocities[sel].copy(),
-                charge=float(sim.robot_charges[sel]),
-            )
+        followed = tuple(RobotView(
+            index=i,
+            position=sim.robot_positions[i].copy(),
+            heading=float(sim.robot_headings[i]),
+            sensors=sim.robot_sensors[i].copy(),
+            sensor_points=sim.sensor_points(i).copy(),
+            command=sim.robot_commands[i].copy(),
+            applied=sim.robot_velocities[i].copy(),
+            charge=float(sim.robot_charges[i]),
+        ) for i in self.followed if 0 <= i < sim.world.n_robots)
         in_goal = sim.box_in_goal
         # The light field counts its pattern changes: a new count means new lights.
         lights_key = (self._world_key, id(sim.lights), sim.lights.rebuilds)
@@ -445,7 +444,7 @@ class Runner(FramePublisher):
             playing=self.playing,
             steps_per_frame=self.steps_per_frame,
             steps_per_second=self.steps_per_second(),
-            robot=robot,
+            followed=followed,
             program=self.program_name,
             program_error=self.program_error,
             world_key=self._world_key,

@@ -9,7 +9,7 @@ Layout (z up, arena on z = 0, camera above looking down):
 - ``/goal``, ``/light_outline``   goal outline and current light outline
 - ``/swarm/robots``, ``/swarm/headings``   point clouds
 - ``/swarm/boxes/*``  the boxes as hexagons, in chunks (:mod:`.hexagons`)
-- ``/inspect/*``   the followed robot (the shape being drawn is :mod:`.draw_view`'s ``/draw/*``)
+- ``/inspect/*``   each viewer's followed robot, in that viewer's own scene (:mod:`.panel.inspector`); the shape being drawn is :mod:`.draw_view`'s ``/draw/*``
 - ``/caption``   what is running: case, strategies, step (also in recordings)
 
 One frame is one instant: the lit lights travel with the bodies, outline and
@@ -224,11 +224,6 @@ class SceneView:
         empty = np.zeros((1, 2, 3), np.float32)
         self.handles["goal"] = sc.add_line_segments("/goal", empty, pal.GOAL_LINE, thickness=0.18)
         self.handles["light_outline"] = sc.add_line_segments("/light_outline", empty, pal.LIGHT_LINE, thickness=0.08)
-        self.handles["selected"] = sc.add_line_segments("/inspect/ring", empty, pal.SELECTED, thickness=0.08,
-                                                        visible=False)
-        self.handles["sensors"] = sc.add_point_cloud(
-            "/inspect/sensors", np.zeros((4, 3), np.float32), pal.SENSOR_COLOURS, point_size=0.09,
-            point_shape="circle", visible=False)
         self._built_for = _geometry_key(cfg, n, m)
         self._lights_key = self._field_key = self._goal_key = None
         self._outline_bytes = None
@@ -267,18 +262,6 @@ class SceneView:
                 self.hexagons.update(self._points(m, snap.box_positions - centre), snap.box_angles,
                                      pal.box_mesh_colours(snap.box_in_goal), np.full(2, cfg.centre - centre))
             send(h["caption"], "text", caption(snap))
-            robot = snap.robot
-            if robot is not None:
-                a = np.linspace(0, 2 * np.pi, 33)
-                r = cfg.robot_radius * 1.9
-                ring = robot.position + r * np.stack([np.cos(a), np.sin(a)], axis=1)
-                h["selected"].points = pal.closed_segments(ring[:-1], Z_TOP)
-                pts = np.zeros((4, 3), np.float32)
-                pts[:, :2], pts[:, 2] = robot.sensor_points, Z_TOP
-                h["sensors"].points = pts
-            if h["selected"].visible != (robot is not None):
-                h["selected"].visible = robot is not None
-                h["sensors"].visible = robot is not None
 
     def set_show_field(self, show: bool, snap: Snapshot) -> None:
         with self._lock:

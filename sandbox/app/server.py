@@ -75,6 +75,8 @@ class App:
             offered = self.access.allow_programs or not is_shared(host)
             self.panel = Panel(self.server, self.runner, self.view, allow_programs=offered,
                                may_load_programs=self.gate.may_load_programs)
+            for client in list(self.server.get_clients().values()):  # came while the panel was built
+                self.panel.inspector.attach(client)
         except BaseException:
             self.server.stop()  # do not leave a half-built server listening
             self.runner.stop()
@@ -90,7 +92,7 @@ class App:
         self._last_viewer = time.monotonic()
         self._stopping = threading.Event()
         self.server.on_client_connect(self._on_connect)
-        self.server.on_client_disconnect(lambda client: setattr(self, "_last_viewer", time.monotonic()))
+        self.server.on_client_disconnect(self._on_disconnect)
         self._controller = controller
 
     # ------------------------------------------------------------ set-up
@@ -110,8 +112,15 @@ class App:
             with self.server.atomic():
                 self.view.update(snap)
                 self.panel.update(snap)
+            self.panel.inspector.draw(snap)  # each viewer's own marks, in its own messages
             self.panel.on_frame_drawn()
             self.frames_drawn += 1
+
+    def _on_disconnect(self, client: Any) -> None:
+        self._last_viewer = time.monotonic()
+        panel = getattr(self, "panel", None)
+        if panel is not None:
+            panel.inspector.detach(client.client_id)
 
     def _on_connect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
@@ -122,6 +131,9 @@ class App:
         if self.auto_paused:
             self.auto_paused = False
             self.runner.set_playing(True)
+        panel = getattr(self, "panel", None)  # a page may connect while the panel is built
+        if panel is not None:
+            panel.inspector.attach(client)
         # Fit the arena to this viewer's window as it tells its shape: its camera reports come while the
         # page lays itself out, and on a loaded machine the last one many seconds later. A page that
         # follows a robot has its camera moved by the inspector instead.

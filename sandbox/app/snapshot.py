@@ -58,7 +58,8 @@ class Snapshot:
     playing: bool
     steps_per_frame: int
     steps_per_second: float
-    robot: RobotView | None
+    #: The robots some viewer follows, in the order of ``Runner.followed`` (each viewer follows its own).
+    followed: tuple[RobotView, ...]
     #: What lights the floor: "the paper's controller" or a light program's path:Class.
     program: str = "the paper's controller"
     #: (count, message) of the last light program that failed while running (the paper's took over).
@@ -68,6 +69,10 @@ class Snapshot:
     #: The outline family the band follows ('scaled' or 'offset') and why.
     family: str = "scaled"
     family_reason: str = ""
+
+    def robot(self, index: int | None) -> RobotView | None:
+        """The followed robot ``index``, or None (not followed, or not in this world)."""
+        return next((r for r in self.followed if r.index == index), None)
 
 
 def case_name(shape: str, strategies: dict) -> str:

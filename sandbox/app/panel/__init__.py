@@ -82,7 +82,7 @@ class Panel:
     def _on_scene_click(self, event: Any) -> None:
         point = floor_point(event.ray_origin, event.ray_direction)
         if point is not None and not self.shape.click(point):
-            self.inspector.click(point)
+            self.inspector.click(point, event.client)
 
     @staticmethod
     def _build_learn(gui: Any) -> None:

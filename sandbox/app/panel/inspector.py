@@ -1,112 +1,206 @@
-"""The Inspector folder: follow one robot (clicked, or at random), read its
-photocells, command and charge, and let the camera follow it."""
+"""The Inspector folder: each viewer follows a robot of its own (clicked, or
+at random), reads its photocells, command and charge, and may let its camera
+follow it.
+
+The folder and its two buttons are shared; what a viewer follows, its
+read-outs and the ring and photocell dots on its floor are that viewer's own
+(viser's per-client GUI and scene), like its camera: following a robot in
+one tab changes nothing in another."""
 
 from __future__ import annotations
 
+import threading
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import viser
 
 from sandbox.app import palette as pal
-from sandbox.app.scene import frame_arena
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.scene import Z_TOP, frame_arena
+from sandbox.app.snapshot import RobotView, Snapshot
 from sandbox.model.robots import PHOTOCELLS
+
+HELP = "Click a robot on the floor to follow it. Each viewer follows its own."
+
+
+@dataclass
+class Viewer:
+    """One page's inspector: the robot it follows, its read-outs and its marks on the floor."""
+
+    client: Any
+    status: Any
+    text: Any
+    charge_bar: Any
+    stop: Any
+    ring: Any
+    sensors: Any
+    robot: int | None = None
 
 
 class InspectorFolder:
     def __init__(self, gui: Any, runner: Any, server: Any):
         self.gui, self.runner, self.server = gui, runner, server
-        #: Viewers whose camera follows the robot: each viewer decides for itself.
+        #: Each connected page's inspector, by client id.
+        self.viewers: dict[int, Viewer] = {}
+        #: Viewers whose camera follows their robot: each viewer decides for itself.
         self.followers: set[int] = set()
+        self._lock = threading.RLock()
+        self.folder: Any = None
 
     def build(self, snap: Snapshot) -> None:
         gui, runner = self.gui, self.runner
-        with gui.add_folder("Inspector"):
-            self.help = gui.add_markdown("Click a robot on the floor to follow it.")
-            self.text = gui.add_markdown("")
-            self.charge_bar = gui.add_progress_bar(0.0, color="green", visible=False)
+        with gui.add_folder("Inspector") as self.folder:
+            self.help = gui.add_markdown(HELP)
             self.camera_follow = gui.add_button("Camera follows (this viewer)", icon=viser.Icon.VIDEO,
-                                                hint="Zoom your own view in on the followed robot and keep it "
+                                                hint="Zoom your own view in on the robot you follow and keep it "
                                                      "centred; press again to see the whole arena")
             self.follow_random = gui.add_button("Follow a random robot", icon=viser.Icon.TARGET)
-            self.stop_follow = gui.add_button("Stop following", icon=viser.Icon.X, disabled=True)
 
         @self.follow_random.on_click
         def _(event: viser.GuiEvent) -> None:
             n = len(runner.latest.robot_positions)
-            if n:
-                self.follow(int(np.random.default_rng().integers(0, n)))
+            if n and event.client is not None:
+                self.follow(event.client, int(np.random.default_rng().integers(0, n)))
 
         @self.camera_follow.on_click
         def _(event: viser.GuiEvent) -> None:
             if event.client is None:
                 return
-            if event.client_id in self.followers:
-                self.followers.discard(event.client_id)
-                frame_arena(event.client, runner.latest.world_config)
-            else:
-                self.followers.add(event.client_id)
+            with self._lock:
+                if event.client_id in self.followers:
+                    self.followers.discard(event.client_id)
+                    frame_arena(event.client, runner.latest.world_config)
+                else:
+                    self.followers.add(event.client_id)
 
-        @self.stop_follow.on_click
+        for client in list(self.server.get_clients().values()):
+            self.attach(client)
+
+    # ------------------------------------------------------------ viewers
+    def attach(self, client: Any) -> None:
+        """Give a page that connected its own read-outs (in the shared folder) and floor marks."""
+        with self._lock:
+            if self.folder is None or client.client_id in self.viewers:
+                return
+            with self.folder:  # a client's elements inside the server's folder
+                status = client.gui.add_markdown("")
+                text = client.gui.add_markdown("")
+                charge_bar = client.gui.add_progress_bar(0.0, color="green", visible=False)
+                stop = client.gui.add_button("Stop following", icon=viser.Icon.X, disabled=True)
+            empty = np.zeros((1, 2, 3), np.float32)
+            ring = client.scene.add_line_segments("/inspect/ring", empty, pal.SELECTED, thickness=0.08, visible=False)
+            sensors = client.scene.add_point_cloud("/inspect/sensors", np.zeros((4, 3), np.float32),
+                                                   pal.SENSOR_COLOURS, point_size=0.09, point_shape="circle",
+                                                   visible=False)
+            self.viewers[client.client_id] = Viewer(client, status, text, charge_bar, stop, ring, sensors)
+
+        @stop.on_click
         def _(event: viser.GuiEvent) -> None:
-            self.stop()
+            self.stop_following(client.client_id)
 
-    def update(self, snap: Snapshot) -> None:
-        if snap.robot is None:
-            return
-        self.text.content = self._text(snap)
-        cap = snap.world_config.capacity
-        self.charge_bar.value = float(100.0 * snap.robot.charge / cap) if cap > 0 else 0.0
-        # The bar in the robot's own colour on the floor (viser's names for them).
-        self.charge_bar.color = ("green", "orange", "red")[int(pal.charge_class([snap.robot.charge], cap)[0])]
-        self.charge_bar.visible = True
-        if self.followers:
-            self._follow_with_cameras(snap)
+    def detach(self, client_id: int) -> None:
+        """A page left: forget what it followed (viser drops its elements)."""
+        with self._lock:
+            self.followers.discard(client_id)
+            if self.viewers.pop(client_id, None) is not None:
+                self._tell_runner()
 
-    def click(self, point: tuple[float, float]) -> None:
-        """A click on the floor: follow the nearest robot within a couple of body lengths."""
+    def follow(self, client: Any, index: int) -> None:
+        """This viewer follows robot ``index``."""
+        with self._lock:
+            viewer = self.viewers.get(client.client_id)
+            if viewer is None:
+                self.attach(client)
+                viewer = self.viewers.get(client.client_id)
+                if viewer is None:
+                    return
+            viewer.robot = int(index)
+            viewer.status.content = f"Following robot **{index}** (click another, or stop)."
+            viewer.stop.disabled = False
+            self._tell_runner()
+
+    def click(self, point: tuple[float, float], client: Any) -> None:
+        """A click on the floor: this viewer follows the nearest robot within a couple of body lengths."""
         snap = self.runner.latest
-        if len(snap.robot_positions) == 0:
+        if client is None or len(snap.robot_positions) == 0:
             return
         d = np.hypot(*(snap.robot_positions - np.asarray(point)).T)
         i = int(np.argmin(d))
         if d[i] <= max(1.5, 6 * snap.world_config.robot_radius):
-            self.follow(i)
+            self.follow(client, i)
 
-    def follow(self, index: int) -> None:
-        self.runner.select(index)
-        self.help.content = f"Following robot **{index}** (click another, or stop)."
-        self.stop_follow.disabled = False
+    def stop_following(self, client_id: int) -> None:
+        """This viewer follows nothing; its camera, if it followed, sees the arena again."""
+        with self._lock:
+            viewer = self.viewers.get(client_id)
+            if viewer is None:
+                return
+            viewer.robot = None
+            viewer.status.content = ""
+            viewer.text.content = ""
+            viewer.charge_bar.visible = False
+            viewer.stop.disabled = True
+            viewer.ring.visible = viewer.sensors.visible = False
+            if client_id in self.followers:
+                self.followers.discard(client_id)
+                frame_arena(viewer.client, self.runner.latest.world_config)
+            self._tell_runner()
 
     def stop(self) -> None:
-        self.runner.select(None)
-        self.help.content = "Click a robot on the floor to follow it."
-        self.text.content = ""
-        self.charge_bar.visible = False
-        self.stop_follow.disabled = True
-        clients = self.server.get_clients()
-        for client_id in list(self.followers):
-            if client_id in clients:
-                frame_arena(clients[client_id], self.runner.latest.world_config)
-        self.followers.clear()
+        """Every viewer stops following (a new world: its robots are not the ones followed)."""
+        with self._lock:
+            for client_id in list(self.viewers):
+                self.stop_following(client_id)
 
-    def _follow_with_cameras(self, snap: Snapshot) -> None:
-        x, y = (float(v) for v in snap.robot.position)
-        height = 12.0
-        clients = self.server.get_clients()
-        for client_id in list(self.followers):
-            client = clients.get(client_id)
-            if client is None:  # left
-                self.followers.discard(client_id)
-                continue
-            with client.atomic():
-                client.camera.position = (x, y - 1e-3 * height, height)
-                client.camera.look_at = (x, y, 0.0)
+    def _tell_runner(self) -> None:
+        self.runner.follow(v.robot for v in self.viewers.values() if v.robot is not None)
+
+    # ------------------------------------------------------------ drawing
+    def update(self, snap: Snapshot) -> None:
+        """The read-outs, at the panel's refresh rate; cameras that follow move with them."""
+        with self._lock:
+            for client_id, viewer in list(self.viewers.items()):
+                robot = snap.robot(viewer.robot)
+                if robot is None:
+                    continue
+                viewer.text.content = self._text(snap, robot)
+                cap = snap.world_config.capacity
+                viewer.charge_bar.value = float(100.0 * robot.charge / cap) if cap > 0 else 0.0
+                # The bar in the robot's own colour on the floor (viser's names for them).
+                viewer.charge_bar.color = ("green", "orange", "red")[int(pal.charge_class([robot.charge], cap)[0])]
+                viewer.charge_bar.visible = True
+                if client_id in self.followers:
+                    self._move_camera(viewer.client, robot)
+
+    def draw(self, snap: Snapshot) -> None:
+        """Each viewer's ring and photocell dots on its robot, at every frame (they ride with it)."""
+        with self._lock:
+            for viewer in list(self.viewers.values()):
+                robot = snap.robot(viewer.robot)
+                if robot is None:
+                    continue
+                a = np.linspace(0, 2 * np.pi, 33)
+                r = snap.world_config.robot_radius * 1.9
+                ring = robot.position + r * np.stack([np.cos(a), np.sin(a)], axis=1)
+                pts = np.zeros((4, 3), np.float32)
+                pts[:, :2], pts[:, 2] = robot.sensor_points, Z_TOP
+                with viewer.client.atomic():
+                    viewer.ring.points = pal.closed_segments(ring[:-1], Z_TOP)
+                    viewer.sensors.points = pts
+                    if not viewer.ring.visible:
+                        viewer.ring.visible = viewer.sensors.visible = True
 
     @staticmethod
-    def _text(snap: Snapshot) -> str:
-        r = snap.robot
+    def _move_camera(client: Any, robot: RobotView) -> None:
+        x, y = (float(v) for v in robot.position)
+        height = 12.0
+        with client.atomic():
+            client.camera.position = (x, y - 1e-3 * height, height)
+            client.camera.look_at = (x, y, 0.0)
+
+    @staticmethod
+    def _text(snap: Snapshot, r: RobotView) -> str:
         names = PHOTOCELLS[snap.world_config.photocells].names
         v, w = r.command
         av, aw = r.applied
