@@ -239,6 +239,45 @@ def test_run_controls(app, page):
     wait_until(lambda: not app.view.show_field, what="the light grid")
 
 
+def test_the_keyboard_runs_the_sandbox(app, page):
+    """Issue 24, item 5: space plays and pauses, s steps, r resets, f follows a robot (this viewer's)."""
+    runner = app.runner
+    page.evaluate("document.activeElement && document.activeElement.blur()")  # keys to the page, not a control
+    playing = runner.playing
+    page.keyboard.press("Space")
+    wait_until(lambda: runner.playing != playing, what="space to play or pause")
+    if runner.playing:
+        page.keyboard.press("Space")
+        wait_until(lambda: not runner.playing, what="space to pause")
+    before = paused_step(runner)
+    page.keyboard.press("s")
+    wait_until(lambda: runner.latest.step == before + runner.latest.world_config.update_every, what="s to step")
+    page.keyboard.press("r")
+    wait_until(lambda: runner.latest.step == 0, what="r to reset")
+    client_id = next(iter(app.server.get_clients()))
+    page.keyboard.press("f")
+    wait_until(lambda: app.panel.inspector.viewers[client_id].robot is not None, what="f to follow a robot")
+    page.get_by_text("Following robot", exact=False).first.wait_for(timeout=10_000)
+    click_button(page, "Stop following")
+    wait_until(lambda: runner.followed == (), what="stop following")
+    page.keyboard.press("Space")
+    wait_until(lambda: runner.playing, what="space to play again")
+    # Typing in a field is typing, not a command.
+    field = page.get_by_label("robots", exact=True)
+    opened = not field.is_visible()
+    if opened:
+        open_folder(page, "Population and physics")
+    world = runner.latest.world_key
+    field.focus()
+    field.press("Space")
+    field.press("r")
+    frames_pass(runner)
+    assert runner.playing and runner.latest.world_key == world  # neither paused nor reset
+    field.press("Escape")
+    if opened:
+        open_folder(page, "Population and physics")  # closed again
+
+
 def test_quick_shape_picks_are_never_lost(app, page):
     """Picks one after another, one click each, as in the report that lost about 1 in
     10: each one reaches the simulation, and the dropdown still shows it after the

@@ -247,3 +247,55 @@ def test_upload_acknowledgements_reach_only_the_uploader(app):
     assert "FileTransferPartAck" not in newcomer.received_types(1.5)  # nothing of it in the backlog
     uploader.close()
     newcomer.close()
+
+
+def command_uuid(app, label: str) -> str:
+    return next(uuid for uuid, handle in app.server.gui._command_handle_from_uuid.items() if handle.label == label)
+
+
+def test_keyboard_commands_are_checked_like_buttons(shared_app):
+    """A key (viser's command palette) triggers a server action: a watching page's is refused, a disabled
+    command never acts, the presenter's acts."""
+    app = shared_app
+    play = command_uuid(app, "Play / pause")
+    watcher = RawClient(app.port, own_page(app))
+    wid = connected(app, watcher)
+    watcher.send("CommandTriggerMessage", uuid=play)
+    wait_until(lambda: refusals(app, wid) >= 1, what="the watcher's key refused")
+    assert app.runner.playing
+    presenter = RawClient(app.port, {**own_page(app), "Authorization": f"token {TOKEN}"})
+    pid = connected(app, presenter)
+    app.server.gui._command_handle_from_uuid[play].disabled = True
+    presenter.send("CommandTriggerMessage", uuid=play)
+    presenter.send("CommandTriggerMessage", uuid="no-such-command")
+    wait_until(lambda: refusals(app, pid) >= 2, what="two refusals")
+    assert app.runner.playing
+    app.server.gui._command_handle_from_uuid[play].disabled = False
+    presenter.send("CommandTriggerMessage", uuid=play)
+    wait_until(lambda: not app.runner.playing, what="the presenter's space to pause")
+    watcher.close()
+    presenter.close()
+
+
+def test_a_page_cannot_press_another_pages_own_controls(app):
+    """The inspector's Stop button is each page's own: checked like a shared control (a disabled one
+    never acts), and another page's is not there to press."""
+    first, second = RawClient(app.port, own_page(app)), RawClient(app.port, own_page(app))
+    fid, sid = connected(app, first), connected(app, second)
+    inspector = app.panel.inspector
+    wait_until(lambda: {fid, sid} <= set(inspector.viewers), what="both pages' inspectors")
+    inspector.follow(app.server.get_clients()[fid], 3)
+    inspector.follow(app.server.get_clients()[sid], 5)
+    first_stop = uuid_of(inspector.viewers[fid].stop)
+    second.click(first_stop)  # not second's control
+    wait_until(lambda: refusals(app, sid) >= 1, what="the other page's press refused")
+    inspector.viewers[fid].stop.disabled = True
+    first.click(first_stop)
+    wait_until(lambda: refusals(app, fid) >= 1, what="the disabled button refused")
+    assert inspector.viewers[fid].robot == 3 and inspector.viewers[sid].robot == 5
+    inspector.viewers[fid].stop.disabled = False
+    first.click(first_stop)
+    wait_until(lambda: app.runner.followed == (5,), what="the page's own Stop to act")
+    assert inspector.viewers[fid].robot is None and inspector.viewers[sid].robot == 5
+    first.close()
+    second.close()

@@ -145,7 +145,7 @@ class Gate:
         inbox = self.inbox
 
         async def guarded(client_id: int, message: Any) -> None:  # this connection's own handlers (camera)
-            if inbox.admit_local(grant, message):
+            if inbox.admit_local(client_id, grant, message):
                 await dispatch(client_id, message)
 
         connection._handle_incoming_message = guarded

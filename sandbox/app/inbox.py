@@ -116,12 +116,17 @@ class Inbox:
             self._refused(client_id, message, str(why))
             return False
 
-    def admit_local(self, grant: Grant | None, message: Any) -> bool:
-        """The same message, on its way to the connection's own handlers (its camera): only the grant
-        matters here, since :meth:`admit` sees, counts and checks every message at the server first."""
-        if grant is None or isinstance(message, NEVER + _UPLOADS):
+    def admit_local(self, client_id: int, grant: Grant | None, message: Any) -> bool:
+        """The same message, on its way to the connection's own handlers (its camera, and the controls
+        made for this page alone, such as its inspector's): checked as :meth:`admit` checks it, which
+        has already counted it and told the page when it was refused."""
+        if isinstance(message, _UPLOADS):
             return False
-        return grant.controls or isinstance(message, WATCH_MESSAGES)
+        try:
+            self._check(client_id, grant, message, quietly=True)
+            return True
+        except Refused:
+            return False
 
     def forget(self, client_id: int) -> None:
         """A page left: drop its upload and its counts."""
@@ -132,25 +137,31 @@ class Inbox:
             self._told_watching.discard(client_id)
 
     # --------------------------------------------------------------- checks
-    def _check_sender(self, client_id: int, grant: Grant | None, message: Any) -> None:
+    def _check_sender(self, client_id: int, grant: Grant | None, message: Any, quietly: bool = False) -> None:
         if grant is None:
             raise Refused("the connection has no grant")
         if isinstance(message, NEVER):
             raise Refused(f"{type(message).__name__} is never accepted")
         if not grant.controls and not isinstance(message, WATCH_MESSAGES):
-            self._tell_watching(client_id)
+            if not quietly:
+                self._tell_watching(client_id)
             raise Refused("a watching page may not control the sandbox")
 
-    def _check(self, client_id: int, grant: Grant | None, message: Any) -> None:
-        self._check_sender(client_id, grant, message)
+    def _check(self, client_id: int, grant: Grant | None, message: Any, quietly: bool = False) -> None:
+        self._check_sender(client_id, grant, message, quietly)
         if isinstance(message, messages.GuiUpdateMessage):
-            self._check_update(message)
+            self._check_update(client_id, message)
         elif isinstance(message, messages.GuiButtonHoldMessage):
-            self._control(message.uuid, GuiButtonHandle)
+            self._control(client_id, message.uuid, GuiButtonHandle)
+        elif isinstance(message, messages.CommandTriggerMessage):
+            self._command(client_id, message.uuid)
 
-    def _control(self, uuid: str, kind: type | tuple) -> Any:
-        """The shown, enabled control ``uuid`` of the given kind, or Refused."""
+    def _control(self, client_id: int, uuid: str, kind: type | tuple) -> Any:
+        """The shown, enabled control ``uuid`` of the given kind, shared or this page's own, or Refused."""
         handle = self.server.gui._gui_input_handle_from_uuid.get(uuid)
+        if handle is None:
+            client = self._client(client_id)
+            handle = None if client is None else client.gui._gui_input_handle_from_uuid.get(uuid)
         if handle is None or handle._impl.removed:
             raise Refused(f"no control {uuid!r}")
         if not isinstance(handle, kind):
@@ -162,11 +173,23 @@ class Inbox:
             raise Refused(f"{_label(handle)} is hidden")
         return handle
 
-    def _check_update(self, message: Any) -> None:
+    def _command(self, client_id: int, uuid: str) -> Any:
+        """The enabled keyboard command ``uuid`` (shared or this page's own), or Refused."""
+        handle = self.server.gui._command_handle_from_uuid.get(uuid)
+        if handle is None:
+            client = self._client(client_id)
+            handle = None if client is None else client.gui._command_handle_from_uuid.get(uuid)
+        if handle is None or handle._impl.removed:
+            raise Refused(f"no command {uuid!r}")
+        if handle._impl.props.disabled:
+            raise Refused(f"command {handle._impl.props.label!r} is disabled")
+        return handle
+
+    def _check_update(self, client_id: int, message: Any) -> None:
         updates = message.updates
         if not isinstance(updates, dict) or set(updates) != {"value"}:
             raise Refused(f"a page may change a control's value only, not {sorted(map(str, updates))}")
-        handle = self._control(message.uuid, _VALUE_CHECKS)
+        handle = self._control(client_id, message.uuid, _VALUE_CHECKS)
         for kind, check in _VALUE_CHECKS_BY_KIND:
             if isinstance(handle, kind):
                 problem = check(handle, updates["value"])
@@ -185,7 +208,7 @@ class Inbox:
         self.forget_upload_of(client_id)  # one transfer per page: a new one replaces it
         size, parts = _whole(message.size_bytes), _whole(message.part_count)
         try:
-            self._control(message.source_component_uuid, GuiUploadButtonHandle)
+            self._control(client_id, message.source_component_uuid, GuiUploadButtonHandle)
             if size is None or parts is None or size < 0 or parts != math.ceil(size / UPLOAD_PART):
                 raise Refused(f"an upload of {message.size_bytes!r} bytes cannot come in {message.part_count!r} parts")
             if size > self.upload_limit:

@@ -24,7 +24,7 @@ from sandbox.model.robots import PHOTOCELLS
 HELP = "Click a robot on the floor to follow it. Each viewer follows its own."
 
 
-@dataclass
+@dataclass(eq=False, repr=False)  # viser's handles have no repr to lend
 class Viewer:
     """One page's inspector: the robot it follows, its read-outs and its marks on the floor."""
 
@@ -57,11 +57,9 @@ class InspectorFolder:
                                                      "centred; press again to see the whole arena")
             self.follow_random = gui.add_button("Follow a random robot", icon=viser.Icon.TARGET)
 
-        @self.follow_random.on_click
-        def _(event: viser.GuiEvent) -> None:
-            n = len(runner.latest.robot_positions)
-            if n and event.client is not None:
-                self.follow(event.client, int(np.random.default_rng().integers(0, n)))
+        self.follow_random.on_click(lambda event: self.follow_any(event.client))
+        gui.add_command("Follow a random robot", hotkey="F", description="key: f (this viewer)").on_trigger(
+            lambda event: self.follow_any(event.client))
 
         @self.camera_follow.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -119,6 +117,12 @@ class InspectorFolder:
             viewer.status.content = f"Following robot **{index}** (click another, or stop)."
             viewer.stop.disabled = False
             self._tell_runner()
+
+    def follow_any(self, client: Any) -> None:
+        """This viewer follows a robot drawn at random."""
+        n = len(self.runner.latest.robot_positions)
+        if n and client is not None:
+            self.follow(client, int(np.random.default_rng().integers(0, n)))
 
     def click(self, point: tuple[float, float], client: Any) -> None:
         """A click on the floor: this viewer follows the nearest robot within a couple of body lengths."""

@@ -55,20 +55,19 @@ class RunFolder:
         def _(event: viser.GuiEvent) -> None:
             runner.cancel_build()
 
-        @self.play.on_click
-        def _(event: viser.GuiEvent) -> None:
-            runner.set_playing(not runner.playing)
-            self._sync_play_button()
-
-        @self.step_button.on_click
-        def _(event: viser.GuiEvent) -> None:
-            runner.set_playing(False)
-            self._sync_play_button()
-            runner.step_once(runner.latest.world_config.update_every)
-
-        @self.reset_same.on_click
-        def _(event: viser.GuiEvent) -> None:
-            self._reset(None, event.client)
+        self.play.on_click(lambda event: self.toggle_play())
+        self.step_button.on_click(lambda event: self.step())
+        self.reset_same.on_click(lambda event: self._reset(None, event.client))
+        # The same actions from the keyboard (and viser's command palette, Ctrl+K), for a presenter
+        # standing at the projector.
+        keys = {"space": ("Play / pause", self.toggle_play), "S": ("Step", self.step),
+                "R": ("Reset (same seed)", None)}
+        for key, (label, action) in keys.items():
+            command = gui.add_command(label, hotkey=key, description=f"key: {key.lower()}")
+            if action is not None:
+                command.on_trigger(lambda event, act=action: act())
+            else:
+                command.on_trigger(lambda event: self._reset(None, event.client))
 
         @self.reset_new.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -86,6 +85,16 @@ class RunFolder:
         def _(event: viser.GuiEvent) -> None:
             runner.want_field = bool(self.show_field.value)  # the next snapshots carry the field
             self._show_field(self.show_field.value)
+
+    def toggle_play(self) -> None:
+        self.runner.set_playing(not self.runner.playing)
+        self._sync_play_button()
+
+    def step(self) -> None:
+        """One controller update, paused first."""
+        self.runner.set_playing(False)
+        self._sync_play_button()
+        self.runner.step_once(self.runner.latest.world_config.update_every)
 
     def frame(self, client: Any, view: str) -> None:
         """Frame one page's camera on the construction area or the whole arena (View buttons)."""
