@@ -389,26 +389,49 @@ def test_strategy_tooltips_are_short_plain_words():
         assert not any(name in s.tip for name in param_names() if "_" in name), s.tip
 
 
-def test_classroom_waits_at_step_0_and_frames_the_construction_area():
-    """Issue 24, item 5: serve --classroom starts paused at step 0 and frames new pages on the
-    construction area; the View buttons frame one page's camera on either."""
-    from sandbox.app.panel.run import CONSTRUCTION, WHOLE_ARENA
+def test_classroom_waits_at_step_0_and_lays_pages_out_for_a_projector():
+    """Issue 24, item 5: serve --classroom starts paused at step 0; a new page gets the presenter
+    layout (its panel folded, the construction area framed with the legend on its floor); the View
+    buttons lay one page out as the construction area, the whole arena or the presenter's."""
+    from sandbox.app.panel.framing import CONSTRUCTION, PRESENTER, WHOLE_ARENA
     from sandbox.app.scene import top_down_camera
     from sandbox.app.server import App, free_port
+    from tests.viser_wire import RawClient
 
     app = App(SMALL, port=free_port(), fps=60, steps_per_frame=2, playing=False, whole_arena=False).start()
+    first = second = None
     try:
         frames_pass(app.runner, 10)
         assert app.runner.latest.step == 0 and not app.runner.latest.playing
         whole_height = top_down_camera(SMALL)[0][2]
         assert app.server.initial_camera.position[2] < 0.5 * whole_height  # the 16 m area, not the 64 m arena
-        page = FakeClient()
-        app.panel.run.frame(page, WHOLE_ARENA)
-        assert page.camera.position[2] == pytest.approx(top_down_camera(SMALL, 1.0)[0][2])
-        app.panel.run.frame(page, CONSTRUCTION)
-        assert page.camera.position[2] == pytest.approx(top_down_camera(SMALL, 1.0, whole=False)[0][2])
-        assert page.camera.position[2] < 0.5 * whole_height
+        first, second = RawClient(app.port), RawClient(app.port)  # as two browsers, 800 x 600 each
+        first.say_hello()
+        second.say_hello()
+        clients = wait_until(lambda: len(app.server.get_clients()) == 2 and app.server.get_clients())
+        a, b = (clients[i] for i in sorted(clients))
+        framing = app.panel.framing
+        assert framing.of(a.client_id) == framing.of(b.client_id) == PRESENTER
+        folded = "GuiSetPanelCollapsedMessage"
+        assert folded in first.received_types(20.0, until=frozenset({folded}))  # its panel folds to its bar
+        wait_until(lambda: a.client_id in framing._legends, what="the legend on the first page's floor")
+        left = framing._legends[a.client_id][0].position[0]
+        assert left < SMALL.centre - SMALL.construction_size / 2  # beside the construction area
+        presenter_x = a.camera.look_at[0]
+        assert presenter_x < SMALL.centre  # centred between the legend and the construction area
+        app.panel.run.frame(a, WHOLE_ARENA)
+        assert a.camera.position[2] == pytest.approx(top_down_camera(SMALL, a.camera.aspect)[0][2])
+        assert a.client_id not in framing._legends and framing.of(b.client_id) == PRESENTER  # b keeps its own
+        app.panel.run.frame(a, CONSTRUCTION)
+        assert a.camera.position[2] == pytest.approx(top_down_camera(SMALL, a.camera.aspect, whole=False)[0][2])
+        assert a.camera.position[2] < 0.5 * whole_height
+        framing.toggle_presenter(a)  # the P key
+        assert framing.of(a.client_id) == PRESENTER and a.client_id in framing._legends
+        assert a.camera.look_at[0] == pytest.approx(presenter_x)
     finally:
+        for page in (first, second):
+            if page is not None:
+                page.close()
         app.stop()
 
 

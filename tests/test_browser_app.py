@@ -262,6 +262,17 @@ def test_the_keyboard_runs_the_sandbox(app, page):
     wait_until(lambda: runner.followed == (), what="stop following")
     page.keyboard.press("Space")
     wait_until(lambda: runner.playing, what="space to play again")
+    # p: this page's presenter layout (panel folded, legend on the floor), and back.
+    framing = app.panel.framing
+    page.keyboard.press("p")
+    wait_until(lambda: framing.of(client_id) == "Presenter" and client_id in framing._legends, what="p: presenter")
+    wait_until(lambda: not page.get_by_text("Steps per frame", exact=True).is_visible(), what="the panel folded")
+    page.keyboard.press("p")
+    wait_until(lambda: framing.of(client_id) == "Construction area" and client_id not in framing._legends,
+               what="p again: the construction area")
+    page.get_by_text("Steps per frame", exact=True).wait_for(timeout=10_000)  # the panel back
+    page.get_by_role("button", name="Whole arena", exact=True).click()
+    wait_until(lambda: framing.of(client_id) == "Whole arena", what="the whole arena again")
     # Typing in a field is typing, not a command.
     field = page.get_by_label("robots", exact=True)
     opened = not field.is_visible()

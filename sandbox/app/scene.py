@@ -39,6 +39,7 @@ from sandbox.app.snapshot import Snapshot, caption
 from sandbox.model.config import Config
 
 Z_FIELD, Z_LIGHTS, Z_LIT, Z_BOXES, Z_ROBOTS, Z_MARKS, Z_LINES, Z_TOP = -0.01, 0.0, 0.01, 0.02, 0.04, 0.05, 0.08, 0.12
+Z_LEGEND = 0.10  # the presenter's legend: over the bodies and lines, under the caption and the followed robot's ring
 
 
 #: The construction view shows this many times the construction area's side: the area, the pile and
@@ -95,17 +96,55 @@ def _geometry_key(cfg: Config, n: int, m: int) -> tuple:
 FLOOR_LEGEND_WIDTH = 16.0
 
 
-def add_floor_legend(scene: Any, config: Config) -> Any:
-    """The legend as a picture on the floor, left of the arena, its top level with the arena's top wall
-    (in view beside the arena in any window wider than 1.3 : 1, as a replay's usually is)."""
+def add_floor_legend(scene: Any, config: Config, presenter: bool = False) -> Any:
+    """The legend as a picture on the floor: left of the arena, its top level with the arena's top wall
+    (in view beside the arena in any window wider than 1.3 : 1, as a replay's usually is); or, for the
+    presenter layout, left of the construction area (:func:`presenter_legend_box`)."""
     from sandbox.app.legend import legend_picture
 
     picture = np.ascontiguousarray(legend_picture()[::-1])  # an image's first row lies at the floor's -y side
-    width = FLOOR_LEGEND_WIDTH
-    height = width * picture.shape[0] / picture.shape[1]
-    position = (-1.0 - width / 2.0, config.arena_size - height / 2.0, Z_LIGHTS)
+    if presenter:
+        left, right, bottom, top = presenter_legend_box(config, picture.shape[0] / picture.shape[1])
+        # Over the robots that roam there: on a projector the legend must stay readable.
+        width, height, position = right - left, top - bottom, ((left + right) / 2.0, (bottom + top) / 2.0, Z_LEGEND)
+    else:
+        width = FLOOR_LEGEND_WIDTH
+        height = width * picture.shape[0] / picture.shape[1]
+        position = (-1.0 - width / 2.0, config.arena_size - height / 2.0, Z_LIGHTS)
     return scene.add_image("/legend", picture, width, height, format="png", position=position,
                            cast_shadow=False, receive_shadow=False)
+
+
+#: The presenter layout's legend: its width as a share of the construction area's side, and its gap
+#: (m) to the construction wall.
+PRESENTER_LEGEND_SHARE, PRESENTER_LEGEND_GAP = 0.6, 1.0
+
+
+def presenter_legend_box(config: Config, height_per_width: float) -> tuple[float, float, float, float]:
+    """(left, right, bottom, top) of the presenter layout's floor legend: left of the construction
+    wall, its top level with the wall's top, large enough to read on a projector."""
+    half = config.construction_size / 2.0
+    width = PRESENTER_LEGEND_SHARE * config.construction_size
+    right = config.centre - half - PRESENTER_LEGEND_GAP
+    top = config.centre + half
+    return right - width, right, top - width * height_per_width, top
+
+
+def presenter_camera(config: Config, aspect: float, height_per_width: float,
+                     fov_deg: float = 50.0) -> tuple[np.ndarray, np.ndarray, float]:
+    """Camera position, look-at point and field of view framing the construction area and the
+    presenter's legend beside it, as large as the view's ``aspect`` allows (a margin all round)."""
+    left, _, bottom, _ = presenter_legend_box(config, height_per_width)
+    half = config.construction_size * CONSTRUCTION_VIEW / 2.0
+    margin = half - config.construction_size / 2.0
+    x0, x1 = left - margin, config.centre + half
+    y0, y1 = min(bottom, config.centre - config.construction_size / 2.0) - margin, config.centre + half
+    fov = np.radians(fov_deg)
+    aspect = max(aspect, 0.1)
+    half_height = max((y1 - y0) / 2.0, (x1 - x0) / 2.0 / aspect)
+    height = half_height / np.tan(fov / 2.0)
+    cx, cy = (x0 + x1) / 2.0, (y0 + y1) / 2.0
+    return np.array([cx, cy - 1e-3 * height, height]), np.array([cx, cy, 0.0]), float(fov)
 
 
 def configure_scene(server: Any, config: Config, whole: bool = True) -> None:
@@ -219,6 +258,8 @@ class SceneView:
         # Above a top-right corner: viser stacks its notifications at the page's top left.
         wall = cfg.centre + cfg.construction_size / 2.0
         corner = (wall, wall + 0.3) if self.caption_over_construction else (s, s + 0.8)
+        # Its size is in screen pixels: at 1.2 it still fits a phone's width (a larger one, for a
+        # projector, would run off a phone that watches the same classroom).
         self.handles["caption"] = sc.add_label("/caption", caption(snap), position=(*corner, Z_TOP),
                                                anchor="bottom-right", font_screen_scale=1.2)
         empty = np.zeros((1, 2, 3), np.float32)

@@ -23,6 +23,7 @@ from sandbox.app.access import WATCH, Access, is_loopback_host, is_shared
 from sandbox.app.gate import start_server
 from sandbox.app.icons import read_icons_once
 from sandbox.app.panel import Panel
+from sandbox.app.panel.framing import PRESENTER, WHOLE_ARENA
 from sandbox.app.process import ProcessRunner
 from sandbox.app.runner import Runner, wait_for
 from sandbox.app.scene import SceneView, configure_scene, frame_arena
@@ -74,9 +75,11 @@ class App:
             # connection may do it (served to this machine, or --allow-programs); the gate decides per page.
             offered = self.access.allow_programs or not is_shared(host)
             self.panel = Panel(self.server, self.runner, self.view, allow_programs=offered,
-                               may_load_programs=self.gate.may_load_programs)
+                               may_load_programs=self.gate.may_load_programs,
+                               default_view=WHOLE_ARENA if whole_arena else PRESENTER)
             for client in list(self.server.get_clients().values()):  # came while the panel was built
                 self.panel.inspector.attach(client)
+                self.panel.framing.arrive(client)
         except BaseException:
             self.server.stop()  # do not leave a half-built server listening
             self.runner.stop()
@@ -121,6 +124,7 @@ class App:
         panel = getattr(self, "panel", None)
         if panel is not None:
             panel.inspector.detach(client.client_id)
+            panel.framing.forget(client.client_id)
 
     def _on_connect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
@@ -134,6 +138,7 @@ class App:
         panel = getattr(self, "panel", None)  # a page may connect while the panel is built
         if panel is not None:
             panel.inspector.attach(client)
+            panel.framing.arrive(client)
         # Fit the arena to this viewer's window as it tells its shape: its camera reports come while the
         # page lays itself out, and on a loaded machine the last one many seconds later. A page that
         # follows a robot has its camera moved by the inspector instead.
@@ -144,7 +149,10 @@ class App:
                 panel = getattr(self, "panel", None)  # a page may connect while the panel is built
                 following = panel is not None and client.client_id in panel.inspector.followers
                 if aspect and aspect != fitted and not following:
-                    frame_arena(client, self.runner.latest.world_config, whole=self.whole_arena)
+                    if panel is not None:
+                        panel.framing.apply(client)  # as this viewer's View says
+                    else:
+                        frame_arena(client, self.runner.latest.world_config, whole=self.whole_arena)
                     fitted = aspect
                 time.sleep(0.25)
 

@@ -14,6 +14,7 @@ from typing import Any
 from sandbox.app import learn, legend
 from sandbox.app.panel.advice import AdviceFolder
 from sandbox.app.panel.common import PANEL_HZ, floor_point
+from sandbox.app.panel.framing import WHOLE_ARENA, Framing
 from sandbox.app.panel.inspector import InspectorFolder
 from sandbox.app.panel.metrics import MetricsFolder
 from sandbox.app.panel.parameters import ParametersFolder
@@ -30,21 +31,23 @@ class Panel:
     ``view`` is the scene (it shows the heat map); the shape being drawn has its own nodes (draw_view)."""
 
     def __init__(self, server: Any, runner: Any, view: Any, *, allow_programs: bool = True,
-                 may_load_programs: Any = None):
+                 may_load_programs: Any = None, default_view: str = WHOLE_ARENA):
         gui = server.gui
         self.runner = runner
+        #: How each viewer frames the floor (its View, the presenter layout).
+        self.framing = Framing(runner, default_view)
         self._last_refresh = 0.0
         self.parameters = ParametersFolder(gui, runner)
         self.metrics = MetricsFolder(gui, runner)
         self.run = RunFolder(gui, runner, show_field=lambda on: view.set_show_field(on, runner.latest),
-                             after_reset=self._after_reset)
+                             after_reset=self._after_reset, framing=self.framing)
         self.shape = ShapeFolder(gui, runner, server.scene, on_change=self.metrics.mark)
         self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark,
                                            reset=self.run.reset)
         self.advice = AdviceFolder(gui, runner, use=self.strategies.use)
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
-        self.inspector = InspectorFolder(gui, runner, server)
+        self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
         self.record = RecordFolder(gui, server, runner)
         self.folders = (self.run, self.shape, self.advice, self.strategies, self.program, self.metrics,
                         self.inspector, self.record, self.parameters)

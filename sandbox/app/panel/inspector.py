@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import viser
 
 from sandbox.app import palette as pal
-from sandbox.app.scene import Z_TOP, frame_arena
+from sandbox.app.scene import Z_TOP
 from sandbox.app.snapshot import RobotView, Snapshot
 from sandbox.model.robots import PHOTOCELLS
 
@@ -39,8 +39,9 @@ class Viewer:
 
 
 class InspectorFolder:
-    def __init__(self, gui: Any, runner: Any, server: Any):
-        self.gui, self.runner, self.server = gui, runner, server
+    def __init__(self, gui: Any, runner: Any, server: Any, reframe: Callable[[Any], None]):
+        """``reframe(client)`` frames a page's camera as its View says (when its camera stops following)."""
+        self.gui, self.runner, self.server, self._reframe = gui, runner, server, reframe
         #: Each connected page's inspector, by client id.
         self.viewers: dict[int, Viewer] = {}
         #: Viewers whose camera follows their robot: each viewer decides for itself.
@@ -49,7 +50,7 @@ class InspectorFolder:
         self.folder: Any = None
 
     def build(self, snap: Snapshot) -> None:
-        gui, runner = self.gui, self.runner
+        gui = self.gui
         with gui.add_folder("Inspector") as self.folder:
             self.help = gui.add_markdown(HELP)
             self.camera_follow = gui.add_button("Camera follows (this viewer)", icon=viser.Icon.VIDEO,
@@ -68,7 +69,7 @@ class InspectorFolder:
             with self._lock:
                 if event.client_id in self.followers:
                     self.followers.discard(event.client_id)
-                    frame_arena(event.client, runner.latest.world_config)
+                    self._reframe(event.client)
                 else:
                     self.followers.add(event.client_id)
 
@@ -148,7 +149,7 @@ class InspectorFolder:
             viewer.ring.visible = viewer.sensors.visible = False
             if client_id in self.followers:
                 self.followers.discard(client_id)
-                frame_arena(viewer.client, self.runner.latest.world_config)
+                self._reframe(viewer.client)
             self._tell_runner()
 
     def stop(self) -> None:

@@ -8,20 +8,15 @@ import numpy as np
 import viser
 
 from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.panel.framing import VIEWS, Framing
 from sandbox.app.runner import FASTEST
-from sandbox.app.scene import frame_arena
 from sandbox.app.snapshot import Snapshot
-
-CONSTRUCTION = "Construction area"
-WHOLE_ARENA = "Whole arena"
-#: The View buttons: each frames the clicking page's own camera.
-VIEWS = (CONSTRUCTION, WHOLE_ARENA)
 
 
 class RunFolder:
     def __init__(self, gui: Any, runner: Any, show_field: Callable[[bool], None],
-                 after_reset: Callable[[Any], None]):
-        self.gui, self.runner = gui, runner
+                 after_reset: Callable[[Any], None], framing: Framing):
+        self.gui, self.runner, self.framing = gui, runner, framing
         self._show_field, self._after_reset = show_field, after_reset
 
     def build(self, snap: Snapshot) -> None:
@@ -44,8 +39,9 @@ class RunFolder:
                                                hint="Show the luminosity field the robots sense, as a heat map, "
                                                     "instead of the light grid")
             self.view = gui.add_button_group("View", VIEWS,
-                                             hint="Frame your own view on where the boxes are built, or on the "
-                                                  "whole arena (other pages keep theirs)")
+                                             hint="Frame your own view on where the boxes are built, the whole "
+                                                  "arena, or for a projector: panel folded, legend on the floor "
+                                                  "(key p). Other pages keep theirs")
             self.status = gui.add_markdown(self._status_text(snap))
             self.cancel = gui.add_button("Cancel building", icon=viser.Icon.X, visible=False,
                                          hint="Stop building the new world; the current one goes on")
@@ -60,14 +56,12 @@ class RunFolder:
         self.reset_same.on_click(lambda event: self._reset(None, event.client))
         # The same actions from the keyboard (and viser's command palette, Ctrl+K), for a presenter
         # standing at the projector.
-        keys = {"space": ("Play / pause", self.toggle_play), "S": ("Step", self.step),
-                "R": ("Reset (same seed)", None)}
-        for key, (label, action) in keys.items():
-            command = gui.add_command(label, hotkey=key, description=f"key: {key.lower()}")
-            if action is not None:
-                command.on_trigger(lambda event, act=action: act())
-            else:
-                command.on_trigger(lambda event: self._reset(None, event.client))
+        keys = (("space", "Play / pause", lambda event: self.toggle_play()),
+                ("S", "Step", lambda event: self.step()),
+                ("R", "Reset (same seed)", lambda event: self._reset(None, event.client)),
+                ("P", "Presenter layout", lambda event: self.framing.toggle_presenter(event.client)))
+        for key, label, action in keys:
+            gui.add_command(label, hotkey=key, description=f"key: {key.lower()}").on_trigger(action)
 
         @self.reset_new.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -97,9 +91,8 @@ class RunFolder:
         self.runner.step_once(self.runner.latest.world_config.update_every)
 
     def frame(self, client: Any, view: str) -> None:
-        """Frame one page's camera on the construction area or the whole arena (View buttons)."""
-        if client is not None:
-            frame_arena(client, self.runner.latest.world_config, whole=view == WHOLE_ARENA)
+        """Lay one page out as ``view`` (the View buttons): its camera, and its panel and legend."""
+        self.framing.choose(client, view)
 
     def _reset(self, seed: int | None, client: Any) -> None:
         self.reset(client, seed)
