@@ -183,7 +183,9 @@ class InspectorFolder:
         with self._lock:
             for viewer in list(self.viewers.values()):
                 robot = snap.robot(viewer.robot)
-                if robot is None:
+                if robot is None:  # following nothing, or a robot this world does not have (yet)
+                    if viewer.ring.visible:
+                        viewer.ring.visible = viewer.sensors.visible = False
                     continue
                 a = np.linspace(0, 2 * np.pi, 33)
                 r = snap.world_config.robot_radius * 1.9
