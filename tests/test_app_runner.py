@@ -150,7 +150,9 @@ class FakeClient:
 def app():
     from sandbox.app.server import App, free_port
 
-    a = App(SMALL, port=free_port(), fps=60, steps_per_frame=2)
+    # The simulation in this process: what these tests check does not depend on where it runs
+    # (test_the_simulation_runs_in_another_process does), and a child costs 1.3 s of CPU to start.
+    a = App(SMALL, port=free_port(), fps=60, steps_per_frame=2, process=False)
     a.start()
     yield a
     a.stop()
@@ -307,7 +309,7 @@ def test_a_crashed_simulation_process_is_reported_and_restarted(process_runner):
 def test_with_no_viewer_for_a_while_the_app_pauses_and_a_viewer_resumes_it():
     from sandbox.app.server import App, free_port
 
-    a = App(SMALL, port=free_port(), fps=60, steps_per_frame=2, idle_pause_seconds=1.0)
+    a = App(SMALL, port=free_port(), fps=60, steps_per_frame=2, idle_pause_seconds=1.0, process=False)
     a.start()
     try:
         wait_until(lambda: a.auto_paused and not a.runner.playing, timeout=15)
@@ -398,7 +400,8 @@ def test_classroom_waits_at_step_0_and_lays_pages_out_for_a_projector():
     from sandbox.app.server import App, free_port
     from tests.viser_wire import RawClient
 
-    app = App(SMALL, port=free_port(), fps=60, steps_per_frame=2, playing=False, whole_arena=False).start()
+    app = App(SMALL, port=free_port(), fps=60, steps_per_frame=2, playing=False, whole_arena=False,
+              process=False).start()
     first = second = None
     try:
         frames_pass(app.runner, 10)
