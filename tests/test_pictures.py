@@ -5,6 +5,7 @@ these tests check that they say what they claim, not how they look."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from sandbox.app import learn, legend
 from sandbox.app import palette as pal
@@ -66,3 +67,13 @@ def test_box_mesh_colours_are_what_the_page_needs_to_show_the_box_colours():
     # Measured in the page: the mesh colour (255, 92, 168) shows as (231, 181, 209).
     assert np.allclose(pal.shown_on_mesh((255, 92, 168)), (231, 181, 209), atol=1.5)
     assert pal.box_mesh_colours(np.array([True, False])).tolist() == [list(pal.BOX_IN_MESH), list(pal.BOX_OUT_MESH)]
+
+
+@pytest.mark.parametrize("name", sorted(learn.PICTURES))
+def test_the_stored_learn_pictures_are_what_the_engine_draws(name):
+    """The server shows the stored pictures; the engine draws the same (text may differ by a few
+    pixels where another Pillow renders its font). Run ``python -m sandbox.app.learn`` when this fails."""
+    drawn, stored = learn.PICTURES[name](), learn.stored_picture(name)
+    assert drawn.shape == stored.shape, f"{name}: drawn {drawn.shape}, stored {stored.shape}"
+    differ = (np.abs(drawn.astype(int) - stored.astype(int)).max(axis=-1) > 40).mean()
+    assert differ < 0.01, f"{name}: {100 * differ:.1f} % of the pixels differ; python -m sandbox.app.learn"

@@ -1,10 +1,19 @@
 """The Learn panel: a short illustrated explanation of the model.
 
 The illustrations are drawn from the engine itself (its controller and light
-grid), so they always match what the simulation does.
+grid), so they always match what the simulation does. They are drawn once,
+stored as PNG files beside this module (``pictures/``) and read by the web
+server: drawing them took the server most of a second at every start, most
+of it loading numba for the controller, which nothing else in the server
+needs. ``tests/test_pictures.py`` draws them again and fails when the stored
+ones differ; ``python -m sandbox.app.learn`` stores them anew.
 """
 
 from __future__ import annotations
+
+import io
+from importlib import resources
+from pathlib import Path
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
@@ -234,3 +243,31 @@ def strategies_picture(config: Config | None = None) -> np.ndarray:
         _tile(cfg, *_smallest(cfg, "star", chase=2.0), "+ chase: goal grown", view=20.0),
     ]
     return _grid(tiles)
+
+
+#: The stored pictures: file name -> how to draw it.
+PICTURES = {"learn-phototaxis.png": phototaxis_picture, "learn-cycle.png": cycle_picture,
+            "learn-strategies.png": strategies_picture}
+
+
+def stored_picture(name: str) -> np.ndarray:
+    """A picture as stored (one of :data:`PICTURES`), as RGB pixels."""
+    data = resources.files("sandbox.app").joinpath("pictures", name).read_bytes()
+    return np.asarray(Image.open(io.BytesIO(data)).convert("RGB"))
+
+
+def store_pictures(folder: Path | None = None) -> list[Path]:
+    """Draw every picture of :data:`PICTURES` and store it as PNG in ``folder`` (this module's)."""
+    folder = folder or Path(__file__).with_name("pictures")
+    folder.mkdir(exist_ok=True)
+    written = []
+    for name, draw in PICTURES.items():
+        path = folder / name
+        Image.fromarray(draw()).save(path, optimize=True)
+        written.append(path)
+    return written
+
+
+if __name__ == "__main__":
+    for path in store_pictures():
+        print(path)

@@ -80,6 +80,7 @@ class App:
             for client in list(self.server.get_clients().values()):  # came while the panel was built
                 self.panel.inspector.attach(client)
                 self.panel.framing.arrive(client)
+                self.panel.shape.draw.warm_up()
         except BaseException:
             self.server.stop()  # do not leave a half-built server listening
             self.runner.stop()
@@ -139,6 +140,7 @@ class App:
         if panel is not None:
             panel.inspector.attach(client)
             panel.framing.arrive(client)
+            panel.shape.draw.warm_up()
         # Fit the arena to this viewer's window as it tells its shape: its camera reports come while the
         # page lays itself out, and on a loaded machine the last one many seconds later. A page that
         # follows a robot has its camera moved by the inspector instead.

@@ -91,9 +91,9 @@ class Panel:
     def _build_learn(gui: Any) -> None:
         with gui.add_folder("Learn", expand_by_default=False):
             gui.add_markdown(learn.INTRO)
-            gui.add_image(learn.phototaxis_picture(), format="png")
+            gui.add_image(learn.stored_picture("learn-phototaxis.png"), format="png")
             gui.add_markdown(learn.CYCLE)
-            gui.add_image(learn.cycle_picture(), format="png")
+            gui.add_image(learn.stored_picture("learn-cycle.png"), format="png")
             gui.add_markdown(learn.STRATEGIES)
-            gui.add_image(learn.strategies_picture(), format="png")
+            gui.add_image(learn.stored_picture("learn-strategies.png"), format="png")
             gui.add_markdown(learn.INSPECT)

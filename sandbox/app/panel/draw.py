@@ -96,8 +96,16 @@ class DrawFolder:
         config = runner.latest.world_config
         self.view = DrawView(scene, config.arena_size, self.pad_drag, self.vertex_drag)
         self._centre = (config.centre, config.centre)
-        # The preview's geometry is compiled (numba) on its first call, most of a second: do it now, aside,
-        # rather than in the middle of the first drag.
+        self._warmed = threading.Event()
+
+    def warm_up(self) -> None:
+        """Load the preview's compiled geometry (numba), aside, once: its first call takes most of a
+        second. The first viewer's arrival starts it, long before that page has loaded and a point is
+        dragged; a server that nobody watches never pays for it."""
+        if self._warmed.is_set():
+            return
+        self._warmed.set()
+        config = self.runner.latest.world_config
         threading.Thread(target=_warm_up, args=(config,), daemon=True, name="draw-preview-warm-up").start()
 
     # ------------------------------------------------------------ build
