@@ -32,7 +32,8 @@ SHELL_BLOCKS = {"bash", "sh", "shell"}
 SHORT = {
     "run": {"--steps": "300", "--no-progress": None},
     "record": {"--steps": "300", "--no-progress": None},
-    "sweep": {"--trials": "1", "--steps": "300", "--workers": "1", "--no-progress": None},
+    # Without figures: 3.5 s of matplotlib, drawn and checked in tests/test_experiment.py.
+    "sweep": {"--trials": "1", "--steps": "300", "--workers": "1", "--no-progress": None, "--no-figures": None},
     "bench": {"--steps": "300", "--no-progress": None},
     "report": {},
 }
@@ -178,7 +179,7 @@ def test_shortening_keeps_the_command_and_bounds_its_length():
         "run", "--case", "star", "--steps", "300", "--json", "--no-progress"]
     assert shortened(["sweep", "--cases", "paper", "--trials", "10", "--out", "runs/paper"]) == [
         "sweep", "--cases", "paper", "--trials", "1", "--out", "runs/paper", "--steps", "300", "--workers", "1",
-        "--no-progress"]
+        "--no-progress", "--no-figures"]
     assert shortened(["report", "runs/paper"]) == ["report", "runs/paper"]
 
 

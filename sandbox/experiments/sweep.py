@@ -168,7 +168,7 @@ def _sweep(args: argparse.Namespace) -> int:
     print(f"sweep: {outcome.done} trial(s) run, {outcome.skipped} already done, {len(outcome.failures)} failed "
           f"({outcome.seconds:.0f} s)", file=sys.stderr)
     if not args.no_report and outcome.done + outcome.skipped:
-        report = build_report(out)
+        report = build_report(out, figures=not args.no_figures)
         print(f"report: {report}", file=sys.stderr)
     return 1 if outcome.failures else 0
 
@@ -206,6 +206,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR", help="folder for results (created; resumed if present)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-report", action="store_true", help="only run the trials; build the report later")
+    p.add_argument("--no-figures", action="store_true",
+                   help="the report's tables without its figures (phototaxis report draws them later)")
     add_controller_argument(p)
     add_config_arguments(p, with_case=False)
     p.set_defaults(func=sweep_command)
