@@ -520,6 +520,39 @@ def test_light_program_from_the_page(app, page, tmp_path):
     open_folder(page, "Light program")  # closed again, as the other tests expect
 
 
+def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
+    """Issue 25, item 2: the student's clicks, not the controller, light the floor; robots drive to it."""
+    from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
+
+    runner = app.runner
+    dismiss_notifications(page)
+    open_folder(page, "Be the light")
+    click_button(page, "Be the light")
+    wait_until(lambda: runner.latest.program == LAMP_PROGRAM, what="the lamp")
+    page.get_by_role("button", name="Give the light back").wait_for(timeout=10_000)
+    box = scene_canvas(page).bounding_box()
+    page.mouse.click(box["x"] + box["width"] / 2 - 60, box["y"] + box["height"] / 2)
+    wait_until(lambda: app.panel.lamp._centre is not None
+               and app.panel.lamp._centre != (runner.latest.world_config.centre,) * 2, what="the lamp moved")
+    centre = np.array(app.panel.lamp._centre)
+    radius = float(app.panel.lamp.radius.value)
+
+    def lit_about_the_click() -> bool:
+        lit = np.argwhere(runner.latest.intensities > 0)
+        pitch = runner.latest.world_config.light_pitch
+        return len(lit) > 0 and np.hypot(*((lit + 0.5) * pitch - centre).T).max() <= radius
+
+    wait_until(lit_about_the_click, what="the lights about the click, and none elsewhere")
+    wait_until(lambda: not app.view.handles["light_outline"].visible, what="the paper's outline hidden")
+    near = lambda: int((np.hypot(*(runner.latest.robot_positions - centre).T) <= radius + 1.0).sum())  # noqa: E731
+    before = near()
+    wait_until(lambda: near() >= before + 3, timeout=90, what="robots driving to the lamp")
+    click_button(page, "Give the light back")
+    wait_until(lambda: runner.latest.program == PAPER_PROGRAM, what="the paper's controller back")
+    wait_until(lambda: app.view.handles["light_outline"].visible, what="the paper's outline shown again")
+    open_folder(page, "Be the light")  # closed again
+
+
 def test_second_browser_and_disconnect(app, browser, page):
     other = browser.new_page(viewport={"width": 800, "height": 760})  # a narrower window than the first
     other.goto(f"http://127.0.0.1:{app.port}/")

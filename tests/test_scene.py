@@ -119,6 +119,13 @@ def test_caption_names_the_case_and_the_step(snapshot):
     assert case_name("heart", {"flare": 1.5}) == "heart + flare 1.5"
     text = caption(snapshot)
     assert text.startswith("circle | step ") and "cycle 0" in text and "% in goal" in text
+    # Another program lights the floor: the caption says so instead of the paper's phase.
+    from dataclasses import replace
+
+    from sandbox.app.snapshot import LAMP_PROGRAM
+
+    assert "| lit by your lamp |" in caption(replace(snapshot, program=LAMP_PROGRAM))
+    assert "| lit by ShrinkingRing |" in caption(replace(snapshot, program="examples/ring.py:ShrinkingRing"))
 
 
 def test_lit_lights_are_points_sent_with_the_bodies(snapshot):

@@ -21,7 +21,7 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from sandbox.app.contract import FramePublisher
-from sandbox.app.snapshot import RobotView, Snapshot
+from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM, RobotView, Snapshot
 from sandbox.model import watchdog
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
@@ -33,7 +33,6 @@ Command = Callable[[Simulation], Any]
 #: steps in chunks of FASTEST_CHUNK until the next frame is due.
 FASTEST = 100
 FASTEST_CHUNK = 10
-PAPER_PROGRAM = "the paper's controller"
 
 log = logging.getLogger("sandbox.app.runner")
 
@@ -305,6 +304,31 @@ class Runner(FramePublisher):
 
             sim.use_program(load_program(spec, time_limit=self.program_time_limit) if spec else None)
             self.program_name = spec or PAPER_PROGRAM
+            return self.program_name
+
+        self.post(do, on_done=on_done, on_error=on_error)
+
+    def set_lamp(self, centre: tuple[float, float] | None, radius: float | None = None, *,
+                 on_done: Callable[[Any], None] | None = None,
+                 on_error: Callable[[BaseException], None] | None = None) -> None:
+        """Be the light: the lights within ``radius`` metres of ``centre`` are on, the others off
+        (:class:`sandbox.model.lamp.Lamp`), keeping the world; None gives the lights back to the paper's
+        controller."""
+
+        def do(sim: Simulation) -> str:
+            from sandbox.model.lamp import Lamp
+
+            lamp = sim.user_program if isinstance(sim.user_program, Lamp) else None
+            if centre is None:
+                if lamp is not None:
+                    sim.use_program(None)
+                    self.program_name = PAPER_PROGRAM
+                return self.program_name
+            if lamp is None:
+                lamp = Lamp()
+                sim.use_program(lamp)
+                self.program_name = LAMP_PROGRAM
+            lamp.aim(*centre, radius)
             return self.program_name
 
         self.post(do, on_done=on_done, on_error=on_error)

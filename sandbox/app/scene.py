@@ -35,7 +35,7 @@ import numpy as np
 
 from sandbox.app import palette as pal
 from sandbox.app.hexagons import Hexagons
-from sandbox.app.snapshot import Snapshot, caption
+from sandbox.app.snapshot import PAPER_PROGRAM, Snapshot, caption
 from sandbox.model.config import Config
 
 Z_FIELD, Z_LIGHTS, Z_LIT, Z_BOXES, Z_ROBOTS, Z_MARKS, Z_LINES, Z_TOP = -0.01, 0.0, 0.01, 0.02, 0.04, 0.05, 0.08, 0.12
@@ -291,6 +291,11 @@ class SceneView:
             if outline_bytes != self._outline_bytes:
                 h["light_outline"].points = pal.closed_segments(snap.outline, Z_LINES)
                 self._outline_bytes = outline_bytes
+            # The orange line is the paper's controller's outline: while a light program or a person's lamp
+            # lights the floor, it is not what the lights follow.
+            paper = snap.program == PAPER_PROGRAM
+            if h["light_outline"].visible != paper:
+                h["light_outline"].visible = paper
             centre = cfg.arena_size / 2.0
             send = self._sent.send
             if n:

@@ -13,6 +13,12 @@ from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
 
 
+#: What lights the floor, as snapshots name it: the paper's controller, a person's lamp (the Be the light
+#: folder), or else a light program's path:Class.
+PAPER_PROGRAM = "the paper's controller"
+LAMP_PROGRAM = "a lamp you move (Be the light)"
+
+
 @dataclasses.dataclass(frozen=True)
 class RobotView:
     """What the inspector shows about one robot."""
@@ -61,7 +67,7 @@ class Snapshot:
     #: The robots some viewer follows, in the order of ``Runner.followed`` (each viewer follows its own).
     followed: tuple[RobotView, ...]
     #: What lights the floor: "the paper's controller" or a light program's path:Class.
-    program: str = "the paper's controller"
+    program: str = PAPER_PROGRAM
     #: (count, message) of the last light program that failed while running (the paper's took over).
     program_error: tuple[int, str] | None = None
     #: Changes with every new world (a reset): charts never join two worlds' samples.
@@ -104,6 +110,15 @@ def running_case(shape: str, strategies: dict, family: str = "scaled") -> str | 
 
 
 def caption(snap: Snapshot) -> str:
-    """One line that says what a recorded frame shows: case, strategies and step."""
-    return (f"{case_name(snap.shape_name, snap.strategies)} | step {snap.step:,} | {snap.phase}, cycle {snap.cycle}"
+    """One line that says what a recorded frame shows: case, strategies and step, and what lights the
+    floor: the paper's controller's phase and cycle, or the program (or person) lighting it instead."""
+    return (f"{case_name(snap.shape_name, snap.strategies)} | step {snap.step:,} | {_lit_by(snap)}"
             f" | {100 * snap.sample.fraction_in_goal:.0f} % in goal")
+
+
+def _lit_by(snap: Snapshot) -> str:
+    if snap.program == PAPER_PROGRAM:
+        return f"{snap.phase}, cycle {snap.cycle}"
+    if snap.program == LAMP_PROGRAM:
+        return "lit by your lamp"
+    return f"lit by {snap.program.rsplit(':', 1)[-1]}"  # a light program's class

@@ -16,6 +16,7 @@ from sandbox.app.panel.advice import AdviceFolder
 from sandbox.app.panel.common import PANEL_HZ, floor_point
 from sandbox.app.panel.framing import WHOLE_ARENA, Framing
 from sandbox.app.panel.inspector import InspectorFolder
+from sandbox.app.panel.lamp import LampFolder
 from sandbox.app.panel.metrics import MetricsFolder
 from sandbox.app.panel.parameters import ParametersFolder
 from sandbox.app.panel.program import ProgramFolder
@@ -47,9 +48,10 @@ class Panel:
         self.advice = AdviceFolder(gui, runner, use=self.strategies.use)
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
+        self.lamp = LampFolder(gui, runner, on_change=self.metrics.mark)
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
         self.record = RecordFolder(gui, server, runner)
-        self.folders = (self.run, self.shape, self.advice, self.strategies, self.program, self.metrics,
+        self.folders = (self.run, self.shape, self.advice, self.strategies, self.program, self.lamp, self.metrics,
                         self.inspector, self.record, self.parameters)
         snap = runner.latest
         self._build_legend(gui)
@@ -84,7 +86,7 @@ class Panel:
 
     def _on_scene_click(self, event: Any) -> None:
         point = floor_point(event.ray_origin, event.ray_direction)
-        if point is not None and not self.shape.click(point):
+        if point is not None and not self.shape.click(point) and not self.lamp.click(point, event.client):
             self.inspector.click(point, event.client)
 
     @staticmethod

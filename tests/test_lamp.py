@@ -1,0 +1,88 @@
+"""Be the light (issue 25, item 2): a lamp a person moves, as a light program."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sandbox.model.config import Config
+from sandbox.model.lamp import LARGEST_RADIUS, SMALLEST_RADIUS, Lamp
+from sandbox.model.programs import Observation
+
+
+def observation(config: Config) -> Observation:
+    n, pitch = config.lights_per_side, config.light_pitch
+    centres = (np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), axis=-1) + 0.5) * pitch
+    return Observation(step=0, goal=None, light_centres=centres,
+                       intensities=np.zeros((n, n)), senses=frozenset(), _read=lambda what: None)
+
+
+def test_the_lamp_lights_the_disc_about_where_it_was_aimed():
+    config = Config()  # 64 x 64 lights, 1 m apart, centres at 0.5, 1.5, ...
+    obs = observation(config)
+    lamp = Lamp(radius=1.0)
+    lamp.reset(config, None)
+    assert lamp.update(obs).sum() == 0  # dark until aimed
+    assert lamp.update(obs) is None  # and then nothing new
+    lamp.aim(10.5, 20.5)
+    on = lamp.update(obs)
+    # Radius 1 about a light's centre: that light and its 4 neighbours, 1 m away.
+    assert on.sum() == 5 and on[10, 20] == 1 and on[9, 20] == on[11, 20] == on[10, 19] == on[10, 21] == 1
+    assert lamp.update(obs) is None  # unmoved: the pattern stays
+    lamp.aim(10.5, 20.5, radius=1.5)  # the 4 diagonal neighbours too, sqrt(2) = 1.41 m away
+    assert lamp.update(obs).sum() == 9
+    lamp.aim(0.0, 0.0, radius=1.0)  # the arena's corner: the one light within 1 m, 0.71 m away
+    assert lamp.update(obs).sum() == 1
+
+
+def test_the_lamp_radius_stays_within_what_the_page_offers():
+    lamp = Lamp()
+    lamp.aim(5.0, 5.0, radius=0.01)
+    assert lamp.radius == SMALLEST_RADIUS
+    lamp.aim(5.0, 5.0, radius=1e9)
+    assert lamp.radius == LARGEST_RADIUS
+
+
+def test_the_runner_hands_the_lights_to_the_lamp_and_back():
+    from sandbox.app.runner import Runner
+    from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
+    from tests.waiting import wait_until
+
+    config = Config(robots=20, boxes=30)
+    runner = Runner(config, fps=60, steps_per_frame=5)
+    runner.start()
+    try:
+        centre = (20.5, 40.5)
+        runner.set_lamp(centre, 3.0)
+        wait_until(lambda: runner.latest.program == LAMP_PROGRAM and runner.latest.intensities.any(),
+                   what="the lamp's lights")
+        lit = np.argwhere(runner.latest.intensities > 0) + 0.5  # light centres (1 m pitch)
+        assert np.hypot(*(lit - centre).T).max() <= 3.0 and len(lit) >= 25  # 29 lights within 3 m
+        step = runner.latest.step
+        runner.set_lamp(None)
+        wait_until(lambda: runner.latest.program == PAPER_PROGRAM, what="the paper's controller back")
+        assert runner.latest.step >= step  # the same world goes on
+    finally:
+        runner.stop()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_one_click_brings_robots_to_the_lamp_within_30_s_of_play(seed):
+    """The default world, the lamp clicked 6 m outside the construction wall, radius 4 m: within 9,000
+    steps (30 s of play at the page's default speed, 300 steps/s) about 30 robots are within 5 m of it
+    (measured 29-36 on seeds 0-2, from 9-20 at the click), every one of them charged."""
+    from sandbox.model.simulation import Simulation
+
+    config = Config()
+    sim = Simulation(config, seed=seed, open_ended=True)
+    lamp = Lamp(radius=4.0)
+    sim.use_program(lamp)
+    spot = np.array([config.centre - config.construction_size / 2 - 6.0, config.centre])
+    lamp.aim(*spot)
+    near = lambda: np.hypot(*(sim.robot_positions - spot).T) <= 5.0  # noqa: E731
+    before = int(near().sum())
+    sim.step(9000)
+    after = near()
+    assert after.sum() >= 25 and after.sum() >= before + 10
+    assert (sim.robot_charges[after] > 0).mean() > 0.9
