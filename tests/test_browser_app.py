@@ -547,6 +547,20 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
     near = lambda: int((np.hypot(*(runner.latest.robot_positions - centre).T) <= radius + 1.0).sum())  # noqa: E731
     before = near()
     wait_until(lambda: near() >= before + 3, timeout=90, what="robots driving to the lamp")
+    # A brush: paint a second patch of lights, keeping the lamp's; then erase the lamp's.
+    lit_lamp = int((runner.latest.intensities > 0).sum())
+    page.get_by_label("A click", exact=True).click()
+    page.get_by_role("option", name="paints lights on", exact=True).click()
+    wait_until(lambda: app.panel.lamp.click_does.value == "paints lights on", what="the brush")
+    page.mouse.click(box["x"] + box["width"] / 2 + 150, box["y"] + box["height"] / 2)
+    wait_until(lambda: (runner.latest.intensities > 0).sum() > 1.5 * lit_lamp, what="a painted patch beside the lamp")
+    page.get_by_label("A click", exact=True).click()
+    page.get_by_role("option", name="erases lights", exact=True).click()
+    wait_until(lambda: app.panel.lamp.click_does.value == "erases lights", what="the eraser")
+    page.mouse.click(box["x"] + box["width"] / 2 - 60, box["y"] + box["height"] / 2)
+    ix, iy = (centre / runner.latest.world_config.light_pitch).astype(int)
+    wait_until(lambda: runner.latest.intensities[ix, iy] == 0 and runner.latest.intensities.any(),
+               what="the lamp's lights erased, the painted ones kept")
     click_button(page, "Give the light back")
     wait_until(lambda: runner.latest.program == PAPER_PROGRAM, what="the paper's controller back")
     wait_until(lambda: app.view.handles["light_outline"].visible, what="the paper's outline shown again")

@@ -35,6 +35,26 @@ def test_the_lamp_lights_the_disc_about_where_it_was_aimed():
     assert lamp.update(obs).sum() == 1
 
 
+def test_a_brush_paints_and_erases_lights_keeping_the_others():
+    config = Config()
+    obs = observation(config)
+    lamp = Lamp(radius=1.0)
+    lamp.reset(config, None)
+    lamp.aim(10.5, 20.5, mode="paint")  # 5 lights (as above)
+    lamp.aim(30.5, 30.5, mode="paint")  # 5 more, far away
+    on = lamp.update(obs)
+    assert on.sum() == 10 and on[10, 20] == on[30, 30] == 1
+    lamp.aim(10.5, 20.5, mode="erase")
+    on = lamp.update(obs)
+    assert on.sum() == 5 and on[10, 20] == 0 and on[30, 30] == 1
+    lamp.reset(config, None)  # a new world keeps what was painted
+    assert lamp.update(obs).sum() == 5
+    lamp.aim(0.0, 0.0)  # the lamp again: only its own lights
+    assert lamp.update(obs).sum() == 1
+    with pytest.raises(ValueError, match="unknown mode"):
+        lamp.aim(1.0, 1.0, mode="flood")
+
+
 def test_the_lamp_radius_stays_within_what_the_page_offers():
     lamp = Lamp()
     lamp.aim(5.0, 5.0, radius=0.01)

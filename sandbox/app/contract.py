@@ -96,7 +96,7 @@ class SimulationRunner(Protocol):
     def set_outline(self, outline: str, *, on_done: Callable[[Any], None] | None = None,
                     on_error: Callable[[BaseException], None] | None = None) -> None: ...
 
-    def set_lamp(self, centre: tuple[float, float] | None, radius: float | None = None, *,
+    def set_lamp(self, centre: tuple[float, float] | None, radius: float | None = None, mode: str = "lamp", *,
                  on_done: Callable[[Any], None] | None = None,
                  on_error: Callable[[BaseException], None] | None = None) -> None: ...
 

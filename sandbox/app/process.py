@@ -358,10 +358,10 @@ class ProcessRunner(FramePublisher):
                     on_error: Callable[[BaseException], None] | None = None) -> None:
         self._runner_call("set_program", on_done, on_error, spec)
 
-    def set_lamp(self, centre: tuple[float, float] | None, radius: float | None = None, *,
+    def set_lamp(self, centre: tuple[float, float] | None, radius: float | None = None, mode: str = "lamp", *,
                  on_done: Callable[[Any], None] | None = None,
                  on_error: Callable[[BaseException], None] | None = None) -> None:
-        self._runner_call("set_lamp", on_done, on_error, centre, radius)
+        self._runner_call("set_lamp", on_done, on_error, centre, radius, mode)
 
     def set_outline(self, outline: str, *, on_done: Callable[[Any], None] | None = None,
                     on_error: Callable[[BaseException], None] | None = None) -> None:

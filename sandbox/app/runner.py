@@ -308,11 +308,12 @@ class Runner(FramePublisher):
 
         self.post(do, on_done=on_done, on_error=on_error)
 
-    def set_lamp(self, centre: tuple[float, float] | None, radius: float | None = None, *,
+    def set_lamp(self, centre: tuple[float, float] | None, radius: float | None = None, mode: str = "lamp", *,
                  on_done: Callable[[Any], None] | None = None,
                  on_error: Callable[[BaseException], None] | None = None) -> None:
-        """Be the light: the lights within ``radius`` metres of ``centre`` are on, the others off
-        (:class:`sandbox.model.lamp.Lamp`), keeping the world; None gives the lights back to the paper's
+        """Be the light: a click at ``centre`` moves the lamp there (the lights within ``radius`` metres
+        on, the others off), or paints or erases the lights there (``mode``: see
+        :mod:`sandbox.model.lamp`), keeping the world; None gives the lights back to the paper's
         controller."""
 
         def do(sim: Simulation) -> str:
@@ -328,7 +329,7 @@ class Runner(FramePublisher):
                 lamp = Lamp()
                 sim.use_program(lamp)
                 self.program_name = LAMP_PROGRAM
-            lamp.aim(*centre, radius)
+            lamp.aim(*centre, radius, mode)
             return self.program_name
 
         self.post(do, on_done=on_done, on_error=on_error)

@@ -1,9 +1,14 @@
-"""Be the light: a lamp that a person moves over the floor (issue 25).
+"""Be the light: lights that a person sets, by clicks on the floor (issue 25).
 
-The lamp is a light program like any other (:mod:`sandbox.model.programs`):
-the lights within ``radius`` of its centre are on, all others off. Where
-it is and how large come from outside, from clicks on the page, between
-updates: the robots follow, charge and drain as always.
+The lamp is a light program like any other (:mod:`sandbox.model.programs`)
+whose pattern comes from outside, between updates: the robots follow,
+charge and drain as always. A click does one of three things (``mode``):
+
+- ``lamp``: the lights within ``radius`` of the click are on, all others
+  off (a lamp moved to where one clicked);
+- ``paint``: the lights within ``radius`` of the click come on, the others
+  stay as they were (a brush);
+- ``erase``: the lights within ``radius`` of the click go off.
 """
 
 from __future__ import annotations
@@ -17,26 +22,35 @@ from sandbox.model.programs import LightProgram, Observation
 
 #: A lamp's radius when none is asked for (m), and the range a page offers.
 DEFAULT_RADIUS, SMALLEST_RADIUS, LARGEST_RADIUS = 4.0, 1.0, 12.0
+#: What a click does.
+LAMP, PAINT, ERASE = "lamp", "paint", "erase"
+MODES = (LAMP, PAINT, ERASE)
 
 
 class Lamp(LightProgram):
-    """A disc of lights, moved by :meth:`aim`; dark until it is first aimed."""
+    """Lights set by clicks (see the module docstring); dark until the first one."""
 
-    #: World steps between two looks at where the lamp is: 0.33 s of simulated time.
+    #: World steps between two looks at the clicks: 0.33 s of simulated time.
     every = 10
 
     def __init__(self, radius: float = DEFAULT_RADIUS):
         self.centre: tuple[float, float] | None = None
         self.radius = float(radius)
+        self._clicks: list[tuple[str, tuple[float, float], float]] = []
+        self._pattern: np.ndarray | None = None
         self._changed = True
         self._lock = threading.Lock()
 
-    def aim(self, x: float, y: float, radius: float | None = None) -> None:
-        """Move the lamp's centre to (x, y) (metres, the arena's frame), and resize it if asked."""
+    def aim(self, x: float, y: float, radius: float | None = None, mode: str = LAMP) -> None:
+        """A click at (x, y) (metres, the arena's frame): the lamp moves there, or the brush paints or
+        erases there (``mode``); ``radius`` resizes the disc, within what a page offers."""
+        if mode not in MODES:
+            raise ValueError(f"unknown mode {mode!r}: one of {', '.join(MODES)}")
         with self._lock:
-            self.centre = (float(x), float(y))
             if radius is not None:
                 self.radius = float(np.clip(radius, SMALLEST_RADIUS, LARGEST_RADIUS))
+            self.centre = (float(x), float(y))
+            self._clicks.append((mode, self.centre, self.radius))
             self._changed = True
 
     def reset(self, config: Config, goal: object) -> np.ndarray | None:
@@ -50,8 +64,15 @@ class Lamp(LightProgram):
             if not self._changed:
                 return None  # the pattern stays
             self._changed = False
-            centre, radius = self.centre, self.radius
-        if centre is None:
-            return np.zeros(observation.lights_shape)
-        distance = np.linalg.norm(observation.light_centres - np.asarray(centre), axis=-1)
-        return (distance <= radius).astype(float)
+            clicks, self._clicks = self._clicks, []
+        pattern = self._pattern
+        if pattern is None or pattern.shape != observation.lights_shape:
+            pattern = np.zeros(observation.lights_shape)
+        for mode, centre, radius in clicks:
+            disc = np.linalg.norm(observation.light_centres - np.asarray(centre), axis=-1) <= radius
+            if mode == LAMP:
+                pattern = disc.astype(float)
+            else:
+                pattern = np.where(disc, 1.0 if mode == PAINT else 0.0, pattern)
+        self._pattern = pattern
+        return pattern.copy()
