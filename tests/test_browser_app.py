@@ -567,6 +567,31 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
     open_folder(page, "Be the light")  # closed again
 
 
+def test_a_challenge_round_is_scored_against_the_paper(app, page):
+    """Issue 25, item 3: a round from the page, its score beside the paper's, the best kept by name."""
+    from sandbox.app.snapshot import PAPER_PROGRAM
+
+    folder = app.panel.challenge
+    folder.round_steps = 300  # a short round (the page says 20,000)
+    open_folder(page, "Challenge")
+    # viser's text inputs are not tied to their label (its for= names another id): find the input in the row.
+    label = page.locator("label:text-is('Your name')")
+    row = label.locator("xpath=ancestor::div[contains(@class,'mantine-Flex-root')][1]")
+    name = row.locator("input").first
+    name.fill("Ada")
+    name.press("Tab")
+    wait_until(lambda: folder.name.value == "Ada", what="the name")
+    click_button(page, "Start a round")
+    page.get_by_text("the paper's controller:", exact=False).first.wait_for(timeout=120_000)
+    assert folder.round.player == "Ada" and folder.round.paper is not None
+    page.get_by_role("cell", name="Ada", exact=True).wait_for(timeout=10_000)  # the best-scores table
+    open_folder(page, "Challenge")  # closed again
+    app.panel.program.load(None, None)  # the paper's controller again, and play, for the tests after
+    wait_until(lambda: app.runner.latest.program == PAPER_PROGRAM, what="the paper's controller back")
+    click_button(page, "Play")
+    wait_until(lambda: app.runner.playing, what="playing again")
+
+
 def test_second_browser_and_disconnect(app, browser, page):
     other = browser.new_page(viewport={"width": 800, "height": 760})  # a narrower window than the first
     other.goto(f"http://127.0.0.1:{app.port}/")

@@ -106,3 +106,41 @@ def test_one_click_brings_robots_to_the_lamp_within_30_s_of_play(seed):
     after = near()
     assert after.sum() >= 25 and after.sum() >= before + 10
     assert (sim.robot_charges[after] > 0).mean() > 0.9
+
+
+def test_with_every_light_off_nothing_moves_so_a_round_scores_at_most_its_start():
+    """Issue 25, item 3: an honest score. Robots start empty; with no light none charges, so no box
+    moves and the share in the goal stays the starting share."""
+    from sandbox.model.simulation import Simulation
+
+    config = Config(robots=40, boxes=80)
+    sim = Simulation(config, seed=0, open_ended=True)
+    lamp = Lamp()
+    sim.use_program(lamp)  # never aimed: dark
+    start = sim.measure().fraction_in_goal
+    sim.step(2000)
+    assert sim.measure().fraction_in_goal <= start
+
+
+def test_a_round_is_scored_against_the_paper_in_the_same_world_and_steps():
+    """A round from the page's folder: the player's share at the round's end, and the paper's
+    controller's in the same world after the same steps (computed again here, the same number)."""
+    from sandbox.app.server import App, free_port
+    from sandbox.model.challenge import ROUND_SEED, paper_share
+    from tests.waiting import wait_until
+
+    config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
+    app = App(config, port=free_port(), fps=60, steps_per_frame=20, process=False).start()
+    try:
+        folder = app.panel.challenge
+        folder.round_steps = 600
+        folder.start("  Ada   Lovelace ", None)
+        wait_until(lambda: "Ada Lovelace" in folder.scores.content, timeout=120, what="the round and its reference")
+        r = folder.round
+        assert r.player == "Ada Lovelace" and r.at_step >= 600 and r.world is not None
+        assert r.paper == paper_share(app.runner.latest.world_config, ROUND_SEED, r.at_step, None)
+        assert folder.best == {"Ada Lovelace": r.score}
+        assert "Ada Lovelace" in folder.scores.content and "paper's controller" in folder.status.content
+        assert not app.runner.playing  # the round's end waits
+    finally:
+        app.stop()

@@ -363,6 +363,10 @@ class ProcessRunner(FramePublisher):
                  on_error: Callable[[BaseException], None] | None = None) -> None:
         self._runner_call("set_lamp", on_done, on_error, centre, radius, mode)
 
+    def world_spec(self, *, on_done: Callable[[Any], None] | None = None,
+                   on_error: Callable[[BaseException], None] | None = None) -> None:
+        self._runner_call("world_spec", on_done, on_error)
+
     def set_outline(self, outline: str, *, on_done: Callable[[Any], None] | None = None,
                     on_error: Callable[[BaseException], None] | None = None) -> None:
         self._runner_call("set_outline", on_done, on_error, outline)

@@ -334,6 +334,17 @@ class Runner(FramePublisher):
 
         self.post(do, on_done=on_done, on_error=on_error)
 
+    def world_spec(self, *, on_done: Callable[[Any], None] | None = None,
+                   on_error: Callable[[BaseException], None] | None = None) -> None:
+        """(config, seed, goal vertices as given or None) of the running world: what builds it again
+        elsewhere (a challenge's reference run)."""
+
+        def do(sim: Simulation) -> tuple:
+            shape = None if sim.shape_vertices is None else sim.shape_vertices.copy()
+            return sim.config, sim.seed, shape
+
+        self.post(do, on_done=on_done, on_error=on_error)
+
     def _step(self, n: int | None = None, deadline: float | None = None) -> None:
         """Step; a light program that fails while running hands the lights back to the paper's controller."""
         from sandbox.model.programs import ProgramError

@@ -9,7 +9,8 @@ Layout (z up, arena on z = 0, camera above looking down):
 - ``/goal``, ``/light_outline``   goal outline and current light outline
 - ``/swarm/robots``, ``/swarm/headings``   point clouds
 - ``/swarm/boxes/*``  the boxes as hexagons, in chunks (:mod:`.hexagons`)
-- ``/inspect/*``   each viewer's followed robot, in that viewer's own scene (:mod:`.panel.inspector`); the shape being drawn is :mod:`.draw_view`'s ``/draw/*``
+- ``/inspect/*``   each viewer's followed robot, in that viewer's own scene (:mod:`.panel.inspector`);
+  the shape being drawn is :mod:`.draw_view`'s ``/draw/*``
 - ``/caption``   what is running: case, strategies, step (also in recordings)
 
 One frame is one instant: the lit lights travel with the bodies, outline and

@@ -14,6 +14,7 @@ from typing import Any
 from sandbox.app import learn, legend
 from sandbox.app.panel.advice import AdviceFolder
 from sandbox.app.panel.common import PANEL_HZ, floor_point
+from sandbox.app.panel.challenge import ChallengeFolder
 from sandbox.app.panel.framing import WHOLE_ARENA, Framing
 from sandbox.app.panel.inspector import InspectorFolder
 from sandbox.app.panel.lamp import LampFolder
@@ -49,10 +50,11 @@ class Panel:
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
         self.lamp = LampFolder(gui, runner, on_change=self.metrics.mark)
+        self.challenge = ChallengeFolder(gui, runner, self.lamp, on_change=self.metrics.mark)
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
         self.record = RecordFolder(gui, server, runner)
-        self.folders = (self.run, self.shape, self.advice, self.strategies, self.program, self.lamp, self.metrics,
-                        self.inspector, self.record, self.parameters)
+        self.folders = (self.run, self.shape, self.advice, self.strategies, self.program, self.lamp, self.challenge,
+                        self.metrics, self.inspector, self.record, self.parameters)
         snap = runner.latest
         self._build_legend(gui)
         for folder in self.folders:
