@@ -87,11 +87,11 @@ def test_the_runner_hands_the_lights_to_the_lamp_and_back():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_one_click_brings_robots_to_the_lamp_within_30_s_of_play(seed):
+def test_one_click_brings_robots_to_the_lamp_within_30_s_of_play():
     """The default world, the lamp clicked 6 m outside the construction wall, radius 4 m: within 9,000
-    steps (30 s of play at the page's default speed, 300 steps/s) about 30 robots are within 5 m of it
-    (measured 29-36 on seeds 0-2, from 9-20 at the click), every one of them charged."""
+    steps (30 s of play at the page's default speed, 300 steps/s) about 30 robots are within 5 m of it,
+    every one of them charged. Measured on seeds 0, 1, 2: 9 -> 30, 20 -> 36, 12 -> 29 (seed 0 here)."""
+    seed = 0
     from sandbox.model.simulation import Simulation
 
     config = Config()
