@@ -144,3 +144,20 @@ def test_a_round_is_scored_against_the_paper_in_the_same_world_and_steps():
         assert not app.runner.playing  # the round's end waits
     finally:
         app.stop()
+
+
+def test_stopping_the_app_ends_a_reference_run_at_once():
+    from sandbox.app.panel.challenge import ChallengeFolder, Round
+    from tests.waiting import wait_until
+
+    class Markdown:
+        content = ""
+
+    folder = ChallengeFolder(gui=None, runner=None, lamp=None, on_change=lambda what: None)
+    folder.status, folder.scores = Markdown(), Markdown()
+    r = Round("Ada", 10**9, 0, world=1, score=0.4, at_step=10**9)  # a reference that would run for days
+    folder._score_the_paper(r, (Config(robots=20, boxes=30), 0, None))
+    wait_until(lambda: folder._pool is not None and getattr(folder._pool, "_processes", None), what="the worker")
+    folder.stop()
+    wait_until(lambda: "no reference" in folder.status.content, timeout=20, what="the run ended")
+    assert folder.best == {"Ada": 0.4} and r.paper is None

@@ -204,6 +204,7 @@ class App:
     def stop(self) -> None:
         self._stopping.set()
         self.panel.advice.stop()
+        self.panel.challenge.stop()
         self.runner.stop()
         with contextlib.redirect_stdout(io.StringIO()):  # viser says goodbye on stdout
             self.server.stop()

@@ -50,6 +50,7 @@ class ChallengeFolder:
         #: Each player's best share of the session, by name.
         self.best: dict[str, float] = {}
         self._lock = threading.RLock()
+        self._pool: cf.ProcessPoolExecutor | None = None
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -115,15 +116,26 @@ class ChallengeFolder:
         config, seed, shape = spec
 
         def run() -> None:
+            pool = cf.ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+            self._pool = pool
             try:
-                with cf.ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
-                    paper = pool.submit(paper_share, config, seed, r.at_step, shape).result()
-            except Exception as exc:  # a worker that could not run: the round still counts
+                paper = pool.submit(paper_share, config, seed, r.at_step, shape).result()
+            except Exception as exc:  # a worker that could not run, or the app stopping: the round counts
                 self._show(r, problem=f"no reference: {exc}")
                 return
+            finally:
+                pool.shutdown(wait=False, cancel_futures=True)
+                self._pool = None
             self._show(r, paper)
 
         threading.Thread(target=run, daemon=True, name="challenge-reference").start()
+
+    def stop(self) -> None:
+        """The app is stopping: a reference run still going ends now, not when it finishes."""
+        pool = self._pool
+        if pool is not None:
+            for process in list(getattr(pool, "_processes", {}).values()):
+                process.terminate()
 
     def _show(self, r: Round, paper: float | None = None, problem: str = "") -> None:
         """The round's end: its score beside the paper's (or why there is none), and the best scores."""
