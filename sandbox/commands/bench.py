@@ -57,6 +57,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 REFERENCE_ARGS = ["-r", "200", "-b", "500", "-z", "0.5", "-s", "0.5", "-t", "C", "-y", "H", "-g", "50",
                   "-d", "0", "-c", "0", "-x"]
 REFERENCE_STEPS = 100_000  # fixed in the program
+#: How the two sides of --compare-reference are seeded: the released program takes no seed.
+SEEDING = ("ours: seed {seed}; the authors' program: its clock (the released program reads no seed), so the two "
+           "runs time the same case, not the same world")
 
 
 def time_process(command: list[str], cwd: str) -> dict[str, Any]:
@@ -112,7 +115,7 @@ def compare_reference(binary: str, rounds: int, config: Config) -> dict[str, Any
                     runs[name].append(time_process(command, scratch))
                 except (OSError, RuntimeError) as exc:
                     raise UserError(f"--compare-reference: {exc}") from None
-    result: dict[str, Any] = {"steps": REFERENCE_STEPS, "rounds": rounds}
+    result: dict[str, Any] = {"steps": REFERENCE_STEPS, "rounds": rounds, "seeding": SEEDING.format(seed=config.seed)}
     for name, measured in runs.items():
         wall = statistics.median(m["wall_seconds"] for m in measured)
         result[name] = {"wall_seconds": wall, "steps_per_second": round(REFERENCE_STEPS / wall, 1),
