@@ -521,43 +521,62 @@ def test_light_program_from_the_page(app, page, tmp_path):
 
 
 def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
-    """Issue 25, item 2: the student's clicks, not the controller, light the floor; robots drive to it."""
+    """Issue 25, item 2: the student's clicks, not the controller, light the floor; robots charge there."""
     from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 
     runner = app.runner
+    runner.set_playing(True)
     dismiss_notifications(page)
     open_folder(page, "Be the light")
     click_button(page, "Be the light")
     wait_until(lambda: runner.latest.program == LAMP_PROGRAM, what="the lamp")
     page.get_by_role("button", name="Give the light back").wait_for(timeout=10_000)
     box = scene_canvas(page).bounding_box()
-    page.mouse.click(box["x"] + box["width"] / 2 - 60, box["y"] + box["height"] / 2)
-    wait_until(lambda: app.panel.lamp._centre is not None
-               and app.panel.lamp._centre != (runner.latest.world_config.centre,) * 2, what="the lamp moved")
-    centre = np.array(app.panel.lamp._centre)
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+
+    def click_floor(x: float, y: float) -> np.ndarray:
+        before = app.panel.lamp._centre
+        page.mouse.click(x, y)
+        wait_until(lambda: app.panel.lamp._centre != before, what="the lamp moved")
+        return np.array(app.panel.lamp._centre)
+
+    # Two clicks tell how the page's pixels map onto the floor (a top-down camera: one scale, y flipped).
+    left, right = click_floor(cx - 60, cy), click_floor(cx + 60, cy)
+    metres_per_pixel = (right[0] - left[0]) / 120
+    assert metres_per_pixel > 0 and abs(right[1] - left[1]) < 0.5
     radius = float(app.panel.lamp.radius.value)
 
-    def lit_about_the_click() -> bool:
+    def lit_about(centre: np.ndarray) -> bool:
         lit = np.argwhere(runner.latest.intensities > 0)
         pitch = runner.latest.world_config.light_pitch
         return len(lit) > 0 and np.hypot(*((lit + 0.5) * pitch - centre).T).max() <= radius
 
-    wait_until(lit_about_the_click, what="the lights about the click, and none elsewhere")
+    wait_until(lambda: lit_about(right), what="the lights about the click, and none elsewhere")
     wait_until(lambda: not app.view.handles["light_outline"].visible, what="the paper's outline hidden")
-    near = lambda: int((np.hypot(*(runner.latest.robot_positions - centre).T) <= radius + 1.0).sum())  # noqa: E731
-    before = near()
-    wait_until(lambda: near() >= before + 3, timeout=90, what="robots driving to the lamp")
+    # Click on a robot: the lamp lights it, and it charges (green: more than half full).
+    robot = int(np.argmin(runner.latest.robot_charges))
+    target = runner.latest.robot_positions[robot]
+    centre = click_floor(cx + (target[0] - (left[0] + right[0]) / 2) / metres_per_pixel,
+                         cy - (target[1] - left[1]) / metres_per_pixel)
+    assert np.hypot(*(centre - target)) < 1.5
+    capacity = runner.latest.world_config.capacity
+    wait_until(lambda: ((np.hypot(*(runner.latest.robot_positions - centre).T) <= radius)
+                        & (runner.latest.robot_charges > capacity / 2)).any(),
+               timeout=90, what="a robot charged by the lamp")
     # A brush: paint a second patch of lights, keeping the lamp's; then erase the lamp's.
     lit_lamp = int((runner.latest.intensities > 0).sum())
     page.get_by_label("A click", exact=True).click()
     page.get_by_role("option", name="paints lights on", exact=True).click()
     wait_until(lambda: app.panel.lamp.click_does.value == "paints lights on", what="the brush")
-    page.mouse.click(box["x"] + box["width"] / 2 + 150, box["y"] + box["height"] / 2)
+    lamp_pixel = (cx + (centre[0] - (left[0] + right[0]) / 2) / metres_per_pixel,
+                  cy - (centre[1] - left[1]) / metres_per_pixel)
+    away = -1 if centre[0] > runner.latest.world_config.centre else 1  # 12 m towards the arena's middle
+    click_floor(lamp_pixel[0] + away * 12 / metres_per_pixel, lamp_pixel[1])
     wait_until(lambda: (runner.latest.intensities > 0).sum() > 1.5 * lit_lamp, what="a painted patch beside the lamp")
     page.get_by_label("A click", exact=True).click()
     page.get_by_role("option", name="erases lights", exact=True).click()
     wait_until(lambda: app.panel.lamp.click_does.value == "erases lights", what="the eraser")
-    page.mouse.click(box["x"] + box["width"] / 2 - 60, box["y"] + box["height"] / 2)
+    click_floor(*lamp_pixel)
     ix, iy = (centre / runner.latest.world_config.light_pitch).astype(int)
     wait_until(lambda: runner.latest.intensities[ix, iy] == 0 and runner.latest.intensities.any(),
                what="the lamp's lights erased, the painted ones kept")
