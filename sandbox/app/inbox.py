@@ -158,10 +158,7 @@ class Inbox:
 
     def _control(self, client_id: int, uuid: str, kind: type | tuple) -> Any:
         """The shown, enabled control ``uuid`` of the given kind, shared or this page's own, or Refused."""
-        handle = self.server.gui._gui_input_handle_from_uuid.get(uuid)
-        if handle is None:
-            client = self._client(client_id)
-            handle = None if client is None else client.gui._gui_input_handle_from_uuid.get(uuid)
+        handle = self._handle(client_id, "_gui_input_handle_from_uuid", uuid)
         if handle is None or handle._impl.removed:
             raise Refused(f"no control {uuid!r}")
         if not isinstance(handle, kind):
@@ -175,14 +172,20 @@ class Inbox:
 
     def _command(self, client_id: int, uuid: str) -> Any:
         """The enabled keyboard command ``uuid`` (shared or this page's own), or Refused."""
-        handle = self.server.gui._command_handle_from_uuid.get(uuid)
-        if handle is None:
-            client = self._client(client_id)
-            handle = None if client is None else client.gui._command_handle_from_uuid.get(uuid)
+        handle = self._handle(client_id, "_command_handle_from_uuid", uuid)
         if handle is None or handle._impl.removed:
             raise Refused(f"no command {uuid!r}")
         if handle._impl.props.disabled:
             raise Refused(f"command {handle._impl.props.label!r} is disabled")
+        return handle
+
+    def _handle(self, client_id: int, table: str, uuid: str) -> Any:
+        """The handle ``uuid`` in viser's ``table`` (by uuid) of the shared GUI, else of the sending
+        page's own GUI (a page cannot reach another page's), or None."""
+        handle = getattr(self.server.gui, table).get(uuid)
+        if handle is None:
+            client = self._client(client_id)
+            handle = None if client is None else getattr(client.gui, table).get(uuid)
         return handle
 
     def _check_update(self, client_id: int, message: Any) -> None:
