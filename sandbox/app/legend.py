@@ -3,6 +3,8 @@ drawn with Pillow in the palette's own colours (so they cannot drift apart)."""
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
@@ -17,6 +19,7 @@ def _font(size: int = FONT_SIZE) -> ImageFont.ImageFont:
     return ImageFont.load_default(size=size)
 
 
+@functools.cache  # the same picture for the panel, every presenter page's floor and every replay
 def legend_picture() -> np.ndarray:
     """Swatches for everything on the floor: lights, robots by charge, boxes,
     the outlines and the walls."""

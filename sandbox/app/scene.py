@@ -79,7 +79,11 @@ def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, 
 def frame_arena(client: Any, config: Config, whole: bool = True) -> None:
     """Point one viewer's camera at the whole arena (or the construction area), for its own window's shape."""
     aspect = float(getattr(client.camera, "aspect", 0.0) or 1.4)
-    position, look_at, fov = top_down_camera(config, aspect, whole=whole)
+    aim_camera(client, *top_down_camera(config, aspect, whole=whole))
+
+
+def aim_camera(client: Any, position: np.ndarray, look_at: np.ndarray, fov: float) -> None:
+    """Move one viewer's camera, in one batch."""
     with client.atomic():
         client.camera.fov = fov
         client.camera.position = tuple(position)

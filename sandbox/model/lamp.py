@@ -34,7 +34,6 @@ class Lamp(LightProgram):
     every = 10
 
     def __init__(self, radius: float = DEFAULT_RADIUS):
-        self.centre: tuple[float, float] | None = None
         self.radius = float(radius)
         self._clicks: list[tuple[str, tuple[float, float], float]] = []
         self._pattern: np.ndarray | None = None
@@ -49,8 +48,7 @@ class Lamp(LightProgram):
         with self._lock:
             if radius is not None:
                 self.radius = float(np.clip(radius, SMALLEST_RADIUS, LARGEST_RADIUS))
-            self.centre = (float(x), float(y))
-            self._clicks.append((mode, self.centre, self.radius))
+            self._clicks.append((mode, (float(x), float(y)), self.radius))
             self._changed = True
 
     def reset(self, config: Config, goal: object) -> np.ndarray | None:

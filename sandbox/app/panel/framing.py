@@ -2,9 +2,9 @@
 or the presenter layout (issue 24, item 5).
 
 The presenter layout is for a projector: this viewer's panel collapses to
-its bar, its camera frames the construction area with the legend drawn on
-the floor beside it (the panel, and its legend, being out of the way), and
-the classroom's caption is large. Each viewer chooses for itself, like its
+its bar, and its camera frames the construction area with the legend drawn
+on the floor beside it (the panel, and its legend, being out of the way).
+Each viewer chooses for itself, like its
 camera; ``serve --classroom`` starts every page in it. A portrait view (a
 phone) has no room beside the construction area: there the presenter layout
 frames the construction area alone, with the legend in the panel.
@@ -16,7 +16,7 @@ import threading
 from typing import Any
 
 from sandbox.app.legend import legend_picture
-from sandbox.app.scene import PHONE_ASPECT, add_floor_legend, frame_arena, presenter_camera
+from sandbox.app.scene import PHONE_ASPECT, add_floor_legend, aim_camera, frame_arena, presenter_camera
 
 CONSTRUCTION = "Construction area"
 WHOLE_ARENA = "Whole arena"
@@ -71,11 +71,7 @@ class Framing:
         if not presenter:
             frame_arena(client, config, whole=view == WHOLE_ARENA)
             return
-        position, look_at, fov = presenter_camera(config, aspect, self._legend_aspect)
-        with client.atomic():
-            client.camera.fov = fov
-            client.camera.position = tuple(position)
-            client.camera.look_at = tuple(look_at)
+        aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect))
 
     def arrive(self, client: Any) -> None:
         """A page that connected: the default view's layout (its camera is framed as it reports its shape)."""

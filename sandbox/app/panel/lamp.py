@@ -31,6 +31,8 @@ CLICKS = {"moves the lamp": LAMP, "paints lights on": PAINT, "erases lights": ER
 class LampFolder:
     def __init__(self, gui: Any, runner: Any, on_change: Any):
         self.gui, self.runner, self._on_change = gui, runner, on_change
+        #: Where the last click put the lamp (a resize keeps it there).
+        self._centre: tuple[float, float] | None = None
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -57,8 +59,6 @@ class LampFolder:
         def _(event: viser.GuiEvent) -> None:
             if self.on and self._centre is not None and self._mode == LAMP:  # the lamp resized where it is
                 self._set(self._centre, event.client)
-
-        self._centre: tuple[float, float] | None = None
 
     @property
     def on(self) -> bool:
