@@ -153,7 +153,7 @@ def test_stopping_the_app_ends_a_reference_run_at_once():
     class Markdown:
         content = ""
 
-    folder = ChallengeFolder(gui=None, runner=None, lamp=None, on_change=lambda what: None)
+    folder = ChallengeFolder(gui=None, runner=None, lockstep=None, lamp=None, on_change=lambda what: None)
     folder.status, folder.scores = Markdown(), Markdown()
     r = Round("Ada", 10**9, 0, world=1, score=0.4, at_step=10**9)  # a reference that would run for days
     folder._score_the_paper(r, (Config(robots=20, boxes=30), 0, None))

@@ -70,6 +70,7 @@ class SimulationRunner(Protocol):
     #: The robots the viewers follow: the snapshots carry their photocells (``Snapshot.followed``).
     followed: tuple[int, ...]
     want_field: bool
+    hold_at: int | None
     errors: list
 
     def start(self) -> Any: ...
@@ -110,6 +111,14 @@ class SimulationRunner(Protocol):
     def follow(self, indices: Iterable[int]) -> None: ...
 
     def step_once(self, n: int = 1) -> None: ...
+
+    def hold(self, step: int | None) -> None:
+        """Playing, step no further than ``step`` (None: no limit)."""
+        ...
+
+    def run_to(self, step: int) -> None:
+        """Step until the world is at ``step`` (nothing if it is there or past)."""
+        ...
 
     def cancel_build(self) -> None: ...
 

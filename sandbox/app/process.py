@@ -70,6 +70,7 @@ class ProcessRunner(FramePublisher):
         self.program_time_limit = float(program_time_limit)
         FramePublisher.__init__(self)
         self.followed: tuple[int, ...] = ()
+        self.hold_at: int | None = None
         self._want_field = False
         self.restarts = 0
         #: Why the simulation cannot run any more (too many crashes in a row), or None.
@@ -143,6 +144,8 @@ class ProcessRunner(FramePublisher):
         for name, value in (("followed", self.followed), ("want_field", self._want_field)):
             if value:  # what differs from a fresh runner's
                 self._control(name, value)
+        if self.hold_at is not None:
+            self._control("hold", self.hold_at)
         if self._started:
             self._control("start")
 
@@ -333,6 +336,13 @@ class ProcessRunner(FramePublisher):
     def step_once(self, n: int = 1) -> None:
         self._control("step", int(n))
 
+    def hold(self, step: int | None) -> None:
+        self.hold_at = None if step is None else int(step)
+        self._control("hold", self.hold_at)
+
+    def run_to(self, step: int) -> None:
+        self._control("run_to", int(step))
+
     def reset(self, seed: int | None = None, *, on_done: Callable[[Any], None] | None = None,
               on_error: Callable[[BaseException], None] | None = None) -> None:
         self._runner_call("reset", on_done, on_error, seed)
@@ -480,6 +490,10 @@ def _apply_control(runner: Runner, name: str, *args: Any) -> None:
         runner.wake()
     elif name == "step":
         runner.step_once(args[0])
+    elif name == "hold":
+        runner.hold(args[0])
+    elif name == "run_to":
+        runner.run_to(args[0])
     elif name == "cancel":
         runner.cancel_build()
 

@@ -78,6 +78,9 @@ class Runner(FramePublisher):
         self.followed: tuple[int, ...] = ()
         #: Whether snapshots should carry the luminosity field (costly: only for the heat map).
         self.want_field = False
+        #: Playing, the world steps no further than this step (None: no limit): compare mode holds two
+        #: worlds in lockstep (sandbox.app.compare).
+        self.hold_at: int | None = None
         self.program_name = PAPER_PROGRAM
         self.program_error: tuple[int, str] | None = None
         self.shape_name = config.shape
@@ -160,6 +163,16 @@ class Runner(FramePublisher):
     def step_once(self, n: int = 1) -> None:
         """Advance ``n`` steps now (used while paused)."""
         self.post(lambda sim: self._step(n))
+
+    def hold(self, step: int | None) -> None:
+        """Playing, step no further than ``step`` (None: no limit). Taken at the next frame: waking the loop
+        would run a frame early, and compare mode moves the limit at every frame."""
+        self.hold_at = None if step is None else int(step)
+
+    def run_to(self, step: int) -> None:
+        """Step until the world's step count is ``step`` (nothing if it is there or past): two paused
+        worlds in compare mode end on the same step."""
+        self.post(lambda sim: self._step(int(step) - sim.steps_done) if sim.steps_done < int(step) else None)
 
     def update_config(self, changes: dict[str, Any], *, on_done: Callable[[Any], None] | None = None,
                       on_error: Callable[[BaseException], None] | None = None) -> None:
@@ -385,21 +398,26 @@ class Runner(FramePublisher):
     def _frame_of_steps(self, deadline: float) -> None:
         """One frame: the waiting commands, the steps (if playing), the series and a snapshot."""
         self._run_commands()
-        if self.playing:
+        if self.playing and self._steps_allowed(self.steps_per_frame) > 0:
             if self.steps_per_frame >= FASTEST:
                 self._step(deadline=deadline)  # as many steps as fit in one frame
             else:
-                self._step(self.steps_per_frame)
+                self._step(self._steps_allowed(self.steps_per_frame))
             self._record_series()
         self._step_times.append((time.perf_counter(), self.sim.steps_done))
         self._snapshot()
 
     def _step_for(self, deadline: float) -> None:
-        """Step in small chunks until ``deadline`` (at least one chunk)."""
-        while True:
-            self.sim.step(FASTEST_CHUNK)
+        """Step in small chunks until ``deadline`` (at least one chunk) or the held step."""
+        while (n := self._steps_allowed(FASTEST_CHUNK)) > 0:
+            self.sim.step(n)
             if time.perf_counter() >= deadline or self._stop.is_set() or not self._commands.empty():
                 return
+
+    def _steps_allowed(self, n: int) -> int:
+        """``n``, or fewer if the world is held (:meth:`hold`)."""
+        hold = self.hold_at
+        return n if hold is None else max(0, min(n, hold - self.sim.steps_done))
 
     def _publish_loop(self) -> None:
         while not self._stop.is_set():

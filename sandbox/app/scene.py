@@ -54,7 +54,7 @@ PHONE_ASPECT = 0.75
 
 
 def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, *,
-                    whole: bool = True) -> tuple[np.ndarray, np.ndarray, float]:
+                    whole: bool = True, beside: float | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """Camera position, look-at point and vertical field of view (radians) that
     frame the whole arena (or, ``whole`` False, the construction area) from
     straight above (tilted a hair so orbiting works), in a view ``aspect``
@@ -62,24 +62,37 @@ def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, 
     for its width. A view much taller than wide (narrower than :data:`PHONE_ASPECT`: a phone,
     where viser lays its panel over the lower half of the page) has the framed square at its top,
     not in its middle. (The server learns only the canvas's shape, not whether the panel covers
-    it: a desktop window that narrow gets the same framing, whole but high.)"""
+    it: a desktop window that narrow gets the same framing, whole but high.) ``beside``: compare
+    mode's second world lies this many metres to the right; both are framed."""
     if whole:
         c, half = config.arena_size / 2.0, config.arena_size * 0.56  # arena plus a margin
     else:
         c, half = config.centre, config.construction_size * CONSTRUCTION_VIEW / 2.0
+    return camera_over((c - half, c + half + (beside or 0.0), c - half, c + half), aspect, fov_deg,
+                       top_on_phone=True)
+
+
+def camera_over(box: tuple[float, float, float, float], aspect: float, fov_deg: float = 50.0, *,
+                top_on_phone: bool = False) -> tuple[np.ndarray, np.ndarray, float]:
+    """Camera position, look-at point and field of view that frame the floor rectangle ``box``
+    (left, right, bottom, top) in a view ``aspect`` wide, as large as it fits; ``top_on_phone``: in a
+    phone's view the rectangle sits at the view's top (see :func:`top_down_camera`)."""
+    x0, x1, y0, y1 = box
     fov = np.radians(fov_deg)
     aspect = max(aspect, 0.1)
-    height = half / np.tan(fov / 2.0) / min(1.0, aspect)
-    # The view spans 2 half / aspect of floor from top to bottom; moving the look-at point down by
-    # half (1 / aspect - 1) puts the square's top edge at the view's top edge.
-    y = c - (half * (1.0 / aspect - 1.0) if aspect < PHONE_ASPECT else 0.0)
-    return np.array([c, y - 1e-3 * height, height]), np.array([c, y, 0.0]), float(fov)
+    half_height = max((y1 - y0) / 2.0, (x1 - x0) / 2.0 / aspect)
+    height = half_height / np.tan(fov / 2.0)
+    cx, cy = (x0 + x1) / 2.0, (y0 + y1) / 2.0
+    if top_on_phone and aspect < PHONE_ASPECT:
+        cy = y1 - half_height  # the rectangle's top edge at the view's top edge
+    return np.array([cx, cy - 1e-3 * height, height]), np.array([cx, cy, 0.0]), float(fov)
 
 
-def frame_arena(client: Any, config: Config, whole: bool = True) -> None:
-    """Point one viewer's camera at the whole arena (or the construction area), for its own window's shape."""
+def frame_arena(client: Any, config: Config, whole: bool = True, beside: float | None = None) -> None:
+    """Point one viewer's camera at the whole arena (or the construction area), for its own window's
+    shape; ``beside``: and compare mode's second world, that far to the right."""
     aspect = float(getattr(client.camera, "aspect", 0.0) or 1.4)
-    aim_camera(client, *top_down_camera(config, aspect, whole=whole))
+    aim_camera(client, *top_down_camera(config, aspect, whole=whole, beside=beside))
 
 
 def aim_camera(client: Any, position: np.ndarray, look_at: np.ndarray, fov: float) -> None:
@@ -135,21 +148,17 @@ def presenter_legend_box(config: Config, height_per_width: float) -> tuple[float
     return right - width, right, top - width * height_per_width, top
 
 
-def presenter_camera(config: Config, aspect: float, height_per_width: float,
-                     fov_deg: float = 50.0) -> tuple[np.ndarray, np.ndarray, float]:
+def presenter_camera(config: Config, aspect: float, height_per_width: float, fov_deg: float = 50.0,
+                     beside: float | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """Camera position, look-at point and field of view framing the construction area and the
-    presenter's legend beside it, as large as the view's ``aspect`` allows (a margin all round)."""
+    presenter's legend beside it, as large as the view's ``aspect`` allows (a margin all round);
+    ``beside``: and compare mode's second construction area, that far to the right."""
     left, _, bottom, _ = presenter_legend_box(config, height_per_width)
     half = config.construction_size * CONSTRUCTION_VIEW / 2.0
     margin = half - config.construction_size / 2.0
-    x0, x1 = left - margin, config.centre + half
-    y0, y1 = min(bottom, config.centre - config.construction_size / 2.0) - margin, config.centre + half
-    fov = np.radians(fov_deg)
-    aspect = max(aspect, 0.1)
-    half_height = max((y1 - y0) / 2.0, (x1 - x0) / 2.0 / aspect)
-    height = half_height / np.tan(fov / 2.0)
-    cx, cy = (x0 + x1) / 2.0, (y0 + y1) / 2.0
-    return np.array([cx, cy - 1e-3 * height, height]), np.array([cx, cy, 0.0]), float(fov)
+    box = (left - margin, config.centre + half + (beside or 0.0),
+           min(bottom, config.centre - config.construction_size / 2.0) - margin, config.centre + half)
+    return camera_over(box, aspect, fov_deg)
 
 
 def configure_scene(server: Any, config: Config, whole: bool = True) -> None:
@@ -202,8 +211,11 @@ class SceneView:
     """Draws snapshots into a viser scene."""
 
     def __init__(self, scene: Any, snapshot: Snapshot, *, show_field: bool = False,
-                 caption_over_construction: bool = False):
+                 caption_over_construction: bool = False, root: str = "", offset: tuple[float, float] = (0.0, 0.0)):
+        """``root`` and ``offset``: a second world (compare mode) is drawn under its own node, moved
+        ``offset`` metres along the floor."""
         self.scene = scene
+        self.root, self.offset = root, (float(offset[0]), float(offset[1]))
         self.show_field = show_field
         #: Where the caption sits: above the arena's top-right corner, or (classroom, whose pages frame
         #: the construction area) above the construction wall's, where both framings show it.
@@ -225,55 +237,68 @@ class SceneView:
         cfg = snap.world_config
         s, c = cfg.arena_size, cfg.arena_size / 2.0
         sc = self.scene
-        for h in [*self.handles.values(), *([self.hexagons] if self.hexagons else [])]:
-            try:
-                h.remove()
-            except Exception:
-                pass
-        self.handles = {}
+        self._remove_nodes()
         self._sent = CompactSender()
+        if self.root:
+            self.handles["root"] = sc.add_frame(self.root, show_axes=False, position=(*self.offset, 0.0))
+        r0 = self.root
         placeholder = np.zeros((8, 8, 3), np.uint8)
         # The grid of lights, all off, as one PNG texture sent once; the lit ones are square points over
         # it, sent with the bodies (a PNG is decoded later than the points it came with).
         self.handles["lights"] = sc.add_image(
-            "/arena/lights", self._light_picture(cfg), s, s, format="png", position=(c, c, Z_LIGHTS),
+            f"{r0}/arena/lights", self._light_picture(cfg), s, s, format="png", position=(c, c, Z_LIGHTS),
             cast_shadow=False, receive_shadow=False, visible=not self.show_field)
         self.handles["lit"] = sc.add_point_cloud(
-            "/arena/lit", self._points(1), np.zeros((1, 3), np.uint8), point_size=self._lit_size(cfg),
+            f"{r0}/arena/lit", self._points(1), np.zeros((1, 3), np.uint8), point_size=self._lit_size(cfg),
             point_shape="square", point_shading="flat", position=(c, c, Z_LIT), visible=False)
         self.handles["field"] = sc.add_image(
-            "/arena/field", placeholder, s, s, format="png", position=(c, c, Z_FIELD),
+            f"{r0}/arena/field", placeholder, s, s, format="png", position=(c, c, Z_FIELD),
             cast_shadow=False, receive_shadow=False, visible=self.show_field)
         self.handles["walls"] = sc.add_line_segments(
-            "/arena/walls", pal.closed_segments(pal.square(c, c), Z_LINES), pal.ARENA_WALL, thickness=0.25)
+            f"{r0}/arena/walls", pal.closed_segments(pal.square(c, c), Z_LINES), pal.ARENA_WALL, thickness=0.25)
         self.handles["box_wall"] = sc.add_line_segments(
-            "/arena/box_wall", pal.closed_segments(pal.square(cfg.centre, cfg.construction_size / 2.0), Z_LINES),
+            f"{r0}/arena/box_wall", pal.closed_segments(pal.square(cfg.centre, cfg.construction_size / 2.0), Z_LINES),
             pal.BOX_WALL, thickness=0.1)
         n, m = len(snap.robot_positions), len(snap.box_positions)
         # A robot is a round point, its heading a dark dot near its front rim (viser draws a point of
         # size d as wide as an object 2d wide, so sizes are radii); a box a hexagon (sandbox.app.hexagons).
         r = cfg.robot_radius
         self.handles["robots"] = sc.add_point_cloud(
-            "/swarm/robots", self._points(max(n, 1)), np.zeros((max(n, 1), 3), np.uint8), point_size=r, point_shape="circle",
+            f"{r0}/swarm/robots", self._points(max(n, 1)), np.zeros((max(n, 1), 3), np.uint8), point_size=r, point_shape="circle",
             point_shading="flat", position=(c, c, Z_ROBOTS), visible=n > 0)
         self.handles["headings"] = sc.add_point_cloud(
-            "/swarm/headings", self._points(max(n, 1)), pal.HEADING_MARK, point_size=0.3 * r,
+            f"{r0}/swarm/headings", self._points(max(n, 1)), pal.HEADING_MARK, point_size=0.3 * r,
             point_shape="circle", point_shading="flat", position=(c, c, Z_MARKS), visible=n > 0)
-        self.hexagons = Hexagons(sc, "/swarm/boxes", m, cfg.box_circumradius, (c, c, Z_BOXES), self._sent)
+        self.hexagons = Hexagons(sc, f"{r0}/swarm/boxes", m, cfg.box_circumradius, (c, c, Z_BOXES), self._sent)
         # Above a top-right corner: viser stacks its notifications at the page's top left.
         wall = cfg.centre + cfg.construction_size / 2.0
         corner = (wall, wall + 0.3) if self.caption_over_construction else (s, s + 0.8)
         # Its size is in screen pixels: at 1.2 it still fits a phone's width (a larger one, for a
         # projector, would run off a phone that watches the same classroom).
-        self.handles["caption"] = sc.add_label("/caption", caption(snap), position=(*corner, Z_TOP),
+        self.handles["caption"] = sc.add_label(f"{r0}/caption", caption(snap), position=(*corner, Z_TOP),
                                                anchor="bottom-right", font_screen_scale=1.2)
         empty = np.zeros((1, 2, 3), np.float32)
-        self.handles["goal"] = sc.add_line_segments("/goal", empty, pal.GOAL_LINE, thickness=0.18)
-        self.handles["light_outline"] = sc.add_line_segments("/light_outline", empty, pal.LIGHT_LINE, thickness=0.08)
+        self.handles["goal"] = sc.add_line_segments(f"{r0}/goal", empty, pal.GOAL_LINE, thickness=0.18)
+        self.handles["light_outline"] = sc.add_line_segments(f"{r0}/light_outline", empty, pal.LIGHT_LINE, thickness=0.08)
         self._built_for = _geometry_key(cfg, n, m)
         self._lights_key = self._field_key = self._goal_key = None
         self._outline_bytes = None
         self._n = (n, m)
+
+    def _remove_nodes(self) -> None:
+        for h in [*([self.hexagons] if self.hexagons else []), *reversed(self.handles.values())]:  # the root last
+            try:
+                h.remove()
+            except Exception:
+                pass
+        self.handles = {}
+        self.hexagons = None
+
+    def remove(self) -> None:
+        """Take this world's nodes off the scene (compare mode ends)."""
+        with self._lock:
+            self._remove_nodes()
+            self._built_for = None
 
     # ----------------------------------------------------------- dynamic
     def update(self, snap: Snapshot) -> None:

@@ -17,8 +17,10 @@ import signal
 import socket
 import threading
 import time
+from pathlib import Path
 from typing import Any
 
+from sandbox.app.compare import Comparison, Lockstep, side_config
 from sandbox.app.access import WATCH, Access, is_loopback_host, is_shared
 from sandbox.app.gate import start_server
 from sandbox.app.icons import read_icons_once
@@ -30,7 +32,7 @@ from sandbox.app.scene import SceneView, configure_scene, frame_arena
 from sandbox.app.snapshot import Snapshot
 from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, config_from_args,
                          controller_from_args, program_time_limit)
-from sandbox.model.config import Config
+from sandbox.model.config import Config, ConfigError
 from sandbox.model.watchdog import DEFAULT_LIMIT
 from sandbox.shapes import shape_vertices
 
@@ -49,7 +51,10 @@ class App:
                  fps: float = 30.0, steps_per_frame: int = 25, playing: bool = True, verbose: bool = False,
                  process: bool = True, keep_running: bool = False, idle_pause_seconds: float = IDLE_PAUSE_SECONDS,
                  controller: str | None = None, allow_programs: bool = False, access: Access | None = None,
-                 program_time_limit: float = DEFAULT_LIMIT, whole_arena: bool = True):
+                 program_time_limit: float = DEFAULT_LIMIT, whole_arena: bool = True,
+                 compare: tuple[Config, str] | None = None):
+        """``compare``: start in compare mode against a world of this configuration (its goal from the
+        configuration), named so in the Compare folder (``serve --compare``)."""
         if isinstance(shape, str) and shape == "from-config":
             shape = shape_vertices(config.shape)  # raises ShapeError before any server starts
         self.config = config
@@ -62,6 +67,14 @@ class App:
         # The simulation process starts (about a second) while the server and the panel are built.
         self.runner = kind(config, shape=shape, fps=fps, steps_per_frame=steps_per_frame, playing=playing,
                            program_time_limit=program_time_limit, **({"wait": False} if process else {}))
+        self._compare_with = compare
+
+        def make_runner(partner_config: Config, **kwargs: Any) -> Any:  # compare mode's second world
+            return kind(partner_config, fps=fps, steps_per_frame=self.runner.steps_per_frame,
+                        program_time_limit=program_time_limit, **kwargs)
+
+        self._frame_lock = threading.Lock()
+        self.lockstep = Lockstep(self.runner)
         try:
             self.server, self.gate = start_server(self.access, host=host, port=port, label=TITLE, verbose=verbose)
         except BaseException:
@@ -71,12 +84,15 @@ class App:
             read_icons_once()
             self._configure_page()
             self.view = SceneView(self.server.scene, self.runner.latest, caption_over_construction=not whole_arena)
+            self.comparison = Comparison(self.server, self.lockstep, make_runner, self._frame_lock,
+                                         on_layout=self._reframe_all)
             # Loading a program runs a Python file on this machine: the page offers it only where a
             # connection may do it (served to this machine, or --allow-programs); the gate decides per page.
             offered = self.access.allow_programs or not is_shared(host)
             self.panel = Panel(self.server, self.runner, self.view, allow_programs=offered,
                                may_load_programs=self.gate.may_load_programs,
-                               default_view=WHOLE_ARENA if whole_arena else PRESENTER)
+                               default_view=WHOLE_ARENA if whole_arena else PRESENTER,
+                               comparison=self.comparison)
             for client in list(self.server.get_clients().values()):  # came while the panel was built
                 self.panel.inspector.attach(client)
                 self.panel.framing.arrive(client)
@@ -86,7 +102,6 @@ class App:
             self.runner.stop()
             raise
         self.frames_drawn = 0
-        self._frame_lock = threading.Lock()
         self.runner.subscribe(self._on_frame)
         if process:
             self.runner.on_crash(self._on_crash)
@@ -135,7 +150,7 @@ class App:
                                     color="red", auto_close_seconds=None)
         if self.auto_paused:
             self.auto_paused = False
-            self.runner.set_playing(True)
+            self.lockstep.set_playing(True)
         panel = getattr(self, "panel", None)  # a page may connect while the panel is built
         if panel is not None:
             panel.inspector.attach(client)
@@ -167,7 +182,14 @@ class App:
             elif (not self.keep_running and self.runner.playing
                   and time.monotonic() - self._last_viewer >= self.idle_pause_seconds):
                 self.auto_paused = True
-                self.runner.set_playing(False)
+                self.lockstep.set_playing(False)
+
+    def _reframe_all(self, beside: float | None) -> None:
+        """Compare mode began or ended: every page frames both worlds, or the one."""
+        self.panel.framing.beside = beside
+        for client in list(self.server.get_clients().values()):
+            if client.client_id not in self.panel.inspector.followers:
+                self.panel.framing.apply(client)
 
     def _on_crash(self, why: str) -> None:
         given_up = self.runner.failed is not None
@@ -198,6 +220,13 @@ class App:
             except Exception as exc:
                 self.stop()
                 raise UserError(str(exc)) from None
+        if self._compare_with is not None:
+            partner_config, label = self._compare_with
+            try:
+                self.comparison.begin(partner_config, "from-config", label)
+            except Exception as exc:
+                self.stop()
+                raise UserError(f"the compared world cannot start: {exc}") from None
         threading.Thread(target=self._watch_viewers, name="phototaxis-viewers", daemon=True).start()
         return self
 
@@ -205,6 +234,7 @@ class App:
         self._stopping.set()
         self.panel.advice.stop()
         self.panel.challenge.stop()
+        self.comparison.end()
         self.runner.stop()
         with contextlib.redirect_stdout(io.StringIO()):  # viser says goodbye on stdout
             self.server.stop()
@@ -235,6 +265,10 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                    help="speed: world steps between two frames (default 25: 750 steps/s, 25x real time; "
                         "100: as fast as the machine can)")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate the page is updated at (default 30)")
+    p.add_argument("--compare", nargs=2, metavar=("LEFT", "RIGHT"), default=None,
+                   help="compare mode: two worlds side by side from the same seed, each a paper case's name "
+                        "(e.g. star star-switch) or a TOML or JSON file of values over the other flags; play, "
+                        "pause, step and reset act on both")
     add_controller_argument(p)
     p.add_argument("--allow-programs", action="store_true",
                    help="let any controlling page load light programs (Python files on this machine), not only "
@@ -264,6 +298,15 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 def serve_command(args: argparse.Namespace) -> int:
 
     config = config_from_args(args)
+    compare = None
+    if args.compare:
+        if args.case:
+            raise UserError("--compare names both sides' cases; leave out --case")
+        try:
+            config, right = (side_config(spec, config) for spec in args.compare)
+        except (ConfigError, OSError) as exc:
+            raise UserError(str(exc)) from None
+        compare = (right, Path(args.compare[1]).stem)
     if not 0 <= args.port <= 65535:
         raise UserError(f"--port must be between 0 and 65535, got {args.port}")
     if not 1 <= args.steps_per_frame <= 100:
@@ -282,7 +325,7 @@ def serve_command(args: argparse.Namespace) -> int:
         app = App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
                   playing=not (args.paused or args.classroom), whole_arena=not args.classroom,
                   keep_running=args.keep_running, controller=controller_from_args(args)[0], access=access,
-                  program_time_limit=program_time_limit(args))
+                  program_time_limit=program_time_limit(args), compare=compare)
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
 

@@ -8,13 +8,16 @@ generated from the model's declaration.
 
 from __future__ import annotations
 
+import threading
 import time
-from typing import Any
+from typing import Any, Callable
 
 from sandbox.app import learn, legend
 from sandbox.app.panel.advice import AdviceFolder
 from sandbox.app.panel.common import PANEL_HZ, floor_point
+from sandbox.app.compare import Comparison, Lockstep
 from sandbox.app.panel.challenge import ChallengeFolder
+from sandbox.app.panel.compare import CompareFolder
 from sandbox.app.panel.framing import WHOLE_ARENA, Framing
 from sandbox.app.panel.inspector import InspectorFolder
 from sandbox.app.panel.lamp import LampFolder
@@ -33,15 +36,22 @@ class Panel:
     ``view`` is the scene (it shows the heat map); the shape being drawn has its own nodes (draw_view)."""
 
     def __init__(self, server: Any, runner: Any, view: Any, *, allow_programs: bool = True,
-                 may_load_programs: Any = None, default_view: str = WHOLE_ARENA):
+                 may_load_programs: Any = None, default_view: str = WHOLE_ARENA, comparison: Comparison | None = None):
+        """``comparison``: compare mode's second world (:mod:`sandbox.app.compare`); without one, the panel
+        makes its own, drawn under no lock."""
         gui = server.gui
         self.runner = runner
+        if comparison is None:
+            comparison = Comparison(server, Lockstep(runner), make_runner=_threaded_runner(runner),
+                                    draw_lock=threading.Lock(), on_layout=lambda beside: None)
+        self.comparison = comparison
+        lockstep = comparison.lockstep
         #: How each viewer frames the floor (its View, the presenter layout).
         self.framing = Framing(runner, default_view)
         self._last_refresh = 0.0
         self.parameters = ParametersFolder(gui, runner)
-        self.metrics = MetricsFolder(gui, runner)
-        self.run = RunFolder(gui, runner, show_field=lambda on: view.set_show_field(on, runner.latest),
+        self.metrics = MetricsFolder(gui, runner, compared=lambda: comparison.runner)
+        self.run = RunFolder(gui, runner, lockstep, show_field=lambda on: view.set_show_field(on, runner.latest),
                              after_reset=self._after_reset, framing=self.framing)
         self.shape = ShapeFolder(gui, runner, server.scene, on_change=self.metrics.mark)
         self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark,
@@ -50,10 +60,11 @@ class Panel:
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
         self.lamp = LampFolder(gui, runner, on_change=self.metrics.mark)
-        self.challenge = ChallengeFolder(gui, runner, self.lamp, on_change=self.metrics.mark)
+        self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark)
+        self.compare = CompareFolder(gui, runner, comparison, on_change=self.metrics.mark)
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
         self.record = RecordFolder(gui, server, runner)
-        self.folders = (self.run, self.shape, self.advice, self.strategies, self.program, self.lamp, self.challenge,
+        self.folders = (self.run, self.compare, self.shape, self.advice, self.strategies, self.program, self.lamp, self.challenge,
                         self.metrics, self.inspector, self.record, self.parameters)
         snap = runner.latest
         self._build_legend(gui)
@@ -88,6 +99,8 @@ class Panel:
 
     def _on_scene_click(self, event: Any) -> None:
         point = floor_point(event.ray_origin, event.ray_direction)
+        if point is not None and self.comparison.runner is not None and point[0] > self.comparison.beside - 1.0:
+            return  # on the compared world: the shape, the lamp and the inspector act on the running one
         if point is not None and not self.shape.click(point) and not self.lamp.click(point, event.client):
             self.inspector.click(point, event.client)
 
@@ -101,3 +114,13 @@ class Panel:
             gui.add_markdown(learn.STRATEGIES)
             gui.add_image(learn.stored_picture("learn-strategies.png"), format="png")
             gui.add_markdown(learn.INSPECT)
+
+
+def _threaded_runner(like: Any) -> Callable[..., Any]:
+    """Makes compare mode's second runner in a thread of this process, paced like ``like``."""
+    from sandbox.app.runner import Runner
+
+    def make(config: Any, **kwargs: Any) -> Any:
+        return Runner(config, fps=like.fps, steps_per_frame=like.steps_per_frame, **kwargs)
+
+    return make

@@ -42,8 +42,10 @@ class Round:
 
 
 class ChallengeFolder:
-    def __init__(self, gui: Any, runner: Any, lamp: Any, on_change: Callable[[str], None]):
-        self.gui, self.runner, self.lamp, self._on_change = gui, runner, lamp, on_change
+    def __init__(self, gui: Any, runner: Any, lockstep: Any, lamp: Any, on_change: Callable[[str], None]):
+        """The round's reset, play and pause act on ``lockstep``: in compare mode the second world (the
+        paper's lights, say) plays the round beside the player's."""
+        self.gui, self.runner, self.lockstep, self.lamp, self._on_change = gui, runner, lockstep, lamp, on_change
         #: World steps a round lasts (tests shorten it).
         self.round_steps = ROUND_STEPS
         self.round: Round | None = None
@@ -71,12 +73,12 @@ class ChallengeFolder:
         with self._lock:
             self.round = Round(player, int(self.round_steps), self.runner.latest.world_key)
         self.status.content = f"**{player}**: building the round's world..."
-        self.runner.set_playing(False)
+        self.lockstep.set_playing(False)
 
         def built(_: Any) -> None:
             centre = self.runner.latest.world_config.centre
             self.runner.set_lamp((centre, centre), float(self.lamp.radius.value), "lamp")
-            self.runner.set_playing(True)
+            self.lockstep.set_playing(True)
             self._on_change(f"round: {player}")
 
         def failed(exc: BaseException) -> None:
@@ -85,7 +87,7 @@ class ChallengeFolder:
             self.status.content = ""
             notify_error(client, "Round not started", str(exc))
 
-        self.runner.reset(ROUND_SEED, on_done=built, on_error=failed)
+        self.lockstep.reset(ROUND_SEED, on_done=built, on_error=failed)
 
     def update(self, snap: Snapshot) -> None:
         with self._lock:
@@ -106,7 +108,7 @@ class ChallengeFolder:
                                        f"{100 * snap.sample.fraction_in_goal:.1f} % in the goal")
                 return
             r.score, r.at_step = float(snap.sample.fraction_in_goal), int(snap.sample.step)
-        self.runner.set_playing(False)
+        self.lockstep.set_playing(False)
         self.status.content = (f"**{r.player}**: {100 * r.score:.1f} % in the goal after {r.at_step:,} steps. "
                                "The paper's controller is playing the same world...")
         self.runner.world_spec(on_done=lambda spec: self._score_the_paper(r, spec),

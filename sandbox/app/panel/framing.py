@@ -32,6 +32,8 @@ class Framing:
         if default not in VIEWS:
             raise ValueError(f"unknown view {default!r}: one of {', '.join(VIEWS)}")
         self.runner, self.default = runner, default
+        #: Compare mode: how far right of the running world the second one lies (m), framed with it.
+        self.beside: float | None = None
         self._views: dict[int, str] = {}
         self._legends: dict[int, Any] = {}
         self._lock = threading.RLock()
@@ -69,9 +71,9 @@ class Framing:
         with self._lock:
             self._show_legend(client, config, presenter)
         if not presenter:
-            frame_arena(client, config, whole=view == WHOLE_ARENA)
+            frame_arena(client, config, whole=view == WHOLE_ARENA, beside=self.beside)
             return
-        aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect))
+        aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect, beside=self.beside))
 
     def arrive(self, client: Any) -> None:
         """A page that connected: the default view's layout (its camera is framed as it reports its shape)."""

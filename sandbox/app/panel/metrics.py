@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import io
 import time
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import viser
 import viser.uplot
 
 from sandbox.app import palette as pal
+from sandbox.app.compare import side_name
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.metrics import SampleWriter
 
@@ -21,13 +22,28 @@ CHART_POINTS = 300
 CHART_PERIOD = 1.0
 
 
+#: Changes made from the page show as white dots along the top of the first chart.
+MARKS = {"label": "change", "stroke": "#ffffff", "width": 0, "points": {"show": True, "size": 9, "fill": "#ffffff"}}
+#: Each chart's colour for compare mode's second world (the right one).
+COMPARED_COLOUR = "#ffd23f"
+
+#: The charts: (handle attribute, the sample's field, the series' label, its colour).
+CHARTS = (("chart_goal", "fraction_in_goal", "in goal", "#ff5ca8"),
+          ("chart_dist", "mean_outside_distance", "stray distance", "#40c8ff"),
+          ("chart_charged", "charged_robots", "with charge", "#2ecc40"))
+
+
 class MetricsFolder:
-    def __init__(self, gui: Any, runner: Any):
-        self.gui, self.runner = gui, runner
+    def __init__(self, gui: Any, runner: Any, compared: Callable[[], Any] = lambda: None):
+        """``compared()``: compare mode's second runner, or None; its curves join the charts."""
+        self.gui, self.runner, self._compared = gui, runner, compared
         #: (step, what) of every change made from the page: shape, strategy, case, reset.
         self.marks: list[tuple[int, str]] = []
         self._charted: tuple | None = None  # what the charts last showed
         self._charted_at = 0.0
+        #: The series (curves and their names) each chart shows: compare mode adds the second world's.
+        self._series_shown = {attr: self._series(label, colour, None, marks=attr == "chart_goal")
+                              for attr, _, label, colour in CHARTS}
 
     def mark(self, what: str, step: int | None = None) -> None:
         """Remember a change, to show on the charts where it happened (``step`` None: now)."""
@@ -47,20 +63,17 @@ class MetricsFolder:
             # The y axis asks for a tick every 22 px, so that even a short chart has three or more.
             common = dict(height=150, padding=(8, 12, 0, 0), legend={"show": True, "live": True},
                           axes=({"stroke": "#c8cbd2"}, {"stroke": "#c8cbd2", "space": 22}))
-            # Changes made from the page show as white dots along the top of the first chart.
-            marks = {"label": "change", "stroke": "#ffffff", "width": 0, "points": {"show": True, "size": 9,
-                                                                                      "fill": "#ffffff"}}
             self.chart_goal = gui.add_uplot(
                 (x, x, np.full(2, np.nan)),
-                ({"label": "step"}, {"label": "in goal", "stroke": "#ff5ca8", "width": 2}, marks),
+                self._series_shown["chart_goal"],
                 title="Boxes in goal (fraction) vs step; dots: changes", scales={"x": {"time": False},
                                                                                   "y": {"range": [0, 1]}},
                 **common)
             self.chart_dist = gui.add_uplot(
-                (x, x), ({"label": "step"}, {"label": "stray distance", "stroke": "#40c8ff", "width": 2}),
+                (x, x), self._series_shown["chart_dist"],
                 title="Mean distance of stray boxes (m)", scales={"x": {"time": False}}, **common)
             self.chart_charged = gui.add_uplot(
-                (x, x), ({"label": "step"}, {"label": "with charge", "stroke": "#2ecc40", "width": 2}),
+                (x, x), self._series_shown["chart_charged"],
                 title="Robots with any charge (green or amber)", scales={"x": {"time": False}}, **common)
             self.download_csv = gui.add_button("Download CSV", icon=viser.Icon.FILE_SPREADSHEET,
                                                hint="The metrics time series of this run")
@@ -77,17 +90,43 @@ class MetricsFolder:
         # draw, at most once per CHART_PERIOD, and as at most CHART_POINTS points of the whole run.
         # (Sending all samples at each panel refresh cost 31 KB/s per viewer after 20 s, growing
         # to about 900 KB/s once the series held its old cap of 3,000 samples.)
-        key = (len(series), series[-1].step if series else None, tuple(self.marks))
+        partner = self._compared()
+        other = partner.series() if partner is not None else None
+        names = None if partner is None else (side_name(snap), side_name(partner.latest))
+        key = (len(series), series[-1].step if series else None, tuple(self.marks),
+               None if other is None else (len(other), names))
         now = time.monotonic()
         if len(series) < 2 or key == self._charted or now - self._charted_at < CHART_PERIOD:
             return
         self._charted, self._charted_at = key, now
         shown = [series[i] for i in chart_indices(len(series), CHART_POINTS)]
         steps = np.array([s.step for s in shown], np.float32)
-        self.chart_goal.data = (steps, np.array([s.fraction_in_goal for s in shown], np.float32),
-                                self.mark_series(steps).astype(np.float32))
-        self.chart_dist.data = (steps, np.array([s.mean_outside_distance for s in shown], np.float32))
-        self.chart_charged.data = (steps, np.array([s.charged_robots for s in shown], np.float32))
+        by_step = {s.step: s for s in other or ()}
+        # (The app sends a frame's scene and panel changes in one batch: series and data arrive together.)
+        for attr, field, label, colour in CHARTS:
+            chart = getattr(self, attr)
+            data = [steps, np.array([getattr(s, field) for s in shown], np.float32)]
+            if other is not None:  # the second world's value at the same steps (lockstep: it has them)
+                data.append(np.array([getattr(by_step[s.step], field) if s.step in by_step else np.nan
+                                      for s in shown], np.float32))
+            if attr == "chart_goal":
+                data.append(self.mark_series(steps).astype(np.float32))
+            series_shown = self._series(label, colour, names, marks=attr == "chart_goal")
+            if self._series_shown[attr] != series_shown:
+                chart.series = self._series_shown[attr] = series_shown
+            chart.data = tuple(data)
+
+    @staticmethod
+    def _series(label: str, colour: str, names: tuple[str, str] | None, marks: bool) -> tuple:
+        """A chart's series: the step, this world's curve, in compare mode the second world's
+        (named after each world), and the change dots."""
+        line = {"stroke": colour, "width": 2}
+        if names is None:
+            curves = ({"label": label, **line},)
+        else:
+            curves = ({"label": f"{label}: {names[0]} (left)", **line},
+                      {"label": f"{names[1]} (right)", "stroke": COMPARED_COLOUR, "width": 2})
+        return ({"label": "step"}, *curves, *((MARKS,) if marks else ()))
 
     def mark_series(self, steps: np.ndarray) -> np.ndarray:
         """1.0 at the first sample at or after each change, NaN elsewhere."""

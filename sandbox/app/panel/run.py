@@ -14,9 +14,11 @@ from sandbox.app.snapshot import Snapshot
 
 
 class RunFolder:
-    def __init__(self, gui: Any, runner: Any, show_field: Callable[[bool], None],
+    def __init__(self, gui: Any, runner: Any, lockstep: Any, show_field: Callable[[bool], None],
                  after_reset: Callable[[Any], None], framing: Framing):
-        self.gui, self.runner, self.framing = gui, runner, framing
+        """Play, pause, step, reset and speed act on ``lockstep`` (the running world and, in compare mode,
+        the second one); the rest reads ``runner``."""
+        self.gui, self.runner, self.lockstep, self.framing = gui, runner, lockstep, framing
         self._show_field, self._after_reset = show_field, after_reset
 
     def build(self, snap: Snapshot) -> None:
@@ -69,7 +71,7 @@ class RunFolder:
 
         @self.speed.on_update
         def _(event: viser.GuiEvent) -> None:
-            runner.set_speed(int(self.speed.value))
+            self.lockstep.set_speed(int(self.speed.value))
 
         @self.view.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -81,14 +83,14 @@ class RunFolder:
             self._show_field(self.show_field.value)
 
     def toggle_play(self) -> None:
-        self.runner.set_playing(not self.runner.playing)
+        self.lockstep.set_playing(not self.lockstep.playing)
         self._sync_play_button()
 
     def step(self) -> None:
         """One controller update, paused first."""
-        self.runner.set_playing(False)
+        self.lockstep.set_playing(False)
         self._sync_play_button()
-        self.runner.step_once(self.runner.latest.world_config.update_every)
+        self.lockstep.step_once(self.runner.latest.world_config.update_every)
 
     def frame(self, client: Any, view: str) -> None:
         """Lay one page out as ``view`` (the View buttons): its camera, and its panel and legend."""
@@ -113,7 +115,7 @@ class RunFolder:
             if on_done:
                 on_done(result)
 
-        self.runner.reset(seed, on_done=done, on_error=failed)
+        self.lockstep.reset(seed, on_done=done, on_error=failed)
 
     def _building(self, fraction: float | None) -> None:
         """Progress of a world being built (None: done)."""

@@ -1,0 +1,270 @@
+"""Compare mode (issue 25, item 1): a second world beside the running one.
+
+The two worlds start from the same seed, so the same robots and boxes, and
+differ only in what the user picked (strategies, goal, outline, profile or
+light program). Each runs in its own simulation process, so both cores
+work; :class:`Lockstep` holds them on the same step (see its docstring).
+The compared world is drawn to the right of the running one, in the same
+scene (so a recording holds both), with its own caption; the Metrics charts
+carry its curves too.
+
+- :func:`partner_config` makes the compared world's settings from the running
+  world's and a paper case's name;
+- :class:`Lockstep` is what play, pause, step, reset and speed act on;
+- :class:`Comparison` starts and stops the compared world and draws it.
+"""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+from typing import Any, Callable
+
+from sandbox.app.runner import FASTEST, FASTEST_CHUNK
+from sandbox.app.snapshot import Snapshot, case_name, running_case
+from sandbox.model.config import CASES, STRATEGIES, Config, ConfigError, read_config_values
+
+#: Floor (m) between the two arenas.
+COMPARE_GAP = 6.0
+#: The choice that compares the running world with itself under the paper's controller: the player's
+#: lamp (Be the light, a challenge) or a light program against the paper.
+SAME = "the same, with the paper's lights"
+
+
+def partner_config(base: Config, choice: str) -> Config:
+    """The compared world's settings: ``base`` with a paper case's goal and strategies (every other
+    strategy off), or ``base`` itself for :data:`SAME`."""
+    if choice == SAME:
+        return base
+    if choice not in CASES:
+        raise ConfigError(f"cannot compare with {choice!r}: one of {', '.join(CASES)}, or {SAME!r}")
+    return base.replace(**{**{s.name: 0.0 for s in STRATEGIES}, **CASES[choice]})
+
+
+def side_config(spec: str, base: Config) -> Config:
+    """One side of ``serve --compare``: a paper case's name, or a TOML or JSON file of values over
+    ``base``."""
+    if spec in CASES:
+        return partner_config(base, spec)
+    if not Path(spec).is_file():
+        raise ConfigError(f"--compare takes two case names ({', '.join(CASES)}) or config files; "
+                          f"{spec!r} is neither")
+    return base.replace(**read_config_values(spec))
+
+
+def side_name(snap: Snapshot) -> str:
+    """A world's short name for a chart's legend: the paper's case, else its goal and strategies."""
+    name = running_case(snap.shape_name, snap.strategies, snap.family) or case_name(snap.shape_name,
+                                                                                   snap.strategies)
+    return name if len(name) <= 28 else name[:27] + "…"
+
+
+class Lockstep:
+    """What play, pause, step, reset and speed act on: the running world and, in compare mode, the
+    compared one too, held on the same step.
+
+    Playing, both worlds may step up to a target step (:meth:`Runner.hold`) a couple of frames ahead
+    of the slower one; each frame of either raises it. So neither runs more than two frames ahead of
+    the other, and the slower sets the pace. Pausing stops raising the target and brings both to it
+    (:meth:`Runner.run_to`): paused, the two are on the same step; a Step moves both by the same
+    steps; a reset holds both at step 0 until both new worlds are built."""
+
+    def __init__(self, main: Any):
+        self.main = main
+        self.partner: Any = None
+        self._target = 0
+        #: World keys of the worlds being replaced by a reset: their frames do not raise the target.
+        self._stale: dict[int, int] = {}
+        self._lock = threading.RLock()
+        main.subscribe(lambda snap: self._advance())
+
+    # ------------------------------------------------------------ pairing
+    def pair(self, partner: Any) -> None:
+        """Hold ``partner`` (a new world at step 0, paused) in step with the running world, which it
+        restarts from step 0 too (``reset`` afterwards)."""
+        with self._lock:
+            self.partner = partner
+            partner.set_speed(self.main.steps_per_frame)
+            partner.subscribe(lambda snap: self._advance())
+
+    def unpair(self) -> Any:
+        """The running world goes on alone; returns the partner (to be stopped)."""
+        with self._lock:
+            partner, self.partner = self.partner, None
+            self._stale.pop(id(partner), None)
+            self.main.hold(None)
+            return partner
+
+    @property
+    def sides(self) -> tuple:
+        return (self.main,) if self.partner is None else (self.main, self.partner)
+
+    # ------------------------------------------------------------ controls
+    @property
+    def playing(self) -> bool:
+        return self.main.playing
+
+    def set_playing(self, playing: bool) -> None:
+        with self._lock:
+            if self.partner is None:
+                self.main.set_playing(playing)
+                return
+            for side in self.sides:
+                side.set_playing(playing)
+            if not playing:  # both to the step either may have reached
+                for side in self.sides:
+                    side.run_to(self._target)
+            else:
+                self._advance()
+
+    def step_once(self, n: int = 1) -> None:
+        with self._lock:
+            if self.partner is None:
+                self.main.step_once(n)
+                return
+            self._target += int(n)
+            for side in self.sides:
+                side.run_to(self._target)
+
+    def set_speed(self, steps_per_frame: int) -> None:
+        for side in self.sides:
+            side.set_speed(steps_per_frame)
+
+    def reset(self, seed: int | None = None, *, on_done: Callable[[Any], None] | None = None,
+              on_error: Callable[[BaseException], None] | None = None) -> None:
+        """Both worlds again (``seed`` None: each its own seed, the same one); ``on_done`` hears the
+        running world's result once both are built, ``on_error`` the first refusal."""
+        with self._lock:
+            if self.partner is None:
+                self.main.reset(seed, on_done=on_done, on_error=on_error)
+                return
+            self._target = 0
+            sides = self.sides
+            waiting = {id(side) for side in sides}
+            box: dict[str, Any] = {}
+            for side in sides:
+                side.hold(0)
+                self._stale[id(side)] = side.latest.world_key
+
+            def finished(side: Any, result: Any = None, error: BaseException | None = None) -> None:
+                with self._lock:
+                    if error is not None:
+                        self._stale.pop(id(side), None)  # its old world goes on
+                        box.setdefault("error", error)
+                    elif side is self.main:
+                        box["result"] = result
+                    waiting.discard(id(side))
+                    if waiting:
+                        return
+                    self._advance()
+                if "error" in box:
+                    if on_error:
+                        on_error(box["error"])
+                elif on_done:
+                    on_done(box.get("result"))
+
+            for side in sides:
+                side.reset(seed, on_done=lambda r, s=side: finished(s, r),
+                           on_error=lambda e, s=side: finished(s, error=e))
+
+    # ------------------------------------------------------------ pacing
+    def _lead(self) -> int:
+        """How far ahead of the slower world the target lies: two frames' steps."""
+        spf = self.main.steps_per_frame
+        if spf < FASTEST:
+            return 2 * spf
+        return max(2 * FASTEST_CHUNK, int(2 * self.main.steps_per_second() / max(self.main.fps, 1.0)))
+
+    def _advance(self) -> None:
+        """A frame came: playing, raise the target to a lead ahead of the slower world."""
+        with self._lock:
+            partner = self.partner
+            if partner is None or not self.main.playing:
+                return
+            snaps = (self.main.latest, partner.latest)
+            for side, snap in zip(self.sides, snaps):
+                if self._stale.get(id(side)) == snap.world_key:
+                    return  # its new world is still being built
+                self._stale.pop(id(side), None)
+            target = min(snap.step for snap in snaps) + self._lead()
+            if target > self._target:
+                self._target = target
+                for side in self.sides:
+                    side.hold(target)
+
+
+class Comparison:
+    """The compared world: its runner (held in :class:`Lockstep` with the running one), and its nodes
+    in the scene, :data:`COMPARE_GAP` metres right of the running world's arena.
+
+    ``make_runner(config, shape=..., seed=..., playing=...)`` builds a runner like the app's (a
+    process of its own); ``draw_lock`` is the lock the app draws the running world under;
+    ``on_layout(beside)`` hears where the second world lies (None: gone), to frame the pages."""
+
+    ROOT = "/compare"
+
+    def __init__(self, server: Any, lockstep: Lockstep, make_runner: Callable[..., Any],
+                 draw_lock: Any, on_layout: Callable[[float | None], None]):
+        self.server, self.lockstep, self._make_runner = server, lockstep, make_runner
+        self._draw_lock, self._on_layout = draw_lock, on_layout
+        self.view: Any = None
+        self.label: str | None = None
+        self._lock = threading.Lock()  # one start or end at a time
+
+    @property
+    def runner(self) -> Any:
+        return self.lockstep.partner
+
+    @property
+    def beside(self) -> float:
+        """How far right of the running world the compared one is drawn (m)."""
+        return self.lockstep.main.latest.world_config.arena_size + COMPARE_GAP
+
+    def begin(self, config: Config, shape: Any, label: str) -> None:
+        """Compare with a world of ``config`` and ``shape`` from the running world's seed: both start
+        again from step 0, playing if the running one was. Blocks while the new world's process
+        starts (a second or two): call it off the page's threads."""
+        from sandbox.app.scene import SceneView
+
+        with self._lock:
+            self._end()
+            main = self.lockstep.main
+            playing, seed = main.playing, main.latest.seed
+            partner = self._make_runner(config, shape=shape, seed=seed, playing=False)
+            try:
+                partner.start()
+                with self._draw_lock, self.server.atomic():
+                    view = SceneView(self.server.scene, partner.latest, root=self.ROOT, offset=(self.beside, 0.0))
+            except BaseException:
+                partner.stop()
+                raise
+            self.view, self.label = view, label
+            partner.subscribe(lambda snap, view=view: self._draw(view, snap))
+            main.set_playing(False)
+            self.lockstep.pair(partner)
+            self.lockstep.reset(None, on_done=lambda _: self.lockstep.set_playing(playing))
+        self._on_layout(self.beside)
+
+    def end(self) -> None:
+        """The running world goes on alone."""
+        with self._lock:
+            ended = self._end()
+        if ended:
+            self._on_layout(None)
+
+    def _end(self) -> bool:
+        partner = self.lockstep.unpair()
+        view, self.view, self.label = self.view, None, None
+        if view is not None:
+            with self._draw_lock:
+                view.remove()
+        if partner is not None:
+            partner.stop()
+        return partner is not None
+
+    def _draw(self, view: Any, snap: Snapshot) -> None:
+        with self._draw_lock:
+            if view is not self.view:
+                return  # a frame of a comparison that has ended
+            with self.server.atomic():
+                view.update(snap)

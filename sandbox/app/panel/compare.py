@@ -1,0 +1,90 @@
+"""The Compare folder: a second world beside the running one (issue 25, item 1; see
+:mod:`sandbox.app.compare`)."""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable
+
+import viser
+
+from sandbox.app.compare import SAME, Comparison, partner_config, side_name
+from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.runner import wait_for
+from sandbox.app.snapshot import Snapshot
+from sandbox.model.config import CASES
+
+NOTHING = "nothing"
+#: The Compare with... choices: none, the running world under the paper's lights, a paper case.
+CHOICES = (NOTHING, SAME, *CASES)
+
+
+class CompareFolder:
+    def __init__(self, gui: Any, runner: Any, comparison: Comparison, on_change: Callable[[str], None]):
+        self.gui, self.runner, self.comparison, self._on_change = gui, runner, comparison, on_change
+        self._busy = threading.Lock()  # one change of comparison at a time
+        self._starting = False
+
+    def build(self, snap: Snapshot) -> None:
+        gui = self.gui
+        with gui.add_folder("Compare", expand_by_default=False):
+            gui.add_markdown("A second world to the right of this one, from the same seed: the same robots and "
+                             "boxes, with the strategies of a paper case (or the same settings under the paper's "
+                             "lights, against your lamp or program). Play, pause, step, reset and speed act on "
+                             "both; the charts show both.")
+            self.choice = gui.add_dropdown("Compare with...", CHOICES, initial_value=NOTHING,
+                                           hint="Both worlds start again from step 0 with this world's seed")
+            self.status = gui.add_markdown("")
+
+        @self.choice.on_update
+        def _(event: viser.GuiEvent) -> None:
+            self.choose(str(self.choice.value), event.client)
+
+    def choose(self, choice: str, client: Any) -> None:
+        """Compare with ``choice`` (one of :data:`CHOICES`; :data:`NOTHING` ends the comparison), in
+        a thread of its own: a new world's process takes a second or two to start."""
+        if choice not in CHOICES:
+            return
+        threading.Thread(target=self._choose, args=(choice, client), daemon=True, name="compare").start()
+
+    def _choose(self, choice: str, client: Any) -> None:
+        with self._busy:
+            if choice == NOTHING:
+                if self.comparison.runner is not None:
+                    self.comparison.end()
+                    self._on_change("compare: off")
+                return
+            self._starting = True
+            self.status.content = "Starting the second world..."
+            try:
+                config, shape = self._partner(choice)
+                self.comparison.begin(config, shape, choice)
+            except Exception as exc:  # a refused goal or a process that would not start: say so
+                notify_error(client, "Cannot compare", str(exc))
+                return
+            finally:
+                self._starting = False
+            self._on_change(f"compare: {choice}")
+            notify(client, "Comparing", "Both worlds start again from step 0 with the same seed; the second one "
+                   "is to the right.", "blue")
+
+    def _partner(self, choice: str) -> tuple[Any, Any]:
+        """The compared world's settings and goal: the running world's (its goal as given) under the
+        paper's lights, or its settings with a paper case's goal and strategies."""
+        config = self.runner.latest.config
+        if choice != SAME:
+            return partner_config(config, choice), "from-config"
+        _, _, vertices = wait_for(lambda command, **kw: self.runner.world_spec(**kw), None, 30.0)
+        return config, ("from-config" if vertices is None else vertices)
+
+    def update(self, snap: Snapshot) -> None:
+        partner = self.comparison.runner
+        if partner is None:
+            if not self._starting:
+                self.status.content = ""
+            return
+        other = partner.latest
+        self.status.content = (
+            f"**Left** {side_name(snap)}: {100 * snap.sample.fraction_in_goal:.1f} % in the goal, step "
+            f"{snap.step:,}  \n**Right** {side_name(other)}: {100 * other.sample.fraction_in_goal:.1f} % in the "
+            f"goal, step {other.step:,}")
