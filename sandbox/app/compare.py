@@ -198,7 +198,8 @@ class Comparison:
     in the scene, :data:`COMPARE_GAP` metres right of the running world's arena.
 
     ``make_runner(config, shape=..., seed=..., playing=...)`` builds a runner like the app's (a
-    process of its own); ``draw_lock`` is the lock the app draws the running world under;
+    process of its own); ``draw_lock`` is the lock the app draws under (:meth:`draw` is called
+    holding it);
     ``on_layout(beside)`` hears where the second world lies (None: gone), to frame the pages."""
 
     ROOT = "/compare"
@@ -209,6 +210,7 @@ class Comparison:
         self._draw_lock, self._on_layout = draw_lock, on_layout
         self.view: Any = None
         self.label: str | None = None
+        self._drawn: int | None = None  # the compared world's frame last drawn
         self._lock = threading.Lock()  # one start or end at a time
 
     @property
@@ -238,8 +240,8 @@ class Comparison:
             except BaseException:
                 partner.stop()
                 raise
-            self.view, self.label = view, label
-            partner.subscribe(lambda snap, view=view: self._draw(view, snap))
+            with self._draw_lock:
+                self.view, self.label, self._drawn = view, label, partner.latest.frame
             main.set_playing(False)
             self.lockstep.pair(partner)
             self.lockstep.reset(None, on_done=lambda _: self.lockstep.set_playing(playing))
@@ -254,17 +256,22 @@ class Comparison:
 
     def _end(self) -> bool:
         partner = self.lockstep.unpair()
-        view, self.view, self.label = self.view, None, None
-        if view is not None:
-            with self._draw_lock:
+        with self._draw_lock:
+            view, self.view, self.label = self.view, None, None
+            if view is not None:
                 view.remove()
         if partner is not None:
             partner.stop()
         return partner is not None
 
-    def _draw(self, view: Any, snap: Snapshot) -> None:
-        with self._draw_lock:
-            if view is not self.view:
-                return  # a frame of a comparison that has ended
-            with self.server.atomic():
-                view.update(snap)
+    def draw(self) -> None:
+        """Draw the compared world's newest frame, if it has a new one: the app calls this as it draws
+        the running world's, in the same batch, so that the page draws both in one picture (viser's
+        page draws once per batch: a batch for each world made it draw twice as often)."""
+        view, partner = self.view, self.runner
+        if view is None or partner is None:
+            return
+        snap = partner.latest
+        if snap.frame != self._drawn:
+            self._drawn = snap.frame
+            view.update(snap)

@@ -130,6 +130,7 @@ class App:
             # batch at once, so what it shows comes from one step.
             with self.server.atomic():
                 self.view.update(snap)
+                self.comparison.draw()  # compare mode's second world, in the same picture
                 self.panel.update(snap)
             self.panel.inspector.draw(snap)  # each viewer's own marks, in its own messages
             self.panel.on_frame_drawn()
