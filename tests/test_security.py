@@ -299,3 +299,21 @@ def test_a_page_cannot_press_another_pages_own_controls(app):
     assert inspector.viewers[fid].robot is None and inspector.viewers[sid].robot == 5
     first.close()
     second.close()
+
+
+def test_a_watching_page_cannot_start_compare_mode(shared_app):
+    """Compare mode starts a simulation process: only a controlling page may, by the dropdown or by
+    Learn's Show me."""
+    app = shared_app
+    watcher = RawClient(app.port, own_page(app))
+    wid = connected(app, watcher)
+    watcher.set_value(uuid_of(app.panel.compare.choice), "star-switch")
+    watcher.click(uuid_of(app.panel.show_me_buttons[0]))
+    wait_until(lambda: refusals(app, wid) >= 2, what="two refusals")
+    assert app.comparison.runner is None and app.panel.compare.choice.value == "nothing"
+    presenter = RawClient(app.port, {**own_page(app), "Authorization": f"token {TOKEN}"})
+    connected(app, presenter)
+    presenter.set_value(uuid_of(app.panel.compare.choice), "star-switch")
+    wait_until(lambda: app.comparison.runner is not None, what="the presenter's comparison")
+    watcher.close()
+    presenter.close()

@@ -26,28 +26,32 @@ from sandbox.model.config import CASES, STRATEGIES, Config, ConfigError, read_co
 
 #: Floor (m) between the two arenas.
 COMPARE_GAP = 6.0
+#: What the second world may be: a paper case, or the star with the closed loop (Learn's *Show me*
+#: for chase; not one of the paper's cases).
+COMPARE_CASES: dict[str, dict[str, Any]] = {**CASES, "star + chase": dict(shape="star", chase=2.0)}
 #: The choice that compares the running world with itself under the paper's controller: the player's
 #: lamp (Be the light, a challenge) or a light program against the paper.
 SAME = "the same, with the paper's lights"
 
 
 def partner_config(base: Config, choice: str) -> Config:
-    """The compared world's settings: ``base`` with a paper case's goal and strategies (every other
-    strategy off), or ``base`` itself for :data:`SAME`."""
+    """The compared world's settings: ``base`` with a case's goal and strategies (every other strategy
+    off) and the outline the goal calls for, as picking a paper case does; or ``base`` itself for
+    :data:`SAME`."""
     if choice == SAME:
         return base
-    if choice not in CASES:
-        raise ConfigError(f"cannot compare with {choice!r}: one of {', '.join(CASES)}, or {SAME!r}")
-    return base.replace(**{**{s.name: 0.0 for s in STRATEGIES}, **CASES[choice]})
+    if choice not in COMPARE_CASES:
+        raise ConfigError(f"cannot compare with {choice!r}: one of {', '.join(COMPARE_CASES)}, or {SAME!r}")
+    return base.replace(**{**{s.name: 0.0 for s in STRATEGIES}, "outline": "auto", **COMPARE_CASES[choice]})
 
 
 def side_config(spec: str, base: Config) -> Config:
     """One side of ``serve --compare``: a paper case's name, or a TOML or JSON file of values over
     ``base``."""
-    if spec in CASES:
+    if spec in COMPARE_CASES:
         return partner_config(base, spec)
     if not Path(spec).is_file():
-        raise ConfigError(f"--compare takes two case names ({', '.join(CASES)}) or config files; "
+        raise ConfigError(f"--compare takes two case names ({', '.join(COMPARE_CASES)}) or config files; "
                           f"{spec!r} is neither")
     return base.replace(**read_config_values(spec))
 

@@ -58,16 +58,26 @@ The grey square is a wall that stops boxes but lets robots through.
 """
 
 STRATEGIES = """\
-**Strategies** (switch them in *Strategies*; they act at the next update):
+**Strategies** (switch them in *Strategies*; they act at the next update).
+Each *Show me* runs the paper's case without the strategy (left) beside
+the case with it (right), from the same seed (see *Compare*):
+"""
 
+#: Each strategy's paragraph and the two worlds its *Show me* button compares (without it, with it):
+#: paper case names, or compare mode's ``star + chase`` (sandbox.app.compare.COMPARE_CASES).
+STRATEGY_LESSONS = (
+    ("""\
 - **Flare** pushes the outline's corners out, more for sharper corners, so
   robots reach into corners instead of rounding them off. As in the
   authors' program, every corner is pushed out, a star's inner corners too
-  (the paper's text pushes only the outer, convex ones).
+  (the paper's text pushes only the outer, convex ones).""", ("square", "square-flare")),
+    ("""\
 - **Switch to circle** uses a circle for the outer part of the cycle, which
-  spreads robots evenly instead of letting them bunch at far vertices.
+  spreads robots evenly instead of letting them bunch at far vertices.""", ("star", "star-switch")),
+    ("""\
 - **No corners** leaves the band lights nearest the corners dark, so robots
-  do not pile up in sharp points (and light is saved).
+  do not pile up in sharp points (and light is saved).""", ("star-switch", "star-switch-nocorners")),
+    ("""\
 - **Chase stray boxes** closes the loop: it looks at the boxes (as an
   overhead camera would). The band runs the same distance from every part
   of the goal (the goal grown, not scaled), so robots reach a star's tips
@@ -76,7 +86,10 @@ STRATEGIES = """\
   Near the goal it presses in where boxes spill out and goes dark where
   the goal still lacks boxes, so the pile flows there; and it holds the
   smallest outline as long as boxes keep arriving. More boxes end in the
-  goal, with less light.
+  goal, with less light.""", ("star", "star + chase")),
+)
+
+STRATEGIES_MORE = """\
 - **A goal already built**: set *box start* to *packed* (under
   *Population and physics*) and reset. The boxes start tiled in the goal,
   and you see what a strategy keeps of a finished shape rather than how

@@ -12,6 +12,8 @@ import threading
 import time
 from typing import Any, Callable
 
+import viser
+
 from sandbox.app import learn, legend
 from sandbox.app.panel.advice import AdviceFolder
 from sandbox.app.panel.common import PANEL_HZ, floor_point
@@ -70,7 +72,8 @@ class Panel:
         self._build_legend(gui)
         for folder in self.folders:
             folder.build(snap)
-        self._build_learn(gui)
+        #: Learn's *Show me* buttons, one per strategy.
+        self.show_me_buttons = self._build_learn(gui, self.show_me)
         server.scene.on_click()(self._on_scene_click)
 
     def update(self, snap: Snapshot, force: bool = False) -> None:
@@ -104,16 +107,30 @@ class Panel:
         if point is not None and not self.shape.click(point) and not self.lamp.click(point, event.client):
             self.inspector.click(point, event.client)
 
+    def show_me(self, without: str, with_it: str, client: Any) -> None:
+        """Learn's *Show me*: the paper case ``without`` a strategy in this world, and beside it, from the
+        same seed, the case ``with_it`` (compare mode)."""
+        self.strategies.use_case(without, client, on_started=lambda: self.compare.choose(with_it, client))
+
     @staticmethod
-    def _build_learn(gui: Any) -> None:
+    def _build_learn(gui: Any, show_me: Callable[[str, str, Any], None]) -> list:
+        buttons = []
         with gui.add_folder("Learn", expand_by_default=False):
             gui.add_markdown(learn.INTRO)
             gui.add_image(learn.stored_picture("learn-phototaxis.png"), format="png")
             gui.add_markdown(learn.CYCLE)
             gui.add_image(learn.stored_picture("learn-cycle.png"), format="png")
             gui.add_markdown(learn.STRATEGIES)
+            for paragraph, (without, with_it) in learn.STRATEGY_LESSONS:
+                gui.add_markdown(paragraph)
+                button = gui.add_button(f"Show me: {without} | {with_it}", icon=viser.Icon.COLUMNS,
+                                        hint=f"Run {without} here and {with_it} beside it, from the same seed")
+                button.on_click(lambda event, a=without, b=with_it: show_me(a, b, event.client))
+                buttons.append(button)
+            gui.add_markdown(learn.STRATEGIES_MORE)
             gui.add_image(learn.stored_picture("learn-strategies.png"), format="png")
             gui.add_markdown(learn.INSPECT)
+        return buttons
 
 
 def _threaded_runner(like: Any) -> Callable[..., Any]:

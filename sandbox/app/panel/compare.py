@@ -8,15 +8,14 @@ from typing import Any, Callable
 
 import viser
 
-from sandbox.app.compare import SAME, Comparison, partner_config, side_name
+from sandbox.app.compare import COMPARE_CASES, SAME, Comparison, partner_config, side_name
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.runner import wait_for
 from sandbox.app.snapshot import Snapshot
-from sandbox.model.config import CASES
 
 NOTHING = "nothing"
-#: The Compare with... choices: none, the running world under the paper's lights, a paper case.
-CHOICES = (NOTHING, SAME, *CASES)
+#: The Compare with... choices: none, the running world under the paper's lights, a case.
+CHOICES = (NOTHING, SAME, *COMPARE_CASES)
 
 
 class CompareFolder:
@@ -24,6 +23,7 @@ class CompareFolder:
         self.gui, self.runner, self.comparison, self._on_change = gui, runner, comparison, on_change
         self._busy = threading.Lock()  # one change of comparison at a time
         self._starting = False
+        self._quiet = False  # set while the dropdown is set from here, not by a page
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -38,13 +38,15 @@ class CompareFolder:
 
         @self.choice.on_update
         def _(event: viser.GuiEvent) -> None:
-            self.choose(str(self.choice.value), event.client)
+            if not self._quiet:
+                self.choose(str(self.choice.value), event.client)
 
     def choose(self, choice: str, client: Any) -> None:
         """Compare with ``choice`` (one of :data:`CHOICES`; :data:`NOTHING` ends the comparison), in
         a thread of its own: a new world's process takes a second or two to start."""
         if choice not in CHOICES:
             return
+        self.show(choice)
         threading.Thread(target=self._choose, args=(choice, client), daemon=True, name="compare").start()
 
     def _choose(self, choice: str, client: Any) -> None:
@@ -67,6 +69,15 @@ class CompareFolder:
             self._on_change(f"compare: {choice}")
             notify(client, "Comparing", "Both worlds start again from step 0 with the same seed; the second one "
                    "is to the right.", "blue")
+
+    def show(self, choice: str) -> None:
+        """The dropdown shows ``choice`` (without acting on it)."""
+        if self.choice.value != choice:
+            self._quiet = True
+            try:
+                self.choice.value = choice
+            finally:
+                self._quiet = False
 
     def _partner(self, choice: str) -> tuple[Any, Any]:
         """The compared world's settings and goal: the running world's (its goal as given) under the

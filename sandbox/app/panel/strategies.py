@@ -120,9 +120,9 @@ class StrategiesFolder:
 
         self.runner.set_outline(outline, on_done=done, on_error=refused)
 
-    def use_case(self, name: str, client: Any) -> None:
+    def use_case(self, name: str, client: Any, on_started: Callable[[], None] | None = None) -> None:
         """Start the case: its goal, its strategies (the others off) and the paper's outline, in a new
-        world with the same seed, from step 0."""
+        world with the same seed, from step 0; then ``on_started()``."""
         case = CASES[name]
         strategies = {s.name: float(case.get(s.name, 0.0)) for s in STRATEGIES}
         self._starting = name
@@ -130,6 +130,8 @@ class StrategiesFolder:
         def started(_: Any = None) -> None:
             self._starting = None
             self._on_change(f"case {name}", 0)  # the first step of the new world
+            if on_started:
+                on_started()
 
         def failed(exc: BaseException) -> None:
             self._starting = None

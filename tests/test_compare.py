@@ -1,0 +1,217 @@
+"""Compare mode (issue 25, item 1): two worlds from the same seed, held on the same step, drawn side by
+side; and the runner's hold and run-to that carry the lockstep."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sandbox.app.compare import COMPARE_CASES, SAME, Lockstep, partner_config, side_config
+from sandbox.app.runner import Runner
+from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
+from sandbox.model.config import CASES, Config, ConfigError
+from tests.waiting import wait_until
+
+SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
+
+
+def started(config: Config, **kwargs) -> Runner:
+    return Runner(config, fps=60, steps_per_frame=5, **kwargs).start()
+
+
+def test_a_held_runner_stops_at_the_held_step_and_runs_to_a_step_while_paused():
+    runner = started(SMALL)
+    try:
+        runner.hold(40)
+        wait_until(lambda: runner.latest.step == 40, what="the runner to reach the held step")
+        frame = runner.latest.frame
+        wait_until(lambda: runner.latest.frame >= frame + 5, what="five more frames")
+        assert runner.latest.step == 40  # playing, but held
+        runner.set_playing(False)
+        runner.run_to(73)
+        wait_until(lambda: runner.latest.step == 73, what="the runner to run to step 73")
+        runner.run_to(50)  # behind it: nothing
+        frame = runner.latest.frame
+        wait_until(lambda: runner.latest.frame >= frame + 3, what="three more frames")
+        assert runner.latest.step == 73
+    finally:
+        runner.stop()
+
+
+def test_steps_allowed_by_a_hold_are_counted_by_hand():
+    runner = Runner(SMALL, steps_per_frame=25)
+    assert runner._steps_allowed(25) == 25  # no hold
+    runner.hold(10)
+    assert runner._steps_allowed(25) == 10  # at step 0: ten to go
+    runner.advance(10)
+    assert runner._steps_allowed(25) == 0
+    runner.hold(None)
+    assert runner._steps_allowed(25) == 25
+
+
+def test_partner_config_takes_the_cases_goal_and_strategies_and_nothing_else():
+    base = Config(robots=50, flare=1.5, chase=2.0, outline="offset", seed=7)
+    switch = partner_config(base, "star-switch")
+    assert (switch.shape, switch.switch, switch.flare, switch.chase, switch.no_corners) == ("star", 0.25, 0, 0, 0)
+    assert switch.outline == "auto" and switch.robots == 50 and switch.seed == 7  # the rest as it was
+    assert partner_config(base, "star + chase").chase == 2.0
+    assert partner_config(base, SAME) is base
+    with pytest.raises(ConfigError, match="cannot compare with 'hexagon'"):
+        partner_config(base, "hexagon")
+    assert set(CASES) < set(COMPARE_CASES)
+
+
+def test_a_side_is_a_case_or_a_config_file(tmp_path):
+    values = tmp_path / "crowd.toml"
+    values.write_text("robots = 90\nflare = 1.2\n")
+    side = side_config(str(values), Config(boxes=300))
+    assert (side.robots, side.flare, side.boxes) == (90, 1.2, 300)
+    assert side_config("square-flare", Config()).flare == 1.75
+    with pytest.raises(ConfigError, match="neither"):
+        side_config(str(tmp_path / "missing.toml"), Config())
+
+
+@pytest.fixture
+def pair():
+    main = started(SMALL.replace(shape="star"))
+    partner = started(partner_config(SMALL.replace(shape="star"), "star-switch"), seed=main.latest.seed,
+                      playing=False)
+    lockstep = Lockstep(main)
+    lockstep.pair(partner)
+    yield lockstep, main, partner
+    main.stop()
+    partner.stop()
+
+
+def _reset(lockstep: Lockstep, seed=None) -> None:
+    done = []
+    lockstep.reset(seed, on_done=done.append, on_error=done.append)
+    wait_until(lambda: done, what="both worlds rebuilt")
+    assert not isinstance(done[0], BaseException), done[0]
+
+
+def test_both_worlds_start_from_the_same_layout(pair):
+    lockstep, main, partner = pair
+    lockstep.set_playing(False)
+    _reset(lockstep)
+    wait_until(lambda: main.latest.step == partner.latest.step == 0
+               and main.latest.world_key == partner.latest.world_key == 1, what="both new worlds drawn")
+    a, b = main.latest, partner.latest
+    assert a.seed == b.seed
+    assert np.array_equal(a.robot_positions, b.robot_positions) and np.array_equal(a.box_positions, b.box_positions)
+    assert a.strategies["switch"] == 0 and b.strategies["switch"] == 0.25  # what differs: the strategy
+    _reset(lockstep, seed=1234)  # a new seed: both get it
+    wait_until(lambda: main.latest.seed == partner.latest.seed == 1234 and main.latest.world_key == 2
+               and partner.latest.world_key == 2, what="both worlds with the new seed")
+    assert np.array_equal(main.latest.robot_positions, partner.latest.robot_positions)
+
+
+def test_playing_worlds_stay_within_two_frames_and_pause_on_the_same_step(pair):
+    lockstep, main, partner = pair
+    _reset(lockstep)
+    lockstep.set_playing(True)
+    lead = 2 * main.steps_per_frame
+    gaps = []
+    for _ in range(30):
+        frame = main.latest.frame
+        wait_until(lambda: main.latest.frame > frame, what="a frame")
+        gaps.append(abs(main.latest.step - partner.latest.step))
+    assert main.latest.step > 50 and max(gaps) <= lead + main.steps_per_frame
+    lockstep.set_playing(False)
+    wait_until(lambda: main.latest.step == partner.latest.step == lockstep._target and not main.latest.playing,
+               what="both paused on the target step")
+    paused_at = main.latest.step
+    lockstep.step_once(10)
+    wait_until(lambda: main.latest.step == partner.latest.step == paused_at + 10, what="both stepped 10")
+
+
+def test_a_slow_world_sets_the_pace(pair):
+    lockstep, main, partner = pair
+    _reset(lockstep)
+    partner.set_speed(1)  # as if its machine were five times slower
+    lockstep.set_playing(True)
+    wait_until(lambda: partner.latest.step >= 40, what="the slow world to step")
+    assert main.latest.step <= partner.latest.step + 2 * main.steps_per_frame + main.steps_per_frame
+
+
+def test_unpaired_the_running_world_goes_on_alone(pair):
+    lockstep, main, partner = pair
+    lockstep.set_playing(True)
+    assert lockstep.unpair() is partner and main.hold_at is None
+    step = main.latest.step
+    wait_until(lambda: main.latest.step > step + 100, what="the running world to go on")
+
+
+# ------------------------------------------------------------------ in the app
+@pytest.fixture
+def comparing_app():
+    from sandbox.app.server import App, free_port
+
+    app = App(SMALL.replace(shape="star"), port=free_port(), fps=60, steps_per_frame=5, process=False,
+              compare=(partner_config(SMALL, "star-switch"), "star-switch")).start()
+    yield app
+    app.stop()
+
+
+def test_the_app_draws_both_worlds_and_charts_both(comparing_app):
+    app = comparing_app
+    partner = app.comparison.runner
+    assert partner is not None and app.panel.framing.beside == SMALL.arena_size + 6.0
+    names = {handle.name for handle in app.comparison.view.handles.values()}
+    assert {"/compare", "/compare/swarm/robots", "/compare/caption", "/compare/goal"} <= names
+    wait_until(lambda: partner.latest.step >= 300 and app.runner.latest.step >= 300, what="both worlds to run")
+    app.panel.metrics._charted_at = 0.0
+    app.panel.update(app.runner.latest, force=True)
+    labels = [series["label"] for series in app.panel.metrics._series_shown["chart_goal"]]
+    assert labels == ["step", "in goal: star (left)", "star-switch (right)", "change"]
+    data = app.panel.metrics.chart_goal.data
+    assert len(data) == 4 and np.isfinite(data[2]).sum() >= 2  # the right world's curve, at the same steps
+    assert "**Right** star-switch" in app.panel.compare.status.content
+    app.panel.compare.choose("nothing", None)
+    wait_until(lambda: app.comparison.runner is None and app.panel.framing.beside is None,
+               what="the comparison to end and the pages to frame one world")
+    assert app.runner.hold_at is None and partner.stopped and not app.comparison.view
+    app.panel.metrics._charted_at = 0.0
+    app.panel.update(app.runner.latest, force=True)
+    assert [s["label"] for s in app.panel.metrics._series_shown["chart_goal"]] == ["step", "in goal", "change"]
+
+
+def test_learns_show_me_runs_the_case_without_and_with_the_strategy(comparing_app):
+    app = comparing_app
+    app.panel.show_me("square", "square-flare", None)
+    wait_until(lambda: app.comparison.label == "square-flare" and app.runner.latest.shape_name == "square",
+               what="square beside square-flare")
+    a, b = app.runner.latest, app.comparison.runner.latest
+    assert (a.strategies["flare"], b.strategies["flare"], b.shape_name) == (0.0, 1.75, "square")
+    assert app.panel.compare.choice.value == "square-flare"
+    wait_until(lambda: app.runner.latest.step > 100, what="the worlds to play")
+    assert abs(app.runner.latest.step - app.comparison.runner.latest.step) <= 3 * app.runner.steps_per_frame
+
+
+def test_compare_with_the_same_world_under_the_papers_lights():
+    from sandbox.app.server import App, free_port
+
+    app = App(SMALL, port=free_port(), fps=60, steps_per_frame=5, process=False).start()
+    try:
+        app.runner.set_lamp((32.0, 32.0), 6.0)
+        app.panel.compare.choose(SAME, None)
+        wait_until(lambda: app.comparison.runner is not None, what="the second world")
+        wait_until(lambda: app.comparison.runner.latest.world_key == app.runner.latest.world_key == 1,
+                   what="both worlds restarted")
+        a, b = app.runner.latest, app.comparison.runner.latest
+        assert (a.program, b.program) == (LAMP_PROGRAM, PAPER_PROGRAM)  # the player's lamp against the paper
+        assert b.config == a.config and b.shape_name == a.shape_name and b.seed == a.seed
+    finally:
+        app.stop()
+
+
+def test_serve_compare_refuses_what_it_cannot_compare():
+    from tests.test_cli import phototaxis
+
+    unknown = phototaxis("serve", "--compare", "star", "hexagon", "--port", "0")
+    assert unknown.returncode == 2 and "--compare takes two case names" in unknown.stderr
+    assert len(unknown.stderr.strip().splitlines()) == 1
+    both = phototaxis("serve", "--compare", "star", "star-switch", "--case", "circle", "--port", "0")
+    assert both.returncode == 2 and "leave out --case" in both.stderr
+    missing = phototaxis("serve", "--compare", "star")
+    assert missing.returncode == 2 and "--compare" in missing.stderr
