@@ -611,6 +611,71 @@ def test_a_challenge_round_is_scored_against_the_paper(app, page):
     wait_until(lambda: app.runner.playing, what="playing again")
 
 
+def test_compare_mode_from_the_panel_and_learn(app, page, tmp_path):
+    """Issue 25, items 1 and 4: Compare with... starts a second world beside this one from the same seed;
+    play, step and reset act on both; a recording holds both; Learn's Show me compares a strategy."""
+    dismiss_notifications(page)
+    open_folder(page, "Compare")
+    choose(page, "Compare with...", "star-switch")
+    wait_until(lambda: app.comparison.runner is not None, what="the second world")
+    partner = app.comparison.runner
+    page.get_by_text("in the goal, step", exact=False).first.wait_for(timeout=30_000)
+    # Each world has its caption on the floor.
+    wait_until(lambda: app.comparison.view.handles["caption"].text.startswith("star-switch (star + switch 0.25) | step"),
+               what="the second world's caption")
+    click_button(page, "Pause")
+    wait_until(lambda: not app.runner.playing and app.runner.latest.step == partner.latest.step
+               and not partner.latest.playing, what="both paused on one step")
+    paused = app.runner.latest.step
+    click_button(page, "Step")
+    every = app.runner.latest.world_config.update_every
+    wait_until(lambda: app.runner.latest.step == partner.latest.step == paused + every, what="both stepped")
+    key = (app.runner.latest.world_key, partner.latest.world_key)
+    click_button(page, "Reset (same seed)")
+    wait_until(lambda: (app.runner.latest.world_key, partner.latest.world_key) == (key[0] + 1, key[1] + 1)
+               and app.runner.latest.step == partner.latest.step == 0, what="both reset")
+    assert np.array_equal(app.runner.latest.robot_positions, partner.latest.robot_positions)
+    click_button(page, "Play")
+    wait_until(lambda: partner.latest.step > 40, what="both playing")
+    # A recording of compare mode holds both worlds.
+    open_folder(page, "Record")
+    click_button(page, "Start recording")
+    frames = app.frames_drawn
+    wait_until(lambda: app.frames_drawn > frames + 5, what="some frames")
+    with page.expect_download(timeout=60_000) as info:
+        click_button(page, "Stop and download")
+    path = tmp_path / "compare.html"
+    info.value.save_as(path)
+    assert "/compare/swarm/robots" in _embedded_scene(path)
+    open_folder(page, "Record")
+    # Learn: Show me runs the case without the strategy here and with it beside.
+    open_folder(page, "Learn")
+    click_button(page, "Show me: square | square-flare")
+    wait_until(lambda: app.comparison.label == "square-flare" and app.runner.latest.shape_name == "square",
+               what="square beside square-flare")
+    assert app.comparison.runner.latest.strategies["flare"] == 1.75 and app.runner.latest.strategies["flare"] == 0
+    wait_until(lambda: page.get_by_label("Compare with...", exact=True).input_value() == "square-flare",
+               what="the dropdown to show the comparison")
+    open_folder(page, "Learn")
+    choose(page, "Compare with...", "nothing")
+    wait_until(lambda: app.comparison.runner is None and app.panel.framing.beside is None, what="compare mode off")
+    open_folder(page, "Compare")
+    assert not app.runner.errors
+
+
+def _embedded_scene(path: Path) -> str:
+    """The scene messages a recording embeds, decoded enough to search for node names (viser 1.1:
+    base64 of an 8-byte size and a zstd stream of msgpack)."""
+    import base64
+
+    import zstandard
+
+    match = re.search(r'__VISER_EMBED_DATA__="([^"]+)"', path.read_text())
+    assert match, "no embedded scene"
+    data = base64.b64decode(match.group(1))
+    return zstandard.ZstdDecompressor().decompressobj().decompress(data[8:]).decode("latin-1")
+
+
 def test_second_browser_and_disconnect(app, browser, page):
     other = browser.new_page(viewport={"width": 800, "height": 760})  # a narrower window than the first
     other.goto(f"http://127.0.0.1:{app.port}/")

@@ -21,11 +21,10 @@ from pathlib import Path
 from typing import Any, Callable
 
 from sandbox.app.runner import FASTEST, FASTEST_CHUNK
+from sandbox.app.scene import COMPARE_GAP
 from sandbox.app.snapshot import Snapshot, case_name, running_case
 from sandbox.model.config import CASES, STRATEGIES, Config, ConfigError, read_config_values
 
-#: Floor (m) between the two arenas.
-COMPARE_GAP = 6.0
 #: What the second world may be: a paper case, or the star with the closed loop (Learn's *Show me*
 #: for chase; not one of the paper's cases).
 COMPARE_CASES: dict[str, dict[str, Any]] = {**CASES, "star + chase": dict(shape="star", chase=2.0)}

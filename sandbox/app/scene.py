@@ -48,6 +48,11 @@ Z_LEGEND = 0.10  # the presenter's legend: over the bodies and lines, under the 
 CONSTRUCTION_VIEW = 1.4
 
 
+#: Floor (m) between the running world's arena and compare mode's second one, to its right.
+COMPARE_GAP = 6.0
+#: The narrowest view the far plane allows for: a phone upright.
+PHONE_ASPECT_NARROWEST = 0.4
+
 #: Views narrower than this (width / height) are framed for a phone (see :func:`top_down_camera`):
 #: a phone upright is 0.45-0.6; a desktop window's canvas beside the docked panel is rarely below 0.75.
 PHONE_ASPECT = 0.75
@@ -68,8 +73,12 @@ def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, 
         c, half = config.arena_size / 2.0, config.arena_size * 0.56  # arena plus a margin
     else:
         c, half = config.centre, config.construction_size * CONSTRUCTION_VIEW / 2.0
-    return camera_over((c - half, c + half + (beside or 0.0), c - half, c + half), aspect, fov_deg,
-                       top_on_phone=True)
+    box = (c - half, c + half + (beside or 0.0), c - half, c + half)
+    if beside and aspect < PHONE_ASPECT:
+        # Two arenas side by side on a phone are framed from so high that the margin above them is a few
+        # pixels: room for the caption over them (a tenth of their width, at least a line of text).
+        box = (*box[:3], box[3] + 0.1 * (box[1] - box[0]))
+    return camera_over(box, aspect, fov_deg, top_on_phone=True)
 
 
 def camera_over(box: tuple[float, float, float, float], aspect: float, fov_deg: float = 50.0, *,
@@ -174,8 +183,10 @@ def configure_scene(server: Any, config: Config, whole: bool = True) -> None:
     server.initial_camera.look_at = tuple(look_at)
     server.initial_camera.fov = fov
     # Far enough for the whole arena's framing even when a page starts on the construction area
-    # (the View buttons switch; a nearer far plane left the floor unseen from above the arena).
-    server.initial_camera.far = float(top_down_camera(config)[0][2] * 4)
+    # (the View buttons switch; a nearer far plane left the floor unseen from above the arena), and for
+    # compare mode's two arenas on a phone (from higher still: at 4x the first, the floor was beyond it).
+    server.initial_camera.far = float(max(top_down_camera(config)[0][2] * 4, 1.5 * top_down_camera(
+        config, PHONE_ASPECT_NARROWEST, beside=config.arena_size + COMPARE_GAP)[0][2]))
 
 
 #: Texture size of the light grid (pixels per side, about): crisp cells with seams at any usual zoom.
@@ -220,6 +231,8 @@ class SceneView:
         #: Where the caption sits: above the arena's top-right corner, or (classroom, whose pages frame
         #: the construction area) above the construction wall's, where both framings show it.
         self.caption_over_construction = caption_over_construction
+        #: Whether the caption sits under the arena (the running world's, beside a compared one).
+        self.caption_below = False
         self._lock = threading.RLock()
         self._built_for: tuple | None = None
         self._lights_key: tuple | None = None
@@ -270,13 +283,7 @@ class SceneView:
             f"{r0}/swarm/headings", self._points(max(n, 1)), pal.HEADING_MARK, point_size=0.3 * r,
             point_shape="circle", point_shading="flat", position=(c, c, Z_MARKS), visible=n > 0)
         self.hexagons = Hexagons(sc, f"{r0}/swarm/boxes", m, cfg.box_circumradius, (c, c, Z_BOXES), self._sent)
-        # Above a top-right corner: viser stacks its notifications at the page's top left.
-        wall = cfg.centre + cfg.construction_size / 2.0
-        corner = (wall, wall + 0.3) if self.caption_over_construction else (s, s + 0.8)
-        # Its size is in screen pixels: at 1.2 it still fits a phone's width (a larger one, for a
-        # projector, would run off a phone that watches the same classroom).
-        self.handles["caption"] = sc.add_label(f"{r0}/caption", caption(snap), position=(*corner, Z_TOP),
-                                               anchor="bottom-right", font_screen_scale=1.2)
+        self.handles["caption"] = self._add_caption(snap)
         empty = np.zeros((1, 2, 3), np.float32)
         self.handles["goal"] = sc.add_line_segments(f"{r0}/goal", empty, pal.GOAL_LINE, thickness=0.18)
         self.handles["light_outline"] = sc.add_line_segments(f"{r0}/light_outline", empty, pal.LIGHT_LINE, thickness=0.08)
@@ -284,6 +291,36 @@ class SceneView:
         self._lights_key = self._field_key = self._goal_key = None
         self._outline_bytes = None
         self._n = (n, m)
+
+    def _add_caption(self, snap: Snapshot) -> Any:
+        """What runs, above the arena's top-right corner (viser stacks its notifications at the page's
+        top left), or the construction wall's (:attr:`caption_over_construction`). Beside a compared
+        world (:attr:`caption_below`) it sits under the bottom-left corner instead: a caption is sized in
+        screen pixels, and two above their arenas overlapped once the arenas were narrower than them."""
+        cfg = snap.world_config
+        if self.caption_over_construction:
+            low, high, gap = cfg.centre - cfg.construction_size / 2.0, cfg.centre + cfg.construction_size / 2.0, 0.3
+        else:
+            low, high, gap = 0.0, cfg.arena_size, 0.8
+        if self.caption_below:
+            position, anchor = (low, low - gap), "top-left"
+        else:
+            position, anchor = (high, high + gap), "bottom-right"
+        # Its size is in screen pixels: at 1.2 it still fits a phone's width (a larger one, for a
+        # projector, would run off a phone that watches the same classroom).
+        return self.scene.add_label(f"{self.root}/caption", caption(snap), position=(*position, Z_TOP),
+                                    anchor=anchor, font_screen_scale=1.2)
+
+    def set_caption_below(self, below: bool, snap: Snapshot) -> None:
+        """Compare mode began (True) or ended: the caption moves under the arena, or back above it."""
+        with self._lock:
+            if below == self.caption_below:
+                return
+            self.caption_below = below
+            if "caption" in self.handles:
+                self.handles["caption"].remove()
+                self.handles["caption"] = self._add_caption(snap)
+                self._sent.remember(self.handles["caption"], "text", caption(snap))
 
     def _remove_nodes(self) -> None:
         for h in [*([self.hexagons] if self.hexagons else []), *reversed(self.handles.values())]:  # the root last

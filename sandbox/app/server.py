@@ -188,6 +188,8 @@ class App:
     def _reframe_all(self, beside: float | None) -> None:
         """Compare mode began or ended: every page frames both worlds, or the one."""
         self.panel.framing.beside = beside
+        with self._frame_lock, self.server.atomic():  # beside the second world, the caption goes under the arena
+            self.view.set_caption_below(beside is not None, self.runner.latest)
         for client in list(self.server.get_clients().values()):
             if client.client_id not in self.panel.inspector.followers:
                 self.panel.framing.apply(client)
@@ -225,6 +227,7 @@ class App:
             partner_config, label = self._compare_with
             try:
                 self.comparison.begin(partner_config, "from-config", label)
+                self.panel.compare.show(label)
             except Exception as exc:
                 self.stop()
                 raise UserError(f"the compared world cannot start: {exc}") from None

@@ -71,8 +71,8 @@ class CompareFolder:
                    "is to the right.", "blue")
 
     def show(self, choice: str) -> None:
-        """The dropdown shows ``choice`` (without acting on it)."""
-        if self.choice.value != choice:
+        """The dropdown shows ``choice`` (without acting on it; a config file's name is not a choice)."""
+        if choice in CHOICES and self.choice.value != choice:
             self._quiet = True
             try:
                 self.choice.value = choice
