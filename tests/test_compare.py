@@ -215,3 +215,10 @@ def test_serve_compare_refuses_what_it_cannot_compare():
     assert both.returncode == 2 and "leave out --case" in both.stderr
     missing = phototaxis("serve", "--compare", "star")
     assert missing.returncode == 2 and "--compare" in missing.stderr
+
+
+def test_bench_live_compare_with_refuses_what_is_not_a_case():
+    from tests.test_cli import phototaxis
+
+    result = phototaxis("bench", "--live", "--compare-with", "hexagon")
+    assert result.returncode == 2 and "--compare-with takes a case" in result.stderr

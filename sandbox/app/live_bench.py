@@ -65,9 +65,10 @@ class WebsocketViewer:
 
 
 def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 25, fps: float = 30.0,
-        warmup: float = 5.0, viewers: int = 1) -> dict[str, Any]:
+        warmup: float = 5.0, viewers: int = 1, compare_with: str | None = None) -> dict[str, Any]:
     """Measure the live app for ``seconds`` (after ``warmup``) with one
-    headless browser and ``viewers`` websocket viewers connected."""
+    headless browser and ``viewers`` websocket viewers connected; ``compare_with``: in compare mode
+    against this case (sandbox.app.compare), both worlds measured."""
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:
@@ -75,7 +76,12 @@ def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 25, fps
     browser_path = chromium_path()
     if browser_path is None:
         raise UserError("the live benchmark needs chromium: apt-get install chromium")
-    app = App(config, port=free_port(), fps=fps, steps_per_frame=steps_per_frame)
+    compare = None
+    if compare_with is not None:
+        from sandbox.app.compare import partner_config
+
+        compare = (partner_config(config, compare_with), compare_with)
+    app = App(config, port=free_port(), fps=fps, steps_per_frame=steps_per_frame, compare=compare)
     app.start()
     try:
         with sync_playwright() as pw:
@@ -91,10 +97,13 @@ def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 25, fps
                 time.sleep(warmup)
                 page.evaluate("""() => { window.__frames = 0; const tick = () => { window.__frames++;
                                  requestAnimationFrame(tick); }; requestAnimationFrame(tick); }""")
+                partner = app.comparison.runner
                 steps0, frames0, t0 = app.runner.latest.step, app.frames_drawn, time.perf_counter()
+                other0 = partner.latest.step if partner is not None else 0
                 bytes0 = [v.received for v in others]
                 time.sleep(seconds)
                 steps1, frames1, t1 = app.runner.latest.step, app.frames_drawn, time.perf_counter()
+                other1 = partner.latest.step if partner is not None else 0
                 bytes1 = [v.received for v in others]
                 browser_frames = page.evaluate("() => window.__frames")
                 clients = len(app.server.get_clients())
@@ -120,6 +129,10 @@ def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 25, fps
         "robots": config.robots,
         "boxes": config.boxes,
         "steps_per_frame": steps_per_frame,
+        **({} if compare is None else {
+            "compared_with": compare_with,
+            "compared_steps_per_second": round((other1 - other0) / wall, 1),
+            "compared_real_time_factor": round((other1 - other0) / wall * config.dt, 2)}),
     }
 
 

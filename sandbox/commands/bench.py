@@ -20,6 +20,7 @@ from typing import Any
 from tqdm import tqdm
 
 from sandbox.app import live_bench
+from sandbox.app.compare import COMPARE_CASES
 from sandbox.cli import UserError, add_config_arguments, config_from_args
 from sandbox.model.config import Config
 from sandbox.model.simulation import Simulation
@@ -42,6 +43,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--viewers", type=int, default=1, metavar="K",
                    help="with --live: K viewers besides the browser (websocket clients that receive the scene "
                    "like a browser but draw nothing; they count the bytes); 9 makes a class of 10 (default 1)")
+    p.add_argument("--compare-with", metavar="CASE", default=None,
+                   help="with --live: in compare mode against this case (a paper case, or 'star + chase'), "
+                        "both worlds measured")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.add_argument("--compare-reference", metavar="PATH",
                    help="also time a locally built binary of the authors' program (github AdamBignell/push) on "
@@ -212,7 +216,10 @@ def bench_command(args: argparse.Namespace) -> int:
             raise UserError(f"--steps-per-frame must be between 1 and 100, got {args.steps_per_frame}")
         if not 0 <= args.viewers <= 100:
             raise UserError(f"--viewers must be between 0 and 100, got {args.viewers}")
-        result = live_bench.run(config, args.seconds, steps_per_frame=args.steps_per_frame, viewers=args.viewers)
+        if args.compare_with is not None and args.compare_with not in COMPARE_CASES:
+            raise UserError(f"--compare-with takes a case: {', '.join(COMPARE_CASES)}")
+        result = live_bench.run(config, args.seconds, steps_per_frame=args.steps_per_frame, viewers=args.viewers,
+                                compare_with=args.compare_with)
     else:
         if config.steps <= 0:
             raise UserError("--steps must be at least 1 for a benchmark")
