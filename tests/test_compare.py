@@ -222,3 +222,26 @@ def test_bench_live_compare_with_refuses_what_is_not_a_case():
 
     result = phototaxis("bench", "--live", "--compare-with", "hexagon")
     assert result.returncode == 2 and "--compare-with takes a case" in result.stderr
+
+
+def test_when_the_compared_worlds_process_dies_compare_mode_ends_and_says_so():
+    import os
+    import signal
+
+    from sandbox.app.server import App, free_port
+
+    app = App(SMALL, port=free_port(), fps=30, steps_per_frame=5, keep_running=True,
+              compare=(partner_config(SMALL, "square-flare"), "square-flare")).start()
+    try:
+        told = []
+        app.comparison._on_crash = lambda why: (told.append(why), app._on_partner_crash(why))
+        partner = app.comparison.runner
+        os.kill(partner.process.pid, signal.SIGKILL)
+        wait_until(lambda: app.comparison.runner is None and app.panel.framing.beside is None,
+                   what="compare mode to end")
+        assert told and partner._stop.is_set() and not partner.process.is_alive() and app.runner.hold_at is None
+        assert app.panel.compare.choice.value == "nothing"
+        step = app.runner.latest.step
+        wait_until(lambda: app.runner.latest.step > step + 50, what="the running world to go on")
+    finally:
+        app.stop()

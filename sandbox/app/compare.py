@@ -94,7 +94,7 @@ class Lockstep:
         """The running world goes on alone; returns the partner (to be stopped)."""
         with self._lock:
             partner, self.partner = self.partner, None
-            self._stale.pop(id(partner), None)
+            self._stale.clear()
             self.main.hold(None)
             return partner
 
@@ -208,9 +208,12 @@ class Comparison:
     ROOT = "/compare"
 
     def __init__(self, server: Any, lockstep: Lockstep, make_runner: Callable[..., Any],
-                 draw_lock: Any, on_layout: Callable[[float | None], None]):
+                 draw_lock: Any, on_layout: Callable[[float | None], None],
+                 on_crash: Callable[[str], None] = lambda why: None):
+        """``on_crash(why)`` hears that the compared world's process died (compare mode then ends: a
+        restarted world would start again from step 0, far behind the running one)."""
         self.server, self.lockstep, self._make_runner = server, lockstep, make_runner
-        self._draw_lock, self._on_layout = draw_lock, on_layout
+        self._draw_lock, self._on_layout, self._on_crash = draw_lock, on_layout, on_crash
         self.view: Any = None
         self.label: str | None = None
         self._drawn: int | None = None  # the compared world's frame last drawn
@@ -245,9 +248,13 @@ class Comparison:
                 raise
             with self._draw_lock:
                 self.view, self.label, self._drawn = view, label, partner.latest.frame
-            main.set_playing(False)
+            if hasattr(partner, "on_crash"):  # a process of its own
+                partner.on_crash(lambda why, partner=partner: self._crashed(partner, why))
             self.lockstep.pair(partner)
-            self.lockstep.reset(None, on_done=lambda _: self.lockstep.set_playing(playing))
+            # Both from step 0 (held there while they are built), then playing if the running world was;
+            # also if a world could not be rebuilt (its process died, say).
+            self.lockstep.reset(None, on_done=lambda _: self.lockstep.set_playing(playing),
+                                on_error=lambda _: self.lockstep.set_playing(playing))
         self._on_layout(self.beside)
 
     def end(self) -> None:
@@ -256,6 +263,12 @@ class Comparison:
             ended = self._end()
         if ended:
             self._on_layout(None)
+
+    def _crashed(self, partner: Any, why: str) -> None:
+        if partner is not self.runner:
+            return
+        self._on_crash(why)
+        threading.Thread(target=self.end, daemon=True, name="compare-end").start()  # not on the receiver
 
     def _end(self) -> bool:
         partner = self.lockstep.unpair()

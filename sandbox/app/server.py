@@ -85,7 +85,7 @@ class App:
             self._configure_page()
             self.view = SceneView(self.server.scene, self.runner.latest, caption_over_construction=not whole_arena)
             self.comparison = Comparison(self.server, self.lockstep, make_runner, self._frame_lock,
-                                         on_layout=self._reframe_all)
+                                         on_layout=self._reframe_all, on_crash=self._on_partner_crash)
             # Loading a program runs a Python file on this machine: the page offers it only where a
             # connection may do it (served to this machine, or --allow-programs); the gate decides per page.
             offered = self.access.allow_programs or not is_shared(host)
@@ -193,6 +193,13 @@ class App:
         for client in list(self.server.get_clients().values()):
             if client.client_id not in self.panel.inspector.followers:
                 self.panel.framing.apply(client)
+
+    def _on_partner_crash(self, why: str) -> None:
+        for client in self.server.get_clients().values():
+            client.add_notification("The compared world stopped", why[0].upper() + why[1:].split("; restarting")[0]
+                                    + ". Compare mode has ended; the running world goes on alone.", color="red",
+                                    auto_close_seconds=20.0)
+        self.panel.compare.show("nothing")
 
     def _on_crash(self, why: str) -> None:
         given_up = self.runner.failed is not None
