@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.runner import Runner
-from sandbox.app.scene import POINT_GRID, CompactSender, SceneView
+from sandbox.app.scene import POINT_GRID, CompactSender, SceneView, top_down_camera
 from sandbox.app.snapshot import caption, case_name
 from sandbox.model.config import Config
 
@@ -213,7 +213,6 @@ def test_a_portrait_view_frames_the_arena_at_its_top_above_the_panel():
     """On a phone viser's panel covers the lower half: the arena goes to the top of the view, whole."""
     import numpy as np
 
-    from sandbox.app.scene import top_down_camera
     from sandbox.model.config import Config
 
     config = Config()
@@ -246,3 +245,25 @@ def test_the_caption_sits_where_every_framing_of_the_page_shows_it(snapshot):
     SceneView(LabelScene(), snapshot, caption_over_construction=True)
     wall = cfg.centre + cfg.construction_size / 2
     assert labels["/caption"]["position"][:2] == (wall, wall + 0.3)
+    # Beside a compared world, the running world's caption goes under its arena's bottom-left corner
+    # (two above their arenas overlapped), and back when compare mode ends.
+    view = SceneView(LabelScene(), snapshot)
+    view.set_caption_below(True, snapshot)
+    assert labels["/caption"]["position"][:2] == (0.0, -0.8) and labels["/caption"]["anchor"] == "top-left"
+    view.set_caption_below(False, snapshot)
+    assert labels["/caption"]["anchor"] == "bottom-right"
+    # The compared world's nodes live under its own root, moved along the floor.
+    SceneView(LabelScene(), snapshot, root="/compare", offset=(70.0, 0.0))
+    assert labels["/compare/caption"]["position"][:2] == (cfg.arena_size, cfg.arena_size + 0.8)
+
+
+def test_compare_mode_frames_both_arenas(snapshot):
+    """The camera over two arenas side by side: centred between them, as high as their width needs."""
+    config = snapshot.world_config
+    s, beside = config.arena_size, config.arena_size + 6.0
+    position, look_at, fov = top_down_camera(config, 1.4, beside=beside)
+    assert look_at[0] == pytest.approx(s / 2 + beside / 2)  # halfway between the two arenas' centres
+    half_width = (1.12 * s + beside) / 2  # both arenas and their margins
+    assert position[2] == pytest.approx(half_width / 1.4 / np.tan(fov / 2))
+    one, _, _ = top_down_camera(config, 1.4)
+    assert position[2] > one[2]

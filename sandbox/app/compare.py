@@ -209,9 +209,12 @@ class Comparison:
 
     def __init__(self, server: Any, lockstep: Lockstep, make_runner: Callable[..., Any],
                  draw_lock: Any, on_layout: Callable[[float | None], None],
-                 on_crash: Callable[[str], None] = lambda why: None):
+                 on_crash: Callable[[str], None] = lambda why: None, caption_over_construction: bool = False):
         """``on_crash(why)`` hears that the compared world's process died (compare mode then ends: a
-        restarted world would start again from step 0, far behind the running one)."""
+        restarted world would start again from step 0, far behind the running one);
+        ``caption_over_construction``: where its caption sits, as the running world's (a classroom's
+        pages frame the construction areas)."""
+        self.caption_over_construction = caption_over_construction
         self.server, self.lockstep, self._make_runner = server, lockstep, make_runner
         self._draw_lock, self._on_layout, self._on_crash = draw_lock, on_layout, on_crash
         self.view: Any = None
@@ -242,7 +245,8 @@ class Comparison:
             try:
                 partner.start()
                 with self._draw_lock, self.server.atomic():
-                    view = SceneView(self.server.scene, partner.latest, root=self.ROOT, offset=(self.beside, 0.0))
+                    view = SceneView(self.server.scene, partner.latest, root=self.ROOT, offset=(self.beside, 0.0),
+                                     caption_over_construction=self.caption_over_construction)
             except BaseException:
                 partner.stop()
                 raise

@@ -85,7 +85,8 @@ class App:
             self._configure_page()
             self.view = SceneView(self.server.scene, self.runner.latest, caption_over_construction=not whole_arena)
             self.comparison = Comparison(self.server, self.lockstep, make_runner, self._frame_lock,
-                                         on_layout=self._reframe_all, on_crash=self._on_partner_crash)
+                                         on_layout=self._reframe_all, on_crash=self._on_partner_crash,
+                                         caption_over_construction=not whole_arena)
             # Loading a program runs a Python file on this machine: the page offers it only where a
             # connection may do it (served to this machine, or --allow-programs); the gate decides per page.
             offered = self.access.allow_programs or not is_shared(host)
