@@ -245,3 +245,26 @@ def test_when_the_compared_worlds_process_dies_compare_mode_ends_and_says_so():
         wait_until(lambda: app.runner.latest.step > step + 50, what="the running world to go on")
     finally:
         app.stop()
+
+
+def test_a_challenge_round_in_compare_mode_plays_the_paper_beside_the_player():
+    """Issue 25, item 3: the round's world and the paper's, side by side from the round's seed; both
+    stop together at the round's end."""
+    from sandbox.app.server import App, free_port
+    from sandbox.model.challenge import ROUND_SEED
+
+    app = App(SMALL, port=free_port(), fps=60, steps_per_frame=5, process=False).start()
+    try:
+        app.panel.compare.choose(SAME, None)
+        wait_until(lambda: app.comparison.runner is not None, what="the second world")
+        folder, partner = app.panel.challenge, app.comparison.runner
+        folder.round_steps = 150
+        folder.start("Ada", None)
+        wait_until(lambda: folder.round is not None and folder.round.score is not None, what="the round's end")
+        wait_until(lambda: not partner.latest.playing and partner.latest.step == app.runner.latest.step,
+                   what="both worlds stopped on one step")
+        assert partner.latest.seed == app.runner.latest.seed == ROUND_SEED
+        assert (app.runner.latest.program, partner.latest.program) == (LAMP_PROGRAM, PAPER_PROGRAM)
+        assert app.runner.latest.step >= 150
+    finally:
+        app.stop()
