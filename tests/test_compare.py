@@ -268,3 +268,22 @@ def test_a_challenge_round_in_compare_mode_plays_the_paper_beside_the_player():
         assert app.runner.latest.step >= 150
     finally:
         app.stop()
+
+
+def test_a_refused_reset_leaves_both_worlds_going_on_in_step(pair):
+    lockstep, main, partner = pair
+    _reset(lockstep)
+    lockstep.set_playing(True)
+    wait_until(lambda: partner.latest.step > 60, what="both playing")
+    key = partner.latest.world_key
+    real_reset = main.reset
+    main.reset = lambda seed, on_done=None, on_error=None: on_error(RuntimeError("refused"))
+    errors = []
+    lockstep.reset(None, on_error=errors.append)
+    main.reset = real_reset
+    assert [str(e) for e in errors] == ["refused"]
+    step = partner.latest.step
+    wait_until(lambda: partner.latest.step > step + 40, what="the worlds to go on")
+    assert partner.latest.world_key == key  # the compared world was not rebuilt alone
+    lockstep.set_playing(False)
+    wait_until(lambda: main.latest.step == partner.latest.step and not main.latest.playing, what="paused in step")

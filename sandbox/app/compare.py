@@ -135,40 +135,45 @@ class Lockstep:
 
     def reset(self, seed: int | None = None, *, on_done: Callable[[Any], None] | None = None,
               on_error: Callable[[BaseException], None] | None = None) -> None:
-        """Both worlds again (``seed`` None: each its own seed, the same one); ``on_done`` hears the
-        running world's result once both are built, ``on_error`` the first refusal."""
+        """Both worlds again (``seed`` None: each its own seed, the same one): the running world first,
+        then, once it is built, the compared one, both held at step 0 meanwhile. ``on_done`` hears the
+        running world's result once both are built. If the running world's reset is refused or
+        cancelled, the compared world is left as it was and both go on from where they were
+        (``on_error`` hears why)."""
         with self._lock:
-            if self.partner is None:
+            partner = self.partner
+            if partner is None:
                 self.main.reset(seed, on_done=on_done, on_error=on_error)
                 return
             self._target = 0
-            sides = self.sides
-            waiting = {id(side) for side in sides}
-            box: dict[str, Any] = {}
-            for side in sides:
+            for side in self.sides:
                 side.hold(0)
                 self._stale[id(side)] = side.latest.world_key
 
-            def finished(side: Any, result: Any = None, error: BaseException | None = None) -> None:
-                with self._lock:
-                    if error is not None:
-                        self._stale.pop(id(side), None)  # its old world goes on
-                        box.setdefault("error", error)
-                    elif side is self.main:
-                        box["result"] = result
-                    waiting.discard(id(side))
-                    if waiting:
-                        return
-                    self._advance()
-                if "error" in box:
-                    if on_error:
-                        on_error(box["error"])
-                elif on_done:
-                    on_done(box.get("result"))
+        def main_built(result: Any) -> None:
+            partner.reset(seed, on_done=lambda _: both_built(result), on_error=failed)
 
-            for side in sides:
-                side.reset(seed, on_done=lambda r, s=side: finished(s, r),
-                           on_error=lambda e, s=side: finished(s, error=e))
+        def both_built(result: Any) -> None:
+            self._advance()
+            if on_done:
+                on_done(result)
+
+        def main_refused(exc: BaseException) -> None:
+            with self._lock:  # neither world changed: on from their steps (held where they were)
+                self._stale.clear()
+                self._target = max(side.latest.step for side in self.sides)
+                if self.main.playing:
+                    self._advance()
+                else:
+                    for side in self.sides:
+                        side.run_to(self._target)
+            failed(exc)
+
+        def failed(exc: BaseException) -> None:
+            if on_error:
+                on_error(exc)
+
+        self.main.reset(seed, on_done=main_built, on_error=main_refused)
 
     # ------------------------------------------------------------ pacing
     def _lead(self) -> int:
