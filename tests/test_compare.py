@@ -266,6 +266,7 @@ def test_a_challenge_round_in_compare_mode_plays_the_paper_beside_the_player():
         assert partner.latest.seed == app.runner.latest.seed == ROUND_SEED
         assert (app.runner.latest.program, partner.latest.program) == (LAMP_PROGRAM, PAPER_PROGRAM)
         assert app.runner.latest.step >= 150
+        wait_until(lambda: folder.round.paper is not None, what="the paper's reference score")
     finally:
         app.stop()
 
