@@ -150,14 +150,14 @@ class App:
         if failed:
             client.add_notification("The simulation cannot start", failed[0].upper() + failed[1:] + ".",
                                     color="red", auto_close_seconds=None)
-        if self.auto_paused:
-            self.auto_paused = False
-            self.lockstep.set_playing(True)
         panel = getattr(self, "panel", None)  # a page may connect while the panel is built
         if panel is not None:
             panel.inspector.attach(client)
             panel.framing.arrive(client)
             panel.shape.draw.warm_up()
+        if self.auto_paused:  # after the page's own parts exist: the frames it then gets are for it
+            self.auto_paused = False
+            self.lockstep.set_playing(True)
         # Fit the arena to this viewer's window as it tells its shape: its camera reports come while the
         # page lays itself out, and on a loaded machine the last one many seconds later. A page that
         # follows a robot has its camera moved by the inspector instead.
