@@ -167,6 +167,12 @@ def test_the_app_draws_both_worlds_and_charts_both(comparing_app):
     data = app.panel.metrics.chart_goal.data
     assert len(data) == 4 and np.isfinite(data[2]).sum() >= 2  # the right world's curve, at the same steps
     assert "**Right** star-switch" in app.panel.compare.status.content
+    assert "**Right** (star-switch): **in goal**" in app.panel.metrics.text.content
+    # The CSV holds both worlds' samples, each row led by its world.
+    rows = app.panel.metrics.csv().splitlines()
+    assert rows[0].startswith("world,step,") and rows[0].endswith(",time")
+    worlds = {row.split(",")[0] for row in rows[1:]}
+    assert worlds == {"left: star", "right: star-switch"}
     app.panel.compare.choose("nothing", None)
     wait_until(lambda: app.comparison.runner is None and app.panel.framing.beside is None,
                what="the comparison to end and the pages to frame one world")
@@ -174,6 +180,7 @@ def test_the_app_draws_both_worlds_and_charts_both(comparing_app):
     app.panel.metrics._charted_at = 0.0
     app.panel.update(app.runner.latest, force=True)
     assert [s["label"] for s in app.panel.metrics._series_shown["chart_goal"]] == ["step", "in goal", "change"]
+    assert app.panel.metrics.csv().startswith("step,") and "Right" not in app.panel.metrics.text.content
 
 
 def test_learns_show_me_runs_the_case_without_and_with_the_strategy(comparing_app):

@@ -84,13 +84,13 @@ class MetricsFolder:
                                             save_immediately=True)
 
     def update(self, snap: Snapshot) -> None:
-        self.text.content = self._text(snap)
+        partner = self._compared()
+        self.text.content = self._text(snap) + ("" if partner is None else self._compared_text(partner.latest))
         series = self.runner.series()
         # Every chart update goes to every viewer: send one only when there is something new to
         # draw, at most once per CHART_PERIOD, and as at most CHART_POINTS points of the whole run.
         # (Sending all samples at each panel refresh cost 31 KB/s per viewer after 20 s, growing
         # to about 900 KB/s once the series held its old cap of 3,000 samples.)
-        partner = self._compared()
         other = partner.series() if partner is not None else None
         names = None if partner is None else (side_name(snap), side_name(partner.latest))
         key = (len(series), series[-1].step if series else None, tuple(self.marks),
@@ -138,13 +138,29 @@ class MetricsFolder:
         return out
 
     def csv(self) -> str:  # every sample, not just the charted ones
-        """The run's samples as CSV, with the time in seconds as the last column."""
+        """The run's samples as CSV, with the time in seconds as the last column; in compare mode
+        both worlds', each row led by its world (``left: star``, ``right: star-switch``)."""
         out = io.StringIO()
         dt = self.runner.latest.world_config.dt
-        writer = SampleWriter(out, trailing=("time",))
-        for s in self.runner.series():
-            writer.write(s, time=round(s.step * dt, 4))
+        partner = self._compared()
+        if partner is None:
+            writer = SampleWriter(out, trailing=("time",))
+            for s in self.runner.series():
+                writer.write(s, time=round(s.step * dt, 4))
+            return out.getvalue()
+        writer = SampleWriter(out, leading=("world",), trailing=("time",))
+        for side, runner in (("left", self.runner), ("right", partner)):
+            world = f"{side}: {side_name(runner.latest)}"
+            for s in runner.series():
+                writer.write(s, world=world, time=round(s.step * dt, 4))
         return out.getvalue()
+
+    @staticmethod
+    def _compared_text(other: Snapshot) -> str:
+        """Compare mode: the second world's metrics under the first's (the charts' yellow curves)."""
+        s = other.sample
+        return (f"  \n**Right** ({side_name(other)}): **in goal** {100 * s.fraction_in_goal:.1f} % &nbsp; "
+                f"**stray distance** {s.mean_outside_distance:.2f} m")
 
     @staticmethod
     def _text(snap: Snapshot) -> str:
