@@ -157,6 +157,7 @@ def test_the_app_draws_both_worlds_and_charts_both(comparing_app):
     app = comparing_app
     partner = app.comparison.runner
     assert partner is not None and app.panel.framing.beside == SMALL.arena_size + 6.0
+    wait_until(lambda: app.panel.compare.choice.value == "star-switch", what="the dropdown to show the comparison")
     names = {handle.name for handle in app.comparison.view.handles.values()}
     assert {"/compare", "/compare/swarm/robots", "/compare/caption", "/compare/goal"} <= names
     wait_until(lambda: partner.latest.step >= 300 and app.runner.latest.step >= 300, what="both worlds to run")
@@ -247,7 +248,7 @@ def test_when_the_compared_worlds_process_dies_compare_mode_ends_and_says_so():
         wait_until(lambda: app.comparison.runner is None and app.panel.framing.beside is None,
                    what="compare mode to end")
         assert told and partner._stop.is_set() and not partner.process.is_alive() and app.runner.hold_at is None
-        assert app.panel.compare.choice.value == "nothing"
+        wait_until(lambda: app.panel.compare.choice.value == "nothing", what="the dropdown to say so")
         step = app.runner.latest.step
         wait_until(lambda: app.runner.latest.step > step + 50, what="the running world to go on")
     finally:

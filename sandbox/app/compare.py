@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from sandbox.app.runner import FASTEST, FASTEST_CHUNK
-from sandbox.app.scene import COMPARE_GAP
+from sandbox.app.scene import COMPARE_GAP, SceneView
 from sandbox.app.snapshot import Snapshot, case_name, running_case
 from sandbox.model.config import CASES, STRATEGIES, Config, ConfigError, read_config_values
 
@@ -207,8 +207,7 @@ class Comparison:
 
     ``make_runner(config, shape=..., seed=..., playing=...)`` builds a runner like the app's (a
     process of its own); ``draw_lock`` is the lock the app draws under (:meth:`draw` is called
-    holding it);
-    ``on_layout(beside)`` hears where the second world lies (None: gone), to frame the pages."""
+    holding it); ``on_layout(beside)`` hears where the second world lies (None: gone), to frame the pages."""
 
     ROOT = "/compare"
 
@@ -240,8 +239,6 @@ class Comparison:
         """Compare with a world of ``config`` and ``shape`` from the running world's seed: both start
         again from step 0, playing if the running one was. Blocks while the new world's process
         starts (a second or two): call it off the page's threads."""
-        from sandbox.app.scene import SceneView
-
         with self._lock:
             self._end()
             main = self.lockstep.main
@@ -291,8 +288,8 @@ class Comparison:
 
     def draw(self) -> None:
         """Draw the compared world's newest frame, if it has a new one: the app calls this as it draws
-        the running world's, in the same batch, so that the page draws both in one picture (viser's
-        page draws once per batch: a batch for each world made it draw twice as often)."""
+        the running world's, in the same batch, so that the page gets both in one picture (viser's
+        page asks for a picture per batch: a batch for each world would ask for two)."""
         view, partner = self.view, self.runner
         if view is None or partner is None:
             return

@@ -398,11 +398,12 @@ class Runner(FramePublisher):
     def _frame_of_steps(self, deadline: float) -> None:
         """One frame: the waiting commands, the steps (if playing), the series and a snapshot."""
         self._run_commands()
-        if self.playing and self._steps_allowed(self.steps_per_frame) > 0:
+        allowed = self._steps_allowed(self.steps_per_frame)
+        if self.playing and allowed > 0:
             if self.steps_per_frame >= FASTEST:
                 self._step(deadline=deadline)  # as many steps as fit in one frame
             else:
-                self._step(self._steps_allowed(self.steps_per_frame))
+                self._step(allowed)
             self._record_series()
         self._step_times.append((time.perf_counter(), self.sim.steps_done))
         self._snapshot()

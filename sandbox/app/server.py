@@ -20,8 +20,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from sandbox.app.compare import Comparison, Lockstep, side_config
 from sandbox.app.access import WATCH, Access, is_loopback_host, is_shared
+from sandbox.app.compare import Comparison, Lockstep, side_config
 from sandbox.app.gate import start_server
 from sandbox.app.icons import read_icons_once
 from sandbox.app.panel import Panel
@@ -90,14 +90,11 @@ class App:
             # Loading a program runs a Python file on this machine: the page offers it only where a
             # connection may do it (served to this machine, or --allow-programs); the gate decides per page.
             offered = self.access.allow_programs or not is_shared(host)
-            self.panel = Panel(self.server, self.runner, self.view, allow_programs=offered,
+            self.panel = Panel(self.server, self.runner, self.view, self.comparison, allow_programs=offered,
                                may_load_programs=self.gate.may_load_programs,
-                               default_view=WHOLE_ARENA if whole_arena else PRESENTER,
-                               comparison=self.comparison)
+                               default_view=WHOLE_ARENA if whole_arena else PRESENTER)
             for client in list(self.server.get_clients().values()):  # came while the panel was built
-                self.panel.inspector.attach(client)
-                self.panel.framing.arrive(client)
-                self.panel.shape.draw.warm_up()
+                self.panel.welcome(client)
         except BaseException:
             self.server.stop()  # do not leave a half-built server listening
             self.runner.stop()
@@ -141,8 +138,7 @@ class App:
         self._last_viewer = time.monotonic()
         panel = getattr(self, "panel", None)
         if panel is not None:
-            panel.inspector.detach(client.client_id)
-            panel.framing.forget(client.client_id)
+            panel.farewell(client.client_id)
 
     def _on_connect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
@@ -152,9 +148,7 @@ class App:
                                     color="red", auto_close_seconds=None)
         panel = getattr(self, "panel", None)  # a page may connect while the panel is built
         if panel is not None:
-            panel.inspector.attach(client)
-            panel.framing.arrive(client)
-            panel.shape.draw.warm_up()
+            panel.welcome(client)
         if self.auto_paused:  # after the page's own parts exist: the frames it then gets are for it
             self.auto_paused = False
             self.lockstep.set_playing(True)
@@ -200,7 +194,6 @@ class App:
             client.add_notification("The compared world stopped", why[0].upper() + why[1:].split("; restarting")[0]
                                     + ". Compare mode has ended; the running world goes on alone.", color="red",
                                     auto_close_seconds=20.0)
-        self.panel.compare.show("nothing")
 
     def _on_crash(self, why: str) -> None:
         given_up = self.runner.failed is not None
@@ -235,7 +228,6 @@ class App:
             partner_config, label = self._compare_with
             try:
                 self.comparison.begin(partner_config, "from-config", label)
-                self.panel.compare.show(label)
             except Exception as exc:
                 self.stop()
                 raise UserError(f"the compared world cannot start: {exc}") from None

@@ -8,16 +8,15 @@ generated from the model's declaration.
 
 from __future__ import annotations
 
-import threading
 import time
 from typing import Any, Callable
 
 import viser
 
 from sandbox.app import learn, legend
+from sandbox.app.compare import Comparison
 from sandbox.app.panel.advice import AdviceFolder
 from sandbox.app.panel.common import PANEL_HZ, floor_point
-from sandbox.app.compare import Comparison, Lockstep
 from sandbox.app.panel.challenge import ChallengeFolder
 from sandbox.app.panel.compare import CompareFolder
 from sandbox.app.panel.framing import WHOLE_ARENA, Framing
@@ -37,15 +36,12 @@ class Panel:
     """Builds the GUI on ``server`` for ``runner`` and keeps its read-outs current.
     ``view`` is the scene (it shows the heat map); the shape being drawn has its own nodes (draw_view)."""
 
-    def __init__(self, server: Any, runner: Any, view: Any, *, allow_programs: bool = True,
-                 may_load_programs: Any = None, default_view: str = WHOLE_ARENA, comparison: Comparison | None = None):
-        """``comparison``: compare mode's second world (:mod:`sandbox.app.compare`); without one, the panel
-        makes its own, drawn under no lock."""
+    def __init__(self, server: Any, runner: Any, view: Any, comparison: Comparison, *, allow_programs: bool = True,
+                 may_load_programs: Any = None, default_view: str = WHOLE_ARENA):
+        """``comparison``: compare mode's second world (:mod:`sandbox.app.compare`); play, pause, step,
+        reset and speed act on its :class:`~sandbox.app.compare.Lockstep`."""
         gui = server.gui
         self.runner = runner
-        if comparison is None:
-            comparison = Comparison(server, Lockstep(runner), make_runner=_threaded_runner(runner),
-                                    draw_lock=threading.Lock(), on_layout=lambda beside: None)
         self.comparison = comparison
         lockstep = comparison.lockstep
         #: How each viewer frames the floor (its View, the presenter layout).
@@ -66,8 +62,8 @@ class Panel:
         self.compare = CompareFolder(gui, runner, comparison, on_change=self.metrics.mark)
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
         self.record = RecordFolder(gui, server, runner)
-        self.folders = (self.run, self.compare, self.shape, self.advice, self.strategies, self.program, self.lamp, self.challenge,
-                        self.metrics, self.inspector, self.record, self.parameters)
+        self.folders = (self.run, self.compare, self.shape, self.advice, self.strategies, self.program, self.lamp,
+                        self.challenge, self.metrics, self.inspector, self.record, self.parameters)
         snap = runner.latest
         self._build_legend(gui)
         for folder in self.folders:
@@ -84,6 +80,17 @@ class Panel:
         self._last_refresh = now
         for folder in self.folders:
             folder.update(snap)
+
+    def welcome(self, client: Any) -> None:
+        """A page connected: its own inspector and layout, and the drawing preview warmed up."""
+        self.inspector.attach(client)
+        self.framing.arrive(client)
+        self.shape.draw.warm_up()
+
+    def farewell(self, client_id: int) -> None:
+        """A page left: its own inspector and layout go with it."""
+        self.inspector.detach(client_id)
+        self.framing.forget(client_id)
 
     def on_frame_drawn(self) -> None:
         self.record.on_frame_drawn()
@@ -102,9 +109,11 @@ class Panel:
 
     def _on_scene_click(self, event: Any) -> None:
         point = floor_point(event.ray_origin, event.ray_direction)
-        if point is not None and self.comparison.runner is not None and point[0] > self.comparison.beside - 1.0:
+        if point is None:
+            return
+        if self.comparison.runner is not None and point[0] > self.comparison.beside - 1.0:
             return  # on the compared world: the shape, the lamp and the inspector act on the running one
-        if point is not None and not self.shape.click(point) and not self.lamp.click(point, event.client):
+        if not self.shape.click(point) and not self.lamp.click(point, event.client):
             self.inspector.click(point, event.client)
 
     def show_me(self, without: str, with_it: str, client: Any) -> None:
@@ -131,13 +140,3 @@ class Panel:
             gui.add_image(learn.stored_picture("learn-strategies.png"), format="png")
             gui.add_markdown(learn.INSPECT)
         return buttons
-
-
-def _threaded_runner(like: Any) -> Callable[..., Any]:
-    """Makes compare mode's second runner in a thread of this process, paced like ``like``."""
-    from sandbox.app.runner import Runner
-
-    def make(config: Any, **kwargs: Any) -> Any:
-        return Runner(config, fps=like.fps, steps_per_frame=like.steps_per_frame, **kwargs)
-
-    return make

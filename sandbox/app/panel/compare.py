@@ -47,6 +47,7 @@ class CompareFolder:
         if choice not in CHOICES:
             return
         self.show(choice)
+        self._starting = choice != NOTHING  # until it runs, the dropdown keeps showing it
         threading.Thread(target=self._choose, args=(choice, client), daemon=True, name="compare").start()
 
     def _choose(self, choice: str, client: Any) -> None:
@@ -56,7 +57,6 @@ class CompareFolder:
                     self.comparison.end()
                     self._on_change("compare: off")
                 return
-            self._starting = True
             self.status.content = "Starting the second world..."
             try:
                 config, shape = self._partner(choice)
@@ -89,7 +89,11 @@ class CompareFolder:
         return config, ("from-config" if vertices is None else vertices)
 
     def update(self, snap: Snapshot) -> None:
+        """The dropdown shows what is compared (nothing, once a comparison ended for any reason), the status
+        line both shares."""
         partner = self.comparison.runner
+        if not self._starting:  # a comparison on its way: the dropdown shows it already
+            self.show(NOTHING if partner is None else self.comparison.label)
         if partner is None:
             if not self._starting:
                 self.status.content = ""
