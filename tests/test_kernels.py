@@ -71,3 +71,19 @@ def test_compiled_step_equals_numpy_step_bit_for_bit(profile):
         np.testing.assert_array_equal(fast.robot_commands, slow.robot_commands)
     assert fast.cycle == slow.cycle and (fast.robot_charges > 0).any()
     assert np.abs(fast.robot_velocities).max() > 0  # robots really moved
+
+
+def test_reads_land_on_each_bodys_row_whatever_order_the_batch_lists_them():
+    """pymunk.batch lists sleeping bodies last: the scatter finds each body's row by its id, and
+    looks again only where the order moved (here two bodies fall asleep, then one wakes)."""
+    body_ids = np.array([40, 10, 30, 20, 50], dtype=np.uintp)  # row r holds the body with id body_ids[r]
+    order = np.argsort(body_ids)
+    rows, last_ids = np.zeros(5, dtype=np.intp), np.zeros(5, dtype=np.uintp)
+    state = np.zeros((5, 6))
+    for listed in ([0, 1, 2, 3, 4], [0, 4, 2, 3, 1], [0, 4, 3, 1, 2], [0, 4, 3, 1, 2], [1, 4, 3, 0, 2]):
+        ids = body_ids[listed]
+        read = np.array(listed, dtype=float)[:, None] * 10 + np.arange(6)  # row r's values: 10 r + column
+        kernels.scatter_by_id(ids, read, last_ids, rows, body_ids[order], order, state)
+        assert rows.tolist() == listed
+        assert np.array_equal(state, np.arange(5)[:, None] * 10.0 + np.arange(6))
+        state[:] = 0

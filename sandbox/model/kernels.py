@@ -217,6 +217,24 @@ def robot_step_set_once(state, n_robots, due, field, lay, rp, command, readings,
     return n
 
 
+@njit(cache=True)
+def scatter_by_id(ids, rows_read, last_ids, rows, sorted_ids, id_order, state):
+    """Copy the rows pymunk.batch read (``rows_read[i]`` for the body with id ``ids[i]``) into
+    ``state`` at each body's own row. The batch lists sleeping bodies after awake ones, so the
+    order moves whenever a group falls asleep or wakes (every other step in a trial): only the
+    positions whose id changed since the last read (``last_ids``) look up their row again
+    (``id_order[searchsorted(sorted_ids, id)]``). In numpy, comparing the ids, searching them and a
+    fancy-indexed copy cost 26 µs a step of 700 bodies; this loop costs a few. Same values copied:
+    bit for bit what numpy wrote."""
+    for i in range(ids.shape[0]):
+        if ids[i] != last_ids[i]:
+            rows[i] = id_order[np.searchsorted(sorted_ids, ids[i])]
+            last_ids[i] = ids[i]
+        row = rows[i]
+        for k in range(state.shape[1]):
+            state[row, k] = rows_read[i, k]
+
+
 _warm = False
 
 
@@ -238,4 +256,7 @@ def warm_up() -> None:
                               np.zeros((1, 2)), np.zeros((3, 3)))
         robot_step_set_once(state, 1, due, field, lay, rp, np.zeros((1, 2)), np.zeros((1, 4)), np.zeros(1),
                             np.zeros((1, 2)), np.zeros((2, 4)))
+    ids = np.array([7, 5], dtype=np.uintp)
+    scatter_by_id(ids, np.zeros((2, 6)), np.zeros(2, dtype=np.uintp), np.zeros(2, dtype=np.intp), np.sort(ids),
+                  np.argsort(ids), np.zeros((2, 6)))
     _warm = True

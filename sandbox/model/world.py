@@ -15,7 +15,7 @@ import pymunk
 import pymunk.batch as batch
 from pymunk._chipmunk_cffi import lib as chipmunk
 
-from sandbox.model import geometry, undamped
+from sandbox.model import geometry, kernels, undamped
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.goal import Goal
 
@@ -141,9 +141,10 @@ class World:
         ids = np.array([b.id for b in bodies], dtype=np.uintp)
         self._id_order = np.argsort(ids)
         self._sorted_ids = ids[self._id_order]
-        #: Row of :attr:`state` of each body pymunk.batch listed in the last read.
+        #: Row of :attr:`state` of each body pymunk.batch listed in the last read, and its id
+        #: (0, no body's, until the first read).
         self._rows = np.arange(len(bodies))
-        self._last_ids = np.zeros(0, dtype=np.uintp)
+        self._last_ids = np.zeros(len(bodies), dtype=np.uintp)
         self._robot_pointers = [b._body for b in self.robot_bodies]
         self.state = np.zeros((self.n_robots + self.n_boxes + 1, 6))
         #: Velocities for the next step, (vx, vy, w) per row of :attr:`state`;
@@ -248,11 +249,9 @@ class World:
             return self.state
         batch.get_space_bodies(self.space, _POSE_AND_ID, self._buffer)
         ids = np.frombuffer(self._buffer.int_buf(), dtype=np.uintp)
-        # The order changes only when bodies fall asleep or wake: usually it is the last one.
-        if not np.array_equal(ids, self._last_ids):
-            self._rows = self._id_order[np.searchsorted(self._sorted_ids, ids)]
-            self._last_ids = ids.copy()
-        self.state[self._rows] = np.frombuffer(self._buffer.float_buf()).reshape(self.state.shape)
+        rows_read = np.frombuffer(self._buffer.float_buf()).reshape(self.state.shape)
+        kernels.scatter_by_id(ids, rows_read, self._last_ids, self._rows, self._sorted_ids, self._id_order,
+                              self.state)
         return self.state
 
     def push_velocities(self) -> None:
