@@ -33,6 +33,12 @@ def test_colour_bar_runs_from_no_light_to_the_brightest():
     assert np.abs(row[-13].astype(int) - bright).sum() < 30
 
 
+def test_the_heat_maps_colours_are_matplotlibs_inferno():
+    colormaps = pytest.importorskip("matplotlib").colormaps
+    inferno = np.round(colormaps["inferno"](np.linspace(0, 1, 256))[:, :3] * 255).astype(np.uint8)
+    assert np.array_equal(pal._heat_lut(), inferno)
+
+
 def test_learn_captions_are_readable():
     img = learn.cycle_picture()
     assert _text_rows(img, 0, learn.CAPTION + 8) >= 10  # the old captions were 7 px tall

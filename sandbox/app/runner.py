@@ -16,7 +16,7 @@ import queue
 import threading
 import time
 from collections import deque
-from typing import Any, Callable, Iterable
+from typing import TYPE_CHECKING, Any, Callable, Iterable
 
 import numpy as np
 
@@ -25,9 +25,11 @@ from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM, RobotView, Snapsho
 from sandbox.model import watchdog
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
-from sandbox.model.simulation import Simulation
 
-Command = Callable[[Simulation], Any]
+if TYPE_CHECKING:  # imported where a Runner is built: the web server itself never steps a world
+    from sandbox.model.simulation import Simulation
+
+Command = Callable[["Simulation"], Any]
 
 #: The top of the speed slider means "as fast as the machine can": the loop
 #: steps in chunks of FASTEST_CHUNK until the next frame is due.
@@ -68,6 +70,8 @@ class Runner(FramePublisher):
                  program_time_limit: float = watchdog.DEFAULT_LIMIT):
         #: Seconds a light program's import, reset or update may take (then the paper's controller takes over).
         self.program_time_limit = float(program_time_limit)
+        from sandbox.model.simulation import Simulation  # with numba's compiled kernels: see the top
+
         # A live run has no last step.
         self.sim = Simulation(config, seed=seed, shape=shape, open_ended=True, program_time_limit=program_time_limit)
         self.fps = float(fps)

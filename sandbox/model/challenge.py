@@ -13,7 +13,6 @@ from __future__ import annotations
 import numpy as np
 
 from sandbox.model.config import Config
-from sandbox.model.simulation import Simulation
 
 #: A round's length in world steps: 11 minutes of simulated time, about a minute of play.
 ROUND_STEPS = 20_000
@@ -25,6 +24,8 @@ def paper_share(config: Config, seed: int, steps: int, shape: np.ndarray | None 
     """The paper's controller's share of boxes in the goal after ``steps`` world steps of the world
     built from ``config``, ``seed`` and ``shape`` (the goal's vertices as given, None for the circle),
     as a live round runs it (open-ended)."""
+    from sandbox.model.simulation import Simulation  # here: the web server imports this module, steps no world
+
     sim = Simulation(config, seed=seed, shape=shape, open_ended=True)
     sim.step(steps)
     return float(sim.measure().fraction_in_goal)

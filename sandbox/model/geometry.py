@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 from shapely.geometry import Polygon
 
 
@@ -105,10 +104,23 @@ def distance_to_outline(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
     v = np.ascontiguousarray(vertices, dtype=float).reshape(-1, 2)
     if len(v) == 0:
         return np.full(len(p), np.inf)
-    return _min_distance_to_closed_polyline(p, v)
+    return _compiled_min_distance()(p, v)
 
 
-@njit(cache=True)
+_compiled = None
+
+
+def _compiled_min_distance():
+    """The compiled loop, compiled (or loaded from numba's cache) at its first use: importing numba
+    took a quarter of the web server's start, and the server only draws."""
+    global _compiled
+    if _compiled is None:
+        from numba import njit
+
+        _compiled = njit(cache=True)(_min_distance_to_closed_polyline)
+    return _compiled
+
+
 def _min_distance_to_closed_polyline(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
     m, n = points.shape[0], vertices.shape[0]
     out = np.empty(m)

@@ -8,7 +8,7 @@ dropdown always shows the case that runs, or ``custom``."""
 
 from __future__ import annotations
 
-import functools
+import operator
 from typing import Any, Callable
 
 import viser
@@ -17,7 +17,6 @@ from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.snapshot import Snapshot, running_case
 from sandbox.model.config import CASES, STRATEGIES, param
 from sandbox.model.notes import strategy_effect_note
-from sandbox.model.simulation import Simulation
 from sandbox.shapes import shape_vertices
 
 #: What the Paper case dropdown shows when the goal, the strategies or the outline are not one of the seven.
@@ -91,7 +90,7 @@ class StrategiesFolder:
         self.outline.value = outline
         self.use_outline(outline, client)
         values = {s.name: float(strategies.get(s.name, 0.0)) for s in STRATEGIES}
-        self.runner.post(functools.partial(Simulation.set_strategies, **values),
+        self.runner.post(operator.methodcaller("set_strategies", **values),
                          on_error=lambda exc: notify_error(client, "Strategies not used", str(exc)))
         self._show_strategies(values)
         self._on_change(f"outline {outline}, " + ", ".join(f"{k} {v:g}" for k, v in values.items() if v > 0))
@@ -154,7 +153,7 @@ class StrategiesFolder:
         def failed(exc: BaseException) -> None:
             notify_error(client, "Strategy not changed", str(exc))
 
-        self.runner.post(functools.partial(Simulation.set_strategies, **{name: value}), on_error=failed)
+        self.runner.post(operator.methodcaller("set_strategies", **{name: value}), on_error=failed)
         self._on_change(f"{name} {value:g}")
         chase = float(self.controls["chase"][1].value) if self.controls["chase"][0].value else 0.0
         snap = self.runner.latest
