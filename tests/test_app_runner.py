@@ -259,6 +259,13 @@ def process_runner():
     r.stop()
 
 
+def sandbox_modules_loaded(sim) -> set[str]:
+    """The modules loaded in the process that runs ``sim`` (a module-level function: it pickles)."""
+    import sys
+
+    return {name for name in sys.modules if name.startswith("sandbox")}
+
+
 def test_the_simulation_runs_in_another_process(process_runner):
     import functools
     import os
@@ -283,6 +290,33 @@ def test_the_simulation_runs_in_another_process(process_runner):
     wait_until(lambda: [s.step for s in r.series()] == [0])
     r.set_playing(True)
     wait_until(lambda: len(r.series()) >= 2)
+
+
+def test_ctrl_c_is_for_the_app_not_its_simulation_process(process_runner):
+    """A terminal's Ctrl-C reaches the whole process group: the simulation process goes on (the app
+    stops it), instead of dying with a KeyboardInterrupt traceback."""
+    import os
+    import signal
+
+    r = process_runner
+    os.kill(r.process.pid, signal.SIGINT)
+    step = r.latest.step
+    wait_until(lambda: r.latest.step > step + 10)
+    assert r.process.is_alive()
+
+
+def test_simulation_processes_are_forked_from_one_warmed_up_server(process_runner):
+    """On Linux the app's simulation processes come from multiprocessing's fork server, which
+    imported the model and loaded the compiled kernels once (sandbox.warm)."""
+    import sys
+
+    from sandbox.processes import simulation_context
+
+    if sys.platform != "linux":
+        pytest.skip("the fork server is what Linux offers; elsewhere a fresh interpreter starts")
+    assert simulation_context().get_start_method() == "forkserver"
+    assert process_runner.process._popen.__class__.__module__ == "multiprocessing.popen_forkserver"
+    assert "sandbox.warm" in process_runner.call(sandbox_modules_loaded)
 
 
 def test_a_crashed_simulation_process_is_reported_and_restarted(process_runner):

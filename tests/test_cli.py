@@ -140,6 +140,16 @@ def test_the_installed_commands_run_in_their_own_processes():
     assert bad.returncode == 2 and "whole number" in bad.stderr and "Traceback" not in bad.stderr
 
 
+def test_the_web_server_imports_no_simulation_engine():
+    """The server draws; its simulation runs in a process of its own. Importing numba (and the scipy
+    it pulls in), pymunk or matplotlib took a third of its start (docs/code.md)."""
+    heavy = ("numba", "scipy", "pymunk", "matplotlib")
+    code = f"import sys, sandbox.app.server; print([m for m in {heavy!r} if m in sys.modules])"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+
+
 @pytest.mark.parametrize("name, text", [("deep.json", "[" * 100_000 + "]" * 100_000),
                                         ("huge.txt", "0 0\n1e308 0\n0 1e308\n"),
                                         ("sliver.txt", "-120 0\n120 0\n0 0.3\n")])  # 50 m long at 20 boxes

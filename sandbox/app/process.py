@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import itertools
 import logging
-import multiprocessing
 import os
 import queue
+import signal
 import threading
 import time
 import traceback
@@ -39,6 +39,7 @@ from sandbox.app.snapshot import Snapshot
 from sandbox.model import watchdog
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
+from sandbox.processes import simulation_context
 
 #: How long the parent waits for a new child's first snapshot (imports, numba cache, world building).
 START_TIMEOUT = 120.0
@@ -93,7 +94,7 @@ class ProcessRunner(FramePublisher):
         self._stop = threading.Event()
         self._ready_lock = threading.Lock()
         self._started = False
-        self._context = multiprocessing.get_context("spawn")  # fresh interpreter, same on every OS
+        self._context = simulation_context()  # a fork of a warmed-up server, else a fresh interpreter
         #: The goal as last given (a name, or vertices as drawn): a restarted child gets it back unchanged,
         #: since the program's largest outline depends on the size a shape was drawn at.
         self._shape = shape
@@ -422,6 +423,9 @@ class ProcessRunner(FramePublisher):
 # ------------------------------------------------------------------ child
 def _child_main(settings: dict, commands: Any, send: Any) -> None:
     """The simulation process: an ordinary Runner, driven by the queue."""
+    # Ctrl-C in a terminal reaches every process of the group: it is for the app, which stops this
+    # one (before, each Ctrl-C printed this process's KeyboardInterrupt traceback under "stopped").
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     runner = Runner(**settings)
     sent = {"world": None, "count": 0}
     lock = threading.Lock()

@@ -16,7 +16,6 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextlib
 import math
-import multiprocessing
 import os
 import threading
 from dataclasses import dataclass, field
@@ -25,6 +24,7 @@ from typing import Callable, Iterator
 import numpy as np
 
 from sandbox.model.config import STRATEGY_DEFAULTS, Config
+from sandbox.processes import simulation_context
 
 #: Seeds and world steps of one candidate's trials (about a third of a 100,000-step run's cycles).
 SEEDS, STEPS = 2, 30_000
@@ -136,7 +136,7 @@ def advise(config: Config, vertices: np.ndarray | None, *, seeds: int = SEEDS, s
 
 @contextlib.contextmanager
 def _pool(workers: int) -> Iterator[cf.ProcessPoolExecutor]:
-    pool = cf.ProcessPoolExecutor(max_workers=max(1, workers), mp_context=multiprocessing.get_context("spawn"),
+    pool = cf.ProcessPoolExecutor(max_workers=max(1, workers), mp_context=simulation_context(),
                                   initializer=_nice_worker)
     try:
         yield pool

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
-import multiprocessing
 import signal
 import sys
 import time
@@ -15,6 +14,7 @@ from typing import Callable, Iterator
 
 from sandbox.experiments.storage import ResultStore
 from sandbox.experiments.trials import SweepError, Trial, run_sweep_trial
+from sandbox.processes import simulation_context
 
 ATTEMPTS = 2  # a failing trial is retried once
 DASK_CONNECT_TIMEOUT = "15s"
@@ -28,8 +28,8 @@ def _worker_init() -> None:
 
 @contextlib.contextmanager
 def local_executor(workers: int) -> Iterator[cf.Executor]:
-    # spawn: fresh interpreters, no inherited threads or pymunk state, same on every OS.
-    ex = cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+    # No inherited threads or pymunk state: forks of the warmed-up fork server, else fresh interpreters.
+    ex = cf.ProcessPoolExecutor(max_workers=workers, mp_context=simulation_context(),
                                 initializer=_worker_init)
     try:
         yield ex

@@ -13,7 +13,6 @@ share of the session, by name.
 from __future__ import annotations
 
 import concurrent.futures as cf
-import multiprocessing
 import threading
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -23,6 +22,7 @@ import viser
 from sandbox.app.panel.common import notify_error
 from sandbox.app.snapshot import LAMP_PROGRAM, Snapshot
 from sandbox.model.challenge import ROUND_SEED, ROUND_STEPS, paper_share
+from sandbox.processes import simulation_context
 
 #: At most this many letters of a player's name are kept.
 NAME_LENGTH = 24
@@ -118,7 +118,7 @@ class ChallengeFolder:
         config, seed, shape = spec
 
         def run() -> None:
-            pool = cf.ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+            pool = cf.ProcessPoolExecutor(1, mp_context=simulation_context())
             self._pool = pool
             try:
                 paper = pool.submit(paper_share, config, seed, r.at_step, shape).result()
