@@ -644,8 +644,9 @@ def test_compare_mode_from_the_panel_and_learn(app, page, tmp_path):
     wait_until(lambda: app.comparison.view.handles["caption"].text.startswith("star-switch (star + switch 0.25) | step"),
                what="the second world's caption")
     click_button(page, "Pause")
-    wait_until(lambda: not app.runner.playing and app.runner.latest.step == partner.latest.step
-               and not partner.latest.playing, what="both paused on one step")
+    # Paused, both run on to the lockstep's target: equal steps short of it are only a moment on the way.
+    wait_until(lambda: not app.runner.playing and not partner.latest.playing
+               and app.runner.latest.step == partner.latest.step == app.lockstep.target, what="both paused on one step")
     paused = app.runner.latest.step
     click_button(page, "Step")
     every = app.runner.latest.world_config.update_every

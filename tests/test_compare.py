@@ -118,7 +118,7 @@ def test_playing_worlds_stay_within_two_frames_and_pause_on_the_same_step(pair):
         gaps.append(abs(main.latest.step - partner.latest.step))
     assert main.latest.step > 50 and max(gaps) <= lead + main.steps_per_frame
     lockstep.set_playing(False)
-    wait_until(lambda: main.latest.step == partner.latest.step == lockstep._target and not main.latest.playing,
+    wait_until(lambda: main.latest.step == partner.latest.step == lockstep.target and not main.latest.playing,
                what="both paused on the target step")
     paused_at = main.latest.step
     lockstep.step_once(10)
@@ -295,4 +295,4 @@ def test_a_refused_reset_leaves_both_worlds_going_on_in_step(pair):
     wait_until(lambda: partner.latest.step > step + 40, what="the worlds to go on")
     assert partner.latest.world_key == key  # the compared world was not rebuilt alone
     lockstep.set_playing(False)
-    wait_until(lambda: main.latest.step == partner.latest.step and not main.latest.playing, what="paused in step")
+    wait_until(lambda: main.latest.step == partner.latest.step == lockstep.target and not main.latest.playing, what="paused in step")

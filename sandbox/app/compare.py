@@ -107,6 +107,11 @@ class Lockstep:
     def playing(self) -> bool:
         return self.main.playing
 
+    @property
+    def target(self) -> int:
+        """The step both worlds may reach; paused, the step both stop on."""
+        return self._target
+
     def set_playing(self, playing: bool) -> None:
         with self._lock:
             if self.partner is None:
