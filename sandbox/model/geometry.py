@@ -112,7 +112,8 @@ _compiled = None
 
 def _compiled_min_distance():
     """The compiled loop, compiled (or loaded from numba's cache) at its first use: importing numba
-    took a quarter of the web server's start, and the server only draws."""
+    took a quarter of the web server's start, and the server needs the loop only once a drawn goal
+    is previewed (its outlines)."""
     global _compiled
     if _compiled is None:
         from numba import njit
