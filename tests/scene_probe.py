@@ -93,6 +93,11 @@ def stop(page: Any) -> list[dict]:
     return page.evaluate("() => { window.__sandboxProbe.recording = false; return window.__sandboxProbe.samples; }")
 
 
+def samples_taken(page: Any) -> int:
+    """How many frames :func:`start` has recorded so far."""
+    return int(page.evaluate("() => window.__sandboxProbe.samples.length"))
+
+
 def frames_rendered(page: Any) -> int:
     return int(page.evaluate("() => window.__sandboxProbe.frames"))
 
