@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from tests.browsing import BROWSER_MARKS
-from tests.waiting import frames_pass, paused_step, wait_until
+from tests.waiting import frames_pass, paused_step, wait_until, wait_until_steady
 
 pytestmark = BROWSER_MARKS
 
@@ -551,6 +551,10 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
     click_button(page, "Be the light")
     wait_until(lambda: runner.latest.program == LAMP_PROGRAM, what="the lamp")
     page.get_by_role("button", name="Give the light back").wait_for(timeout=10_000)
+    # The two clicks below tell pixels from metres: a camera still easing into place skews them (on a
+    # loaded machine their y once differed by 1.8 m), so wait for every page's camera to rest.
+    wait_until_steady(lambda: [tuple(np.round(c.camera.position, 2)) for c in app.server.get_clients().values()],
+                      quiet=0.5, timeout=30)
     box = scene_canvas(page).bounding_box()
     cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
 
