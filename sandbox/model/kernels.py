@@ -26,6 +26,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from sandbox.model import body_memory
 from sandbox.model.robots import PHOTOCELLS
 
 
@@ -259,4 +260,5 @@ def warm_up() -> None:
     ids = np.array([7, 5], dtype=np.uintp)
     scatter_by_id(ids, np.zeros((2, 6)), np.zeros(2, dtype=np.uintp), np.zeros(2, dtype=np.intp), np.sort(ids),
                   np.argsort(ids), np.zeros((2, 6)))
+    body_memory.layout_holds()  # compiles (or loads) body_memory.read_rows on a real body
     _warm = True

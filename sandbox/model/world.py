@@ -1,8 +1,10 @@
 """The pymunk world (SPEC §2): arena wall, box-only construction wall, robots and boxes.
 
-State moves between pymunk and numpy in bulk through ``pymunk.batch``; no
-per-body Python loop runs per step. Bodies are added robots first, then
-boxes, and ``pymunk.batch`` reports them in that order.
+State moves between pymunk and numpy in bulk, robots first, then boxes, then
+the space's static body; no per-body Python loop runs per step. It is read
+straight from Chipmunk's memory in one compiled loop where that is checked
+to hold (:mod:`sandbox.model.body_memory`), else through ``pymunk.batch``;
+velocities are written through ``pymunk.batch`` or Chipmunk's setters.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import pymunk
 import pymunk.batch as batch
 from pymunk._chipmunk_cffi import lib as chipmunk
 
-from sandbox.model import geometry, kernels, undamped
+from sandbox.model import body_memory, geometry, kernels, undamped
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.goal import Goal
 
@@ -153,7 +155,11 @@ class World:
         self._velocity_buffer = batch.Buffer()
         self._velocity_buffer.set_float_buf(self.velocities.reshape(-1))
         self._velocity_order = np.zeros_like(self.velocities)  # velocities in pymunk.batch's order
-        self.read()
+        self._read_batch()
+        #: Each body's ``cpBody`` address, row by row, where the state is read from memory
+        #: (see :mod:`sandbox.model.body_memory`); None: read through pymunk.batch. The 'continuous'
+        #: motor pushes velocities through the batch, in the batch's order, which only its read keeps.
+        self._addresses = self._memory_addresses(bodies) if config.motor == "set-once" else None
 
     # -- construction -----------------------------------------------------
     def _make_space(self) -> pymunk.Space:
@@ -240,8 +246,24 @@ class World:
         return bodies
 
     # -- bulk state -------------------------------------------------------
+    def _memory_addresses(self, bodies: list[pymunk.Body]) -> np.ndarray | None:
+        """The bodies' addresses if reading them from memory gives, bit for bit, what pymunk.batch
+        just read (checked once per world: the layout is not pymunk's API)."""
+        if not body_memory.layout_holds():
+            return None
+        addresses = body_memory.addresses(bodies)
+        from_memory = np.empty_like(self.state)
+        body_memory.read_rows(addresses, from_memory)
+        return addresses if np.array_equal(from_memory.view(np.uint64), self.state.view(np.uint64)) else None
+
     def read(self) -> np.ndarray:
         """Refresh :attr:`state`: rows (x, y, angle, vx, vy, w): robots, boxes, static body."""
+        if self._addresses is not None:
+            body_memory.read_rows(self._addresses, self.state)
+            return self.state
+        return self._read_batch()
+
+    def _read_batch(self) -> np.ndarray:
         self._buffer.clear()
         if self.config.sleep_time <= 0:
             batch.get_space_bodies(self.space, _POSE, self._buffer)
