@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from sandbox.model import lights
 from sandbox.model.config import Config
 from sandbox.model.controller import Controller
 from sandbox.model.goal import make_goal
@@ -160,3 +161,26 @@ def test_points_outside_arena_are_clamped():
     outside = field.sample(np.array([[-5.0, 0.5]]))
     assert outside[0] == pytest.approx(inside[0])
     assert math.isfinite(outside[0])
+
+
+def test_compiled_block_adds_equal_one_numpy_add_per_light_bit_for_bit():
+    """Overlapping blocks, in an order that is not sorted, with weights 1, -1 and others (a dimmed
+    light takes the float32 product first, as numpy's ``block += float32(w) * kernel`` does)."""
+    rng = np.random.default_rng(7)
+    kernel = rng.random((6, 6), dtype=np.float32)
+    values = rng.random((20, 20), dtype=np.float32)
+    x0, y0 = np.array([9, 2, 5, 2, 12]), np.array([3, 4, 5, 4, 0])
+    weights = np.array([1.0, -1.0, 0.3, 1.0 / 3.0, -2.5])
+    expected = values.copy()
+    for x, y, w in zip(x0, y0, weights):
+        block = expected[x:x + 6, y:y + 6]
+        if w == 1.0:
+            np.add(block, kernel, out=block)
+        elif w == -1.0:
+            np.subtract(block, kernel, out=block)
+        else:
+            block += np.float32(w) * kernel
+    lights._compiled_add_blocks()(values, kernel, x0, y0, weights)
+    assert np.array_equal(values.view(np.uint32), expected.view(np.uint32))
+    lights.add_blocks(values, kernel, x0[:0], y0[:0], weights[:0])  # no light: nothing to do
+    assert np.array_equal(values.view(np.uint32), expected.view(np.uint32))

@@ -26,7 +26,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from sandbox.model import body_memory
+from sandbox.model import body_memory, lights
 from sandbox.model.robots import PHOTOCELLS
 
 
@@ -261,4 +261,6 @@ def warm_up() -> None:
     scatter_by_id(ids, np.zeros((2, 6)), np.zeros(2, dtype=np.uintp), np.zeros(2, dtype=np.intp), np.sort(ids),
                   np.argsort(ids), np.zeros((2, 6)))
     body_memory.layout_holds()  # compiles (or loads) body_memory.read_rows on a real body
+    lights._compiled_add_blocks()(np.zeros((2, 2), dtype=np.float32), np.ones((1, 1), dtype=np.float32),
+                                  np.zeros(1, dtype=np.intp), np.zeros(1, dtype=np.intp), np.ones(1))
     _warm = True

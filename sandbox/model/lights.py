@@ -181,6 +181,54 @@ class _AxisLayout:
         return row, g - i
 
 
+def add_blocks(values: np.ndarray, kernel: np.ndarray, x0: np.ndarray, y0: np.ndarray,
+               weights: np.ndarray) -> None:
+    """``values[x0[i]:, y0[i]:][:w, :w] += weights[i] * kernel`` for each light i in turn: what one
+    numpy add per light computes, bit for bit (the same float32 operations, in the same order for
+    each sample; a weight of 1 or -1 adds or subtracts the kernel as it is).
+
+    Compiled (:func:`_compiled_add_blocks`), it goes row by row of ``values``, adding every light's
+    kernel row there while the row stays in the processor's cache: a light's block is 240 x 240
+    samples (230 KB), a pattern change adds 55 lights on average, and adding them block by block
+    streamed each block through memory (33 µs a light)."""
+    width = kernel.shape[0]
+    if x0.shape[0] == 0:
+        return
+    first, last = x0.min(), x0.max() + width
+    for x in range(first, last):
+        for i in range(x0.shape[0]):
+            r = x - x0[i]
+            if r < 0 or r >= width:
+                continue
+            # A slice, indexed from 0 by the loop: numba then needs no negative-index check and the
+            # loop vectorises (indexing the whole row at y + j ran 5x slower).
+            segment, k, w = values[x, y0[i]:y0[i] + width], kernel[r], weights[i]
+            if w == 1.0:
+                for j in range(width):
+                    segment[j] = segment[j] + k[j]
+            elif w == -1.0:
+                for j in range(width):
+                    segment[j] = segment[j] - k[j]
+            else:
+                scaled = np.float32(w)
+                for j in range(width):
+                    segment[j] = segment[j] + scaled * k[j]
+
+
+_compiled = None
+
+
+def _compiled_add_blocks():
+    """:func:`add_blocks` compiled (or loaded from numba's cache) at its first use: the web server
+    imports this module, never changes a pattern, and does not load numba."""
+    global _compiled
+    if _compiled is None:
+        from numba import njit
+
+        _compiled = njit(cache=True)(add_blocks)
+    return _compiled
+
+
 class LightField:
     """Light intensities and the sampled luminosity field they produce."""
 
@@ -232,24 +280,18 @@ class LightField:
         return True
 
     def _add_lights(self, indices: np.ndarray, weights: np.ndarray) -> None:
-        ax, k = self.axis, self.kernel
-        width = k.shape[0]
+        """Add ``weights[ix, iy]`` times the kernel block of each light in ``indices``, in that order."""
+        x0, y0 = self._block_starts(indices)
+        _compiled_add_blocks()(self._values, self.kernel, x0, y0, weights[indices[:, 0], indices[:, 1]])
+
+    def _block_starts(self, indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where each light's block starts in the sample array (x row, y column)."""
+        ax = self.axis
         # Light column lx reaches layout cells lx - t for t in light_offsets
         # (largest t first), i.e. starting at cell lx - t_max.
         start_cell = -int(ax.light_offsets.max()) - ax.first_cell + ax.pad
-        values = self._values
-        for ix, iy in indices:
-            x0 = (ix + start_cell) * ax.per_cell
-            y0 = (iy + start_cell) * ax.per_cell
-            block = values[x0 : x0 + width, y0 : y0 + width]
-            w = weights[ix, iy]
-            # Lights switch on and off far more often than they dim: no temporary then.
-            if w == 1.0:
-                np.add(block, k, out=block)
-            elif w == -1.0:
-                np.subtract(block, k, out=block)
-            else:
-                block += self.DTYPE(w) * k
+        starts = (np.asarray(indices, dtype=np.intp).reshape(-1, 2) + start_cell) * ax.per_cell
+        return np.ascontiguousarray(starts[:, 0]), np.ascontiguousarray(starts[:, 1])
 
     def sample(self, points: np.ndarray) -> np.ndarray:
         """Luminosity at floor points (..., 2) by bilinear interpolation within

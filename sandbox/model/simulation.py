@@ -245,10 +245,13 @@ class Simulation:
             pattern = check_pattern(pattern, self.controller.intensities.shape, who)
         self.lights.set_intensities(pattern)
         self._pattern_sum = float(np.sum(pattern))
+        self._pattern_seen = _read_only(self.lights.intensities)  # what observations show, until the next
 
     def _observation(self) -> Observation:
-        return Observation(self.steps_done, self.goal, self._centres, _read_only(self.lights.intensities),
-                           self.senses, self._sensed)
+        # Asked every step by the paper's controller: the pattern's view is made when it changes.
+        # The senses are asked each time: chase's change with its strategy.
+        return Observation(self.steps_done, self.goal, self._centres, self._pattern_seen, self.senses,
+                           self._sensed)
 
     def _sensed(self, name: str) -> np.ndarray:
         return np.array(getattr(self, name))  # a copy: the program cannot move anything
