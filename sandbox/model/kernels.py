@@ -44,11 +44,24 @@ class SampleLayout(NamedTuple):
     length: int  # samples per side of the field array
 
 
-def sample_layout(lights) -> SampleLayout:
-    """The compiled sampler's view of a :class:`sandbox.lights.LightField`."""
+# The kernels take their layout and parameters packed in one float64 array each, and unpack them
+# into the NamedTuples above inside compiled code: numba's dispatcher checks an array's type in C,
+# but a NamedTuple's in Python, field by field (2.8 µs a step for the two).
+
+
+def sample_layout(lights) -> np.ndarray:
+    """The compiled sampler's view of a :class:`sandbox.lights.LightField`, packed (see :func:`layout_of`)."""
     ax = lights.axis
-    return SampleLayout(float(ax.limit), float(ax.origin), 1.0 / ax.pitch, float(ax.pitch),
-                        ax.knots_x, ax.knots_g, int(ax.per_cell), int(ax.row_base), int(ax.length))
+    return np.array([float(ax.limit), float(ax.origin), 1.0 / ax.pitch, float(ax.pitch), ax.per_cell, ax.row_base,
+                     ax.length, len(ax.knots_x), *ax.knots_x, *ax.knots_g])
+
+
+@njit(cache=True, inline="always")
+def layout_of(packed):
+    """The :class:`SampleLayout` packed by :func:`sample_layout`."""
+    m = int(packed[7])
+    return SampleLayout(packed[0], packed[1], packed[2], packed[3], packed[8:8 + m], packed[8 + m:8 + 2 * m],
+                        int(packed[4]), int(packed[5]), int(packed[6]))
 
 
 @njit(cache=True, inline="always")
@@ -116,13 +129,20 @@ class RobotParams(NamedTuple):
     signed_turn_cost: bool
 
 
-def robot_params(config) -> RobotParams:
-    """The kernels' view of a :class:`sandbox.config.Config`."""
+def robot_params(config) -> np.ndarray:
+    """The kernels' view of a :class:`sandbox.config.Config`, packed (see :func:`params_of`)."""
     cells = PHOTOCELLS[config.photocells]
-    return RobotParams(cells.angles, float(config.sensor_offset * cells.reach), cells.drive,
-                       cells.turn[config.steering], float(config.k_drive), float(config.k_turn),
-                       float(config.eta_in), float(config.metabolic), float(config.eta_out),
-                       float(config.capacity), config.energy_turn_cost == "signed")
+    return np.array([*cells.angles, *cells.drive, *cells.turn[config.steering],
+                     config.sensor_offset * cells.reach, config.k_drive, config.k_turn, config.eta_in,
+                     config.metabolic, config.eta_out, config.capacity, config.energy_turn_cost == "signed"],
+                    dtype=float)
+
+
+@njit(cache=True, inline="always")
+def params_of(packed):
+    """The :class:`RobotParams` packed by :func:`robot_params` (four photocells)."""
+    return RobotParams(packed[0:4], packed[12], packed[4:8], packed[8:12], packed[13], packed[14], packed[15],
+                       packed[16], packed[17], packed[18], packed[19] != 0.0)
 
 
 @njit(cache=True)
@@ -153,8 +173,10 @@ def robot_step_continuous(state, n_robots, due, field, lay, rp, velocity_scale, 
     ``state`` rows are (x, y, angle, vx, vy, w) for robots, then boxes, then
     the static body; ``velocities`` receives (vx, vy, w) for every row:
     robots' new ones (divided by the space's damping factor, so they arrive
-    unchanged) and everything else's current ones, ready for pymunk.batch.
+    unchanged) and everything else's current ones, ready for pymunk.batch. ``lay`` and ``rp`` are
+    packed by :func:`sample_layout` and :func:`robot_params`.
     """
+    lay, rp = layout_of(lay), params_of(rp)
     _refresh_commands(state, due, field, lay, rp, command, readings)
     for r in range(n_robots):
         lum = sample_point(state[r, 0], state[r, 1], field, lay)
@@ -186,8 +208,10 @@ def robot_step_set_once(state, n_robots, due, field, lay, rp, command, readings,
     Every robot then pays for its actual motion (see
     :func:`sandbox.robots.charge_step_actual`) and a robot left with no
     charge is stopped. ``state`` is updated to match; each velocity to hand
-    to pymunk is a row (robot, vx, vy, w) of ``writes``. Returns their number.
+    to pymunk is a row (robot, vx, vy, w) of ``writes``. Returns their number. ``lay`` and ``rp``
+    are packed by :func:`sample_layout` and :func:`robot_params`.
     """
+    lay, rp = layout_of(lay), params_of(rp)
     _refresh_commands(state, due, field, lay, rp, command, readings)
     n = 0
     for d in due:
@@ -246,12 +270,13 @@ def warm_up() -> None:
     global _warm
     if _warm:
         return
-    lay = SampleLayout(4.0, 0.0, 1.0, 1.0, np.array([0.0, 1.0]), np.array([0.0, 2.0]), 3, 4, 24)
+    lay = np.array([4.0, 0.0, 1.0, 1.0, 3, 4, 24, 2, 0.0, 1.0, 0.0, 2.0])  # as sample_layout packs it
     field = np.zeros(24 * 24, dtype=np.float32)
     state = np.zeros((3, 6))
     for signed in (False, True):
         cells = PHOTOCELLS["axes"]
-        rp = RobotParams(cells.angles, 0.1, cells.drive, cells.turn["sides"], 5.0, 20.0, 0.4, 0.01, 0.1, 20.0, signed)
+        rp = np.array([*cells.angles, *cells.drive, *cells.turn["sides"], 0.1, 5.0, 20.0, 0.4, 0.01, 0.1, 20.0, signed],
+                      dtype=float)  # as robot_params packs it
         due = np.zeros(1, dtype=np.intp)
         robot_step_continuous(state, 1, due, field, lay, rp, 1.0, np.zeros((1, 2)), np.zeros((1, 4)), np.zeros(1),
                               np.zeros((1, 2)), np.zeros((3, 3)))
