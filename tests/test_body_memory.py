@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pymunk
+from pymunk._chipmunk_cffi import lib
 
 from sandbox.model import body_memory
 from sandbox.model.config import Config
@@ -75,3 +76,35 @@ def test_the_continuous_motor_reads_through_the_batch():
     assert sim.world._addresses is None
     sim.step(200)
     assert not math.isnan(sim.world.state.sum())
+
+
+def test_compiled_setters_set_and_wake_as_chipmunks_setters_through_cffi():
+    """Each row sets a velocity and an angular velocity, in turn (a body twice: the last row wins),
+    and wakes a sleeping body, as the same setters called through cffi do."""
+    assert body_memory.SETTERS is not None  # x86-64 or AArch64, as the project's machines
+
+    def world() -> tuple[pymunk.Space, list[pymunk.Body]]:
+        space = pymunk.Space()
+        space.sleep_time_threshold = 0.05
+        bodies = [pymunk.Body(1.0, 1.0) for _ in range(3)]
+        for k, body in enumerate(bodies):
+            body.position = (3.0 * k, 0.0)
+            space.add(body, pymunk.Circle(body, 0.5))
+        for _ in range(20):
+            space.step(0.01)
+        assert all(body.is_sleeping for body in bodies)
+        return space, bodies
+
+    writes = np.array([[2, 0.5, -1.0 / 3.0, 0.25], [0, 1e-3, 2.0, -7.0], [2, 1.5, 0.0, -0.125]])
+    space, bodies = world()
+    body_memory.set_velocities(body_memory.addresses(bodies), writes, 3, *body_memory.SETTERS)
+    space_c, bodies_c = world()
+    for row, vx, vy, w in writes.tolist():
+        body = bodies_c[int(row)]._body
+        lib.cpBodySetVelocity(body, (vx, vy))
+        lib.cpBodySetAngularVelocity(body, w)
+    for compiled, through_cffi in zip(bodies, bodies_c):
+        assert (compiled.velocity, compiled.angular_velocity, compiled.is_sleeping) == \
+            (through_cffi.velocity, through_cffi.angular_velocity, through_cffi.is_sleeping)
+    assert [b.velocity for b in bodies] == [(1e-3, 2.0), (0.0, 0.0), (1.5, 0.0)]
+    assert [b.is_sleeping for b in bodies] == [False, True, False]

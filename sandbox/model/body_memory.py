@@ -1,4 +1,5 @@
-"""Reading every body's pose and velocity straight from Chipmunk's memory, in one compiled loop.
+"""Reading every body's pose and velocity straight from Chipmunk's memory, in one compiled loop;
+setting robots' velocities through Chipmunk's setters from compiled code.
 
 ``World.read`` needs, each step, the position, angle, velocity and angular
 velocity of all 700 bodies. ``pymunk.batch.get_space_bodies`` walks the
@@ -21,6 +22,15 @@ it against pymunk's own getters on a body whose centre of gravity is off its
 origin (where the position is not the field ``p``). Anything else reads
 through ``pymunk.batch``, as before; ``World`` also compares the two reads
 once, when a world is built.
+
+A robot whose command is refreshed (4 a step in a trial, 40 at 10x the
+population) gets its velocity through ``cpBodySetVelocity`` and
+``cpBodySetAngularVelocity``, which also wake it. From Python, through cffi,
+that cost 1.4 µs a robot; :func:`set_velocities` calls the same two C
+functions from compiled code, by their addresses. ``cpBodySetVelocity``
+takes its vector (a struct of two doubles) by value, which on x86-64 System V
+and AArch64 travels exactly like two doubles, as :mod:`undamped` relies on
+too; elsewhere the setters are called through cffi.
 """
 
 from __future__ import annotations
@@ -33,7 +43,9 @@ import pymunk
 from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
-from pymunk._chipmunk_cffi import ffi
+from pymunk._chipmunk_cffi import ffi, lib
+
+from sandbox.model.undamped import _ABI_OK
 
 # Byte offsets of the fields in struct cpBody (Munk2D, 64-bit): two function
 # pointers, m, m_inv, i, i_inv (doubles), cog, p, v, f (vectors), a, w, t, then
@@ -53,6 +65,56 @@ def _load_double(typingctx, address):
         return builder.load(builder.inttoptr(args[0], ir.DoubleType().as_pointer()))
 
     return types.float64(address), codegen
+
+
+@intrinsic
+def _call_with_two_doubles(typingctx, function, body, x, y):
+    """Call the C function ``void f(void *body, double x, double y)`` at address ``function``."""
+    if not all(isinstance(t, types.Integer) for t in (function, body)):
+        return None
+
+    def codegen(context, builder, signature, args):
+        pointer = ir.IntType(8).as_pointer()
+        kind = ir.FunctionType(ir.VoidType(), [pointer, ir.DoubleType(), ir.DoubleType()])
+        builder.call(builder.inttoptr(args[0], kind.as_pointer()), [builder.inttoptr(args[1], pointer), args[2], args[3]])
+        return context.get_dummy_value()
+
+    return types.void(function, body, types.float64, types.float64), codegen
+
+
+@intrinsic
+def _call_with_double(typingctx, function, body, x):
+    """Call the C function ``void f(void *body, double x)`` at address ``function``."""
+    if not all(isinstance(t, types.Integer) for t in (function, body)):
+        return None
+
+    def codegen(context, builder, signature, args):
+        pointer = ir.IntType(8).as_pointer()
+        kind = ir.FunctionType(ir.VoidType(), [pointer, ir.DoubleType()])
+        builder.call(builder.inttoptr(args[0], kind.as_pointer()), [builder.inttoptr(args[1], pointer), args[2]])
+        return context.get_dummy_value()
+
+    return types.void(function, body, types.float64), codegen
+
+
+def _address_of(function: str) -> int:
+    return int(ffi.cast("uintptr_t", ffi.addressof(lib, function)))
+
+
+#: Addresses of Chipmunk's velocity setters, for :func:`set_velocities` (None where the vector's
+#: passing is not known to match two doubles).
+SETTERS = (_address_of("cpBodySetVelocity"), _address_of("cpBodySetAngularVelocity")) if _ABI_OK else None
+
+
+@njit(cache=True)
+def set_velocities(addresses, writes, count, set_velocity, set_angular_velocity):
+    """For each of the first ``count`` rows (row, vx, vy, w) of ``writes``, in turn, set the velocity
+    and then the angular velocity of the body at ``addresses[row]``, with Chipmunk's setters (at
+    addresses ``set_velocity`` and ``set_angular_velocity``: :data:`SETTERS`)."""
+    for n in range(count):
+        body = addresses[int(writes[n, 0])]
+        _call_with_two_doubles(set_velocity, body, writes[n, 1], writes[n, 2])
+        _call_with_double(set_angular_velocity, body, writes[n, 3])
 
 
 @njit(cache=True)

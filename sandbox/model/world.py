@@ -148,6 +148,7 @@ class World:
         self._rows = np.arange(len(bodies))
         self._last_ids = np.zeros(len(bodies), dtype=np.uintp)
         self._robot_pointers = [b._body for b in self.robot_bodies]
+        self._robot_addresses = body_memory.addresses(self.robot_bodies)
         self.state = np.zeros((self.n_robots + self.n_boxes + 1, 6))
         #: Velocities for the next step, (vx, vy, w) per row of :attr:`state`;
         #: pymunk reads them straight from this array's memory.
@@ -289,8 +290,12 @@ class World:
     def set_robot_velocities(self, writes: np.ndarray, count: int) -> None:
         """Set the velocity of a few robots: ``writes[:count]`` rows are
         (robot index, vx, vy, angular velocity). Straight through Chipmunk's
-        setters (which wake the body, as Box2D's do for a moving one): a
-        third of the cost of pymunk's properties, on every step."""
+        setters (which wake the body, as Box2D's do for a moving one), called
+        from compiled code where :mod:`body_memory` can (see its docstring),
+        else through cffi (a third of the cost of pymunk's properties)."""
+        if body_memory.SETTERS is not None:
+            body_memory.set_velocities(self._robot_addresses, writes, count, *body_memory.SETTERS)
+            return
         pointers = self._robot_pointers
         for index, vx, vy, w in writes[:count].tolist():
             body = pointers[int(index)]
