@@ -7,5 +7,5 @@ from sandbox.app import process  # noqa: F401  (the child's entry point, and the
 from sandbox.model import kernels, simulation, undamped  # noqa: F401
 
 kernels.warm_up()
-if undamped._ABI_OK:
+if undamped.VECT_AS_TWO_DOUBLES:
     undamped._compiled_velocity_function()  # same address in every fork: Chipmunk is loaded here

@@ -45,7 +45,7 @@ from numba import njit, types
 from numba.extending import intrinsic
 from pymunk._chipmunk_cffi import ffi, lib
 
-from sandbox.model.undamped import _ABI_OK
+from sandbox.model.undamped import VECT_AS_TWO_DOUBLES
 
 # Byte offsets of the fields in struct cpBody (Munk2D, 64-bit): two function
 # pointers, m, m_inv, i, i_inv (doubles), cog, p, v, f (vectors), a, w, t, then
@@ -76,7 +76,8 @@ def _call_with_two_doubles(typingctx, function, body, x, y):
     def codegen(context, builder, signature, args):
         pointer = ir.IntType(8).as_pointer()
         kind = ir.FunctionType(ir.VoidType(), [pointer, ir.DoubleType(), ir.DoubleType()])
-        builder.call(builder.inttoptr(args[0], kind.as_pointer()), [builder.inttoptr(args[1], pointer), args[2], args[3]])
+        function_pointer = builder.inttoptr(args[0], kind.as_pointer())
+        builder.call(function_pointer, [builder.inttoptr(args[1], pointer), args[2], args[3]])
         return context.get_dummy_value()
 
     return types.void(function, body, types.float64, types.float64), codegen
@@ -103,7 +104,8 @@ def _address_of(function: str) -> int:
 
 #: Addresses of Chipmunk's velocity setters, for :func:`set_velocities` (None where the vector's
 #: passing is not known to match two doubles).
-SETTERS = (_address_of("cpBodySetVelocity"), _address_of("cpBodySetAngularVelocity")) if _ABI_OK else None
+SETTERS = ((_address_of("cpBodySetVelocity"), _address_of("cpBodySetAngularVelocity"))
+           if VECT_AS_TWO_DOUBLES else None)
 
 
 @njit(cache=True)

@@ -27,7 +27,7 @@ import pymunk
 from pymunk._chipmunk_cffi import ffi, lib
 
 #: Where a struct of two doubles passed by value is laid out like two doubles.
-_ABI_OK = sys.platform != "win32" and platform.machine().lower() in ("x86_64", "amd64", "aarch64", "arm64")
+VECT_AS_TWO_DOUBLES = sys.platform != "win32" and platform.machine().lower() in ("x86_64", "amd64", "aarch64", "arm64")
 
 _cfunc_address: int | None = None
 
@@ -59,7 +59,7 @@ def _python_velocity_function(body: pymunk.Body, gravity, damping: float, dt: fl
 
 def make_undamped(body: pymunk.Body) -> None:
     """Let ``body`` ignore the space's damping (gravity and forces still apply)."""
-    if _ABI_OK:
+    if VECT_AS_TWO_DOUBLES:
         lib.cpBodySetVelocityUpdateFunc(body._body, ffi.cast("cpBodyVelocityFunc", _compiled_velocity_function()))
     else:  # pragma: no cover - other platforms
         body.velocity_func = _python_velocity_function
