@@ -120,6 +120,18 @@ def test_bench_scale_grows_the_world():
     assert (c.robots, c.boxes, c.arena_size, c.construction_size) == (2000, 5000, 202.0, 51.0)
 
 
+@pytest.mark.slow
+def test_bench_live_without_a_browser_measures_what_its_websocket_viewer_receives():
+    from sandbox.app import live_bench
+    from sandbox.model.config import Config
+
+    r = live_bench.run(Config(robots=20, boxes=30), 1.0, warmup=0.5, viewers=1, browser=False)
+    assert r["steps_per_second"] > 0 and r["kb_per_second_per_viewer"] > 0
+    assert (r["viewers"], r["browser_frames_per_second"]) == (1, None)
+    refused = phototaxis("bench", "--live", "--no-browser", "--viewers", "0")
+    assert refused.returncode == 2 and "needs a websocket viewer" in refused.stderr
+
+
 def test_help_lists_commands():
     out = phototaxis("--help")
     assert out.returncode == 0

@@ -15,6 +15,7 @@ thirty Chromiums competing with the server for the CPU.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import threading
@@ -35,6 +36,24 @@ def chromium_path() -> str | None:
         if candidate and os.path.exists(candidate):
             return candidate
     return None
+
+
+@contextlib.contextmanager
+def _browser_page():
+    """A page of a headless Chromium, closed with the browser on the way out."""
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        raise UserError("the live benchmark needs playwright: pip install -e '.[test]'") from None
+    browser_path = chromium_path()
+    if browser_path is None:
+        raise UserError("the live benchmark needs chromium: apt-get install chromium (or --no-browser)")
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=browser_path, args=CHROMIUM_ARGS)
+        try:
+            yield browser.new_page(viewport={"width": 1280, "height": 800})
+        finally:
+            browser.close()
 
 
 class WebsocketViewer:
@@ -65,63 +84,55 @@ class WebsocketViewer:
 
 
 def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 25, fps: float = 30.0,
-        warmup: float = 5.0, viewers: int = 1, compare_with: str | None = None) -> dict[str, Any]:
+        warmup: float = 5.0, viewers: int = 1, compare_with: str | None = None,
+        browser: bool = True) -> dict[str, Any]:
     """Measure the live app for ``seconds`` (after ``warmup``) with one
-    headless browser and ``viewers`` websocket viewers connected; ``compare_with``: in compare mode
-    against this case (sandbox.app.compare), both worlds measured."""
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        raise UserError("the live benchmark needs playwright: pip install -e '.[test]'") from None
-    browser_path = chromium_path()
-    if browser_path is None:
-        raise UserError("the live benchmark needs chromium: apt-get install chromium")
+    headless browser (unless ``browser`` is False) and ``viewers`` websocket viewers connected;
+    ``compare_with``: in compare mode against this case (sandbox.app.compare), both worlds measured."""
+    if not browser and viewers < 1:
+        raise UserError("with no browser, the live benchmark needs a websocket viewer (--viewers 1 or more)")
     compare = None
     if compare_with is not None:
         from sandbox.app.compare import partner_config
 
         compare = (partner_config(config, compare_with), compare_with)
-    app = App(config, port=free_port(), fps=fps, steps_per_frame=steps_per_frame, compare=compare)
-    app.start()
-    try:
-        with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=browser_path, args=CHROMIUM_ARGS)
-            try:
-                page = browser.new_page(viewport={"width": 1280, "height": 800})
-                page.goto(f"http://127.0.0.1:{app.port}/")
-                page.wait_for_selector("canvas", timeout=30_000)
-                deadline = time.time() + 30
-                while not app.server.get_clients() and time.time() < deadline:
-                    time.sleep(0.1)
-                others = [WebsocketViewer(app.port) for _ in range(viewers)]
-                time.sleep(warmup)
-                page.evaluate("""() => { window.__frames = 0; const tick = () => { window.__frames++;
-                                 requestAnimationFrame(tick); }; requestAnimationFrame(tick); }""")
-                partner = app.comparison.runner
-                steps0, frames0, t0 = app.runner.latest.step, app.frames_drawn, time.perf_counter()
-                other0 = partner.latest.step if partner is not None else 0
-                bytes0 = [v.received for v in others]
-                time.sleep(seconds)
-                steps1, frames1, t1 = app.runner.latest.step, app.frames_drawn, time.perf_counter()
-                other1 = partner.latest.step if partner is not None else 0
-                bytes1 = [v.received for v in others]
-                browser_frames = page.evaluate("() => window.__frames")
-                clients = len(app.server.get_clients())
-                for viewer in others:
-                    viewer.close()
-            finally:
-                browser.close()
-    finally:
-        app.stop()
+    with contextlib.ExitStack() as stack:
+        page = stack.enter_context(_browser_page()) if browser else None
+        app = App(config, port=free_port(), fps=fps, steps_per_frame=steps_per_frame, compare=compare)
+        app.start()
+        stack.callback(app.stop)
+        if page is not None:
+            page.goto(f"http://127.0.0.1:{app.port}/")
+            page.wait_for_selector("canvas", timeout=30_000)
+        others = [WebsocketViewer(app.port) for _ in range(viewers)]
+        for viewer in others:
+            stack.callback(viewer.close)
+        deadline = time.time() + 30
+        while page is not None and not app.server.get_clients() and time.time() < deadline:
+            time.sleep(0.1)
+        time.sleep(warmup)
+        if page is not None:
+            page.evaluate("""() => { window.__frames = 0; const tick = () => { window.__frames++;
+                             requestAnimationFrame(tick); }; requestAnimationFrame(tick); }""")
+        partner = app.comparison.runner
+        steps0, frames0, t0 = app.runner.latest.step, app.frames_drawn, time.perf_counter()
+        other0 = partner.latest.step if partner is not None else 0
+        bytes0 = [v.received for v in others]
+        time.sleep(seconds)
+        steps1, frames1, t1 = app.runner.latest.step, app.frames_drawn, time.perf_counter()
+        other1 = partner.latest.step if partner is not None else 0
+        bytes1 = [v.received for v in others]
+        browser_frames = page.evaluate("() => window.__frames") if page is not None else None
+        clients = len(app.server.get_clients())
     wall = t1 - t0
     sps = (steps1 - steps0) / wall
     return {
         "steps_per_second": round(sps, 1),
         "real_time_factor": round(sps * config.dt, 2),
         "frames_per_second": round((frames1 - frames0) / wall, 1),
-        "browser_frames_per_second": round(browser_frames / wall, 1),
+        "browser_frames_per_second": round(browser_frames / wall, 1) if browser else None,
         "clients": clients,
-        "viewers": 1 + viewers,
+        "viewers": int(browser) + viewers,
         # The browser's websocket lives in a web worker, out of Playwright's sight: the websocket viewers count.
         "kb_per_second_per_viewer": (round(max(b1 - b0 for b0, b1 in zip(bytes0, bytes1)) / wall / 1000, 1)
                                      if viewers else None),

@@ -43,6 +43,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--viewers", type=int, default=1, metavar="K",
                    help="with --live: K viewers besides the browser (websocket clients that receive the scene "
                    "like a browser but draw nothing; they count the bytes); 9 makes a class of 10 (default 1)")
+    p.add_argument("--no-browser", action="store_true",
+                   help="with --live: no browser, only the websocket viewers (what the app costs without the "
+                   "browser's drawing, which shares this machine's cores)")
     p.add_argument("--compare-with", metavar="CASE", default=None,
                    help="with --live: in compare mode against this case (a paper case, or 'star + chase'), "
                         "both worlds measured")
@@ -219,7 +222,7 @@ def bench_command(args: argparse.Namespace) -> int:
         if args.compare_with is not None and args.compare_with not in COMPARE_CASES:
             raise UserError(f"--compare-with takes a case: {', '.join(COMPARE_CASES)}")
         result = live_bench.run(config, args.seconds, steps_per_frame=args.steps_per_frame, viewers=args.viewers,
-                                compare_with=args.compare_with)
+                                compare_with=args.compare_with, browser=not args.no_browser)
     else:
         if config.steps <= 0:
             raise UserError("--steps must be at least 1 for a benchmark")
