@@ -643,6 +643,8 @@ def test_compare_mode_from_the_panel_and_learn(app, page, tmp_path):
     choose(page, "Compare with...", "star-switch")
     wait_until(lambda: app.comparison.runner is not None, what="the second world")
     partner = app.comparison.runner
+    # The status line, first on the server (a loaded machine builds the two worlds slowly), then on the page.
+    wait_until(lambda: "in the goal, step" in app.panel.compare.status.content, what="the compare status line")
     page.get_by_text("in the goal, step", exact=False).first.wait_for(timeout=30_000)
     # Each world has its caption on the floor.
     wait_until(lambda: app.comparison.view.handles["caption"].text.startswith("star-switch (star + switch 0.25) | step"),
