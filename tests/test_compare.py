@@ -298,3 +298,45 @@ def test_a_refused_reset_leaves_both_worlds_going_on_in_step(pair):
     assert partner.latest.world_key == key  # the compared world was not rebuilt alone
     lockstep.set_playing(False)
     wait_until(lambda: main.latest.step == partner.latest.step == lockstep.target and not main.latest.playing, what="paused in step")
+
+
+def _pick_as_viser_does(handle, value, refresh) -> None:
+    """What viser does with a page's pick: the value is set on its event loop, the callback runs later in
+    a thread of its own. ``refresh()`` is a panel refresh that falls in between."""
+    from unittest import mock
+
+    import viser
+
+    handle._impl.value = value
+    refresh()
+    page = mock.MagicMock(name="the page's client")  # told what happens (notifications); not a browser
+    for callback in handle._impl.update_cb:
+        callback(viser.GuiEvent(client=page, client_id=0, target=handle))
+
+
+def test_a_pick_survives_a_panel_refresh_before_its_callback():
+    """Under two test suites at once, a refresh between viser's setting of the value and the callback put
+    the old value back; the callback read it, and the pick was lost (Compare with... started no second
+    world; Paper case restarted the running case). Both dropdowns now keep a pick on its way."""
+    from sandbox.app.server import App, free_port
+
+    app = App(SMALL, port=free_port(), fps=30, steps_per_frame=2, process=False).start()
+    try:
+        panel = app.panel
+        refresh = lambda: panel.update(app.runner.latest, force=True)  # noqa: E731
+        _pick_as_viser_does(panel.compare.choice, "star-switch", refresh)
+        wait_until(lambda: app.comparison.label == "star-switch" and app.comparison.runner is not None,
+                   what="the second world")
+        refresh()
+        assert panel.compare.choice.value == "star-switch"
+        _pick_as_viser_does(panel.strategies.case, "square", refresh)
+        wait_until(lambda: app.runner.latest.shape_name == "square", what="the square case")
+        refresh()
+        assert panel.strategies.case.value == "square"
+        panel.compare.choose("nothing", None)  # ended elsewhere: the dropdown follows what runs
+        wait_until(lambda: app.comparison.runner is None, what="the comparison to end")
+        refresh()
+        assert panel.compare.choice.value == "nothing"
+        assert not app.runner.errors
+    finally:
+        app.stop()

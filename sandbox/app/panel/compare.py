@@ -24,6 +24,7 @@ class CompareFolder:
         self._busy = threading.Lock()  # one change of comparison at a time
         self._starting = False
         self._quiet = False  # set while the dropdown is set from here, not by a page
+        self._shown = NOTHING  # what this panel last set the dropdown to show
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -63,6 +64,7 @@ class CompareFolder:
                 self.comparison.begin(config, shape, choice)
             except Exception as exc:  # a refused goal or a process that would not start: say so
                 notify_error(client, "Cannot compare", str(exc))
+                self.show(NOTHING if self.comparison.runner is None else self.comparison.label)
                 return
             finally:
                 self._starting = False
@@ -72,6 +74,8 @@ class CompareFolder:
 
     def show(self, choice: str) -> None:
         """The dropdown shows ``choice`` (without acting on it; a config file's name is not a choice)."""
+        if choice in CHOICES:
+            self._shown = choice
         if choice in CHOICES and self.choice.value != choice:
             self._quiet = True
             try:
@@ -92,8 +96,16 @@ class CompareFolder:
         """The dropdown shows what is compared (nothing, once a comparison ended for any reason), the status
         line both shares."""
         partner = self.comparison.runner
-        if not self._starting:  # a comparison on its way: the dropdown shows it already
-            self.show(NOTHING if partner is None else self.comparison.label)
+        compared = NOTHING if partner is None else self.comparison.label
+        # Never over a page's pick: viser sets the dropdown's value, then runs its callback in a thread
+        # of its own; a refresh in between put "nothing" back, the callback read it, and no second world
+        # started (seen under two test suites at once). So the dropdown is set only while it still shows
+        # what this panel showed. A comparison on its way: the dropdown shows it already.
+        if not self._starting:
+            if self.choice.value == compared:
+                self._shown = compared
+            elif self.choice.value == self._shown:
+                self.show(compared)
         if partner is None:
             if not self._starting:
                 self.status.content = ""

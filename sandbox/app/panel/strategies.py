@@ -32,11 +32,13 @@ class StrategiesFolder:
         self._outline_shown = ""
         #: A case picked and on its way to the simulation: the dropdown keeps showing it meanwhile.
         self._starting: str | None = None
+        self._case_shown = ""  # what this panel last set the Paper case dropdown to show
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
         with gui.add_folder("Strategies"):
-            self.case = gui.add_dropdown("Paper case", (*CASES, CUSTOM), initial_value=self._running(snap),
+            self._case_shown = self._running(snap)
+            self.case = gui.add_dropdown("Paper case", (*CASES, CUSTOM), initial_value=self._case_shown,
                                          hint="Start one of the paper's seven cases from step 0 (same seed). "
                                               "custom: your own goal or strategies")
             self.outline = gui.add_dropdown("Outline", param("outline").choices, initial_value=snap.config.outline,
@@ -60,7 +62,7 @@ class StrategiesFolder:
             if self.case.value in CASES:
                 self.use_case(self.case.value, event.client)
             else:  # custom is what the dropdown says, not something to pick
-                self.case.value = self._running(self.runner.latest)
+                self._case_shown = self.case.value = self._running(self.runner.latest)
 
         @self.outline.on_update
         def _(event: viser.GuiEvent) -> None:
@@ -71,9 +73,14 @@ class StrategiesFolder:
         text = self._outline_text(snap)
         if text != self._outline_shown:
             self.outline_status.content = self._outline_shown = text
+        # Never over a viewer's pick on its way (as the shape's dropdown): viser sets the value, then runs
+        # the callback in a thread of its own, which would read what a refresh put back in between.
         running = self._running(snap)
-        if self._starting is None and self.case.value != running:
-            self.case.value = running
+        if self._starting is None:
+            if self.case.value == running:
+                self._case_shown = running
+            elif self.case.value == self._case_shown:
+                self._case_shown = self.case.value = running
 
     @staticmethod
     def _running(snap: Snapshot) -> str:
@@ -124,7 +131,7 @@ class StrategiesFolder:
         world with the same seed, from step 0; then ``on_started()``."""
         case = CASES[name]
         strategies = {s.name: float(case.get(s.name, 0.0)) for s in STRATEGIES}
-        self._starting = name
+        self._starting = self._case_shown = self.case.value = name  # shown until it runs (or until it fails)
 
         def started(_: Any = None) -> None:
             self._starting = None
