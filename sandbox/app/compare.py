@@ -168,6 +168,11 @@ class Lockstep:
                 self._stale.clear()
                 self._target = max(side.latest.step for side in self.sides)
                 if self.main.playing:
+                    # Held at the farther world's step, not at the 0 of the refused reset: _advance raises
+                    # the holds only above the target, and the worlds' last frames may lie further apart
+                    # than its lead (then both stayed held at 0, and stopped).
+                    for side in self.sides:
+                        side.hold(self._target)
                     self._advance()
                 else:
                     for side in self.sides:
