@@ -27,6 +27,7 @@ import numpy as np
 from numba import njit
 
 from sandbox.model import body_memory, lights
+from sandbox.model.config import Config
 from sandbox.model.robots import PHOTOCELLS
 
 
@@ -273,15 +274,13 @@ def warm_up() -> None:
     lay = np.array([4.0, 0.0, 1.0, 1.0, 3, 4, 24, 2, 0.0, 1.0, 0.0, 2.0])  # as sample_layout packs it
     field = np.zeros(24 * 24, dtype=np.float32)
     state = np.zeros((3, 6))
-    for signed in (False, True):
-        cells = PHOTOCELLS["axes"]
-        rp = np.array([*cells.angles, *cells.drive, *cells.turn["sides"], 0.1, 5.0, 20.0, 0.4, 0.01, 0.1, 20.0, signed],
-                      dtype=float)  # as robot_params packs it
-        due = np.zeros(1, dtype=np.intp)
-        robot_step_continuous(state, 1, due, field, lay, rp, 1.0, np.zeros((1, 2)), np.zeros((1, 4)), np.zeros(1),
-                              np.zeros((1, 2)), np.zeros((3, 3)))
-        robot_step_set_once(state, 1, due, field, lay, rp, np.zeros((1, 2)), np.zeros((1, 4)), np.zeros(1),
-                            np.zeros((1, 2)), np.zeros((2, 4)))
+    # One call each compiles every case: the parameters' values, the turn cost's sign among them, are data.
+    rp = robot_params(Config())
+    due = np.zeros(1, dtype=np.intp)
+    robot_step_continuous(state, 1, due, field, lay, rp, 1.0, np.zeros((1, 2)), np.zeros((1, 4)), np.zeros(1),
+                          np.zeros((1, 2)), np.zeros((3, 3)))
+    robot_step_set_once(state, 1, due, field, lay, rp, np.zeros((1, 2)), np.zeros((1, 4)), np.zeros(1),
+                        np.zeros((1, 2)), np.zeros((2, 4)))
     ids = np.array([7, 5], dtype=np.uintp)
     scatter_by_id(ids, np.zeros((2, 6)), np.zeros(2, dtype=np.uintp), np.zeros(2, dtype=np.intp), np.sort(ids),
                   np.argsort(ids), np.zeros((2, 6)))

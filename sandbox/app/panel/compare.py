@@ -74,9 +74,10 @@ class CompareFolder:
 
     def show(self, choice: str) -> None:
         """The dropdown shows ``choice`` (without acting on it; a config file's name is not a choice)."""
-        if choice in CHOICES:
-            self._shown = choice
-        if choice in CHOICES and self.choice.value != choice:
+        if choice not in CHOICES:
+            return
+        self._shown = choice
+        if self.choice.value != choice:
             self._quiet = True
             try:
                 self.choice.value = choice
