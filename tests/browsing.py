@@ -12,3 +12,31 @@ CHROMIUM = chromium_path()
 BROWSER_MARKS = [pytest.mark.browser,
                  pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (apt-get install chromium)")]
 playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwright (pip install -e '.[test]')")
+
+
+PATIENCE_MS = 120_000
+"""How long a page may take to show something or to answer a click before a test gives up.
+Playwright's default is 30 s; with two full suites at once on two cores (load average 20-26), pages
+took longer than that to answer, and tests failed on nothing but the wait (issue 23's stress runs).
+These waits are not what the tests measure: the bars on time (the first visit, the drift, a notice
+that must vanish) keep their own bounds."""
+
+
+class PatientBrowser:
+    """A Playwright browser whose contexts and pages wait up to PATIENCE_MS by default."""
+
+    def __init__(self, browser) -> None:
+        self._browser = browser
+
+    def new_context(self, **options):
+        context = self._browser.new_context(**options)
+        context.set_default_timeout(PATIENCE_MS)
+        return context
+
+    def new_page(self, **options):
+        page = self._browser.new_page(**options)  # in a context of its own, which closes with the page
+        page.set_default_timeout(PATIENCE_MS)
+        return page
+
+    def __getattr__(self, name):
+        return getattr(self._browser, name)

@@ -56,9 +56,9 @@ def pytest_collection_modifyitems(config, items) -> None:
 def browser():
     """One headless Chromium for a browser test module (see tests/browsing.py)."""
     from sandbox.app.live_bench import CHROMIUM_ARGS
-    from tests.browsing import CHROMIUM, playwright_api
+    from tests.browsing import CHROMIUM, PatientBrowser, playwright_api
 
     with playwright_api.sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        yield browser
+        yield PatientBrowser(browser)
         browser.close()

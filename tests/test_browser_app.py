@@ -63,7 +63,7 @@ def page(app, browser):
     context = browser.new_context(viewport={"width": 1100, "height": 760}, accept_downloads=True)
     page = context.new_page()
     page.goto(f"http://127.0.0.1:{app.port}/")
-    page.get_by_text("Goal shape", exact=True).wait_for(timeout=30_000)
+    page.get_by_text("Goal shape", exact=True).wait_for()
     wait_until(lambda: app.server.get_clients(), what="the page to connect")
     yield page
     context.close()
@@ -90,7 +90,7 @@ def choose(page, label: str, option: str) -> None:
     for _ in range(5):
         field.click()
         item = page.get_by_role("option", name=option, exact=True)
-        item.wait_for(state="visible", timeout=10_000)
+        item.wait_for(state="visible")
         wait_until(lambda: done_moving(item), 5, "the drop-down to finish opening")
         item.click()
         try:
@@ -102,7 +102,7 @@ def choose(page, label: str, option: str) -> None:
 
 
 def notification(page, text: str):
-    return page.get_by_text(text).first.wait_for(timeout=15_000)
+    return page.get_by_text(text).first.wait_for()
 
 
 def dismiss_notifications(page) -> None:
@@ -182,7 +182,7 @@ def test_refused_population_is_never_stored(app, page):
         wait_until(lambda: robots.input_value() == str(stored), what="the field to show the stored value")
         assert runner.latest.config.robots == stored
     page.reload()
-    page.get_by_text("Goal shape", exact=True).wait_for(timeout=30_000)
+    page.get_by_text("Goal shape", exact=True).wait_for()
     open_folder(page, "Population and physics")
     field = page.get_by_label("robots", exact=True)
     assert int(float(field.input_value())) == stored
@@ -209,7 +209,7 @@ def test_the_largest_world_builds_with_progress_and_can_be_cancelled(app, page):
     # the build ended. Then the small world is built again and the cancel tried again.
     for _ in range(3):
         click_button(page, "Reset (same seed)")
-        page.get_by_text("Building the world").first.wait_for(timeout=15_000)  # progress in the panel
+        page.get_by_text("Building the world").first.wait_for()  # progress in the panel
         click_button(page, "Cancel building")
         if wait_until(outcome, 30, "the build cancelled or finished") == "cancelled":
             break
@@ -277,7 +277,7 @@ def test_the_keyboard_runs_the_sandbox(app, page):
     client_id = next(iter(app.server.get_clients()))
     page.keyboard.press("f")
     wait_until(lambda: app.panel.inspector.viewers[client_id].robot is not None, what="f to follow a robot")
-    page.get_by_text("Following robot", exact=False).first.wait_for(timeout=10_000)
+    page.get_by_text("Following robot", exact=False).first.wait_for()
     click_button(page, "Stop following")
     wait_until(lambda: runner.followed == (), what="stop following")
     page.keyboard.press("Space")
@@ -290,7 +290,7 @@ def test_the_keyboard_runs_the_sandbox(app, page):
     page.keyboard.press("p")
     wait_until(lambda: framing.of(client_id) == "Construction area" and client_id not in framing._legends,
                what="p again: the construction area")
-    page.get_by_text("Steps per frame", exact=True).wait_for(timeout=10_000)  # the panel back
+    page.get_by_text("Steps per frame", exact=True).wait_for()  # the panel back
     page.get_by_role("button", name="Whole arena", exact=True).click()
     wait_until(lambda: framing.of(client_id) == "Whole arena", what="the whole arena again")
     # Typing in a field is typing, not a command.
@@ -317,7 +317,7 @@ def test_quick_shape_picks_are_never_lost(app, page):
     for name in ("square", "triangle", "house", "star", "l-shape", "circle"):
         field.click()
         item = page.get_by_role("option", name=name, exact=True)
-        item.wait_for(state="visible", timeout=10_000)
+        item.wait_for(state="visible")
         wait_until(lambda: done_moving(item), 5, "the drop-down to finish opening")
         item.click()
         wait_until(lambda: app.runner.latest.shape_name == name, 10, f"the {name} goal")
@@ -447,9 +447,9 @@ def test_parameters_and_inspector(app, page):
     wait_until(lambda: app.runner.latest.world_config.k_turn == 15, what="the live gain")
     click_button(page, "Follow a random robot")
     wait_until(lambda: app.runner.latest.followed, what="a followed robot")
-    page.get_by_text("front-left", exact=True).wait_for(timeout=10_000)
-    page.get_by_text("dark grey", exact=True).wait_for(timeout=10_000)  # which dot on the floor is which
-    page.get_by_text("Commanded", exact=True).wait_for(timeout=10_000)
+    page.get_by_text("front-left", exact=True).wait_for()
+    page.get_by_text("dark grey", exact=True).wait_for()  # which dot on the floor is which
+    page.get_by_text("Commanded", exact=True).wait_for()
     click_button(page, "Camera follows (this viewer)")
     client = next(iter(app.server.get_clients().values()))
 
@@ -550,7 +550,7 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
     open_folder(page, "Be the light")
     click_button(page, "Be the light")
     wait_until(lambda: runner.latest.program == LAMP_PROGRAM, what="the lamp")
-    page.get_by_role("button", name="Give the light back").wait_for(timeout=10_000)
+    page.get_by_role("button", name="Give the light back").wait_for()
     # The two clicks below tell pixels from metres: a camera still easing into place skews them (on a
     # loaded machine their y once differed by 1.8 m), so wait for every page's camera to rest.
     wait_until_steady(lambda: [tuple(np.round(c.camera.position, 2)) for c in app.server.get_clients().values()],
@@ -627,7 +627,7 @@ def test_a_challenge_round_is_scored_against_the_paper(app, page):
     click_button(page, "Start a round")
     page.get_by_text("the paper's controller:", exact=False).first.wait_for(timeout=120_000)
     assert folder.round.player == "Ada" and folder.round.paper is not None
-    page.get_by_role("cell", name="Ada", exact=True).wait_for(timeout=10_000)  # the best-scores table
+    page.get_by_role("cell", name="Ada", exact=True).wait_for()  # the best-scores table
     open_folder(page, "Challenge")  # closed again
     app.panel.program.load(None, None)  # the paper's controller again, and play, for the tests after
     wait_until(lambda: app.runner.latest.program == PAPER_PROGRAM, what="the paper's controller back")
@@ -645,7 +645,7 @@ def test_compare_mode_from_the_panel_and_learn(app, page, tmp_path):
     partner = app.comparison.runner
     # The status line, first on the server (a loaded machine builds the two worlds slowly), then on the page.
     wait_until(lambda: "in the goal, step" in app.panel.compare.status.content, what="the compare status line")
-    page.get_by_text("in the goal, step", exact=False).first.wait_for(timeout=30_000)
+    page.get_by_text("in the goal, step", exact=False).first.wait_for()
     # Each world has its caption on the floor.
     wait_until(lambda: app.comparison.view.handles["caption"].text.startswith("star-switch (star + switch 0.25) | step"),
                what="the second world's caption")
@@ -669,7 +669,7 @@ def test_compare_mode_from_the_panel_and_learn(app, page, tmp_path):
     click_button(page, "Start recording")
     frames = app.frames_drawn
     wait_until(lambda: app.frames_drawn > frames + 5, what="some frames")
-    with page.expect_download(timeout=60_000) as info:
+    with page.expect_download() as info:
         click_button(page, "Stop and download")
     path = tmp_path / "compare.html"
     info.value.save_as(path)
@@ -706,7 +706,7 @@ def _embedded_scene(path: Path) -> str:
 def test_second_browser_and_disconnect(app, browser, page):
     other = browser.new_page(viewport={"width": 800, "height": 760})  # a narrower window than the first
     other.goto(f"http://127.0.0.1:{app.port}/")
-    other.get_by_text("Goal shape", exact=True).wait_for(timeout=30_000)
+    other.get_by_text("Goal shape", exact=True).wait_for()
     wait_until(lambda: len(app.server.get_clients()) == 2, what="two clients")
     first, second = (app.server.get_clients()[i] for i in sorted(app.server.get_clients()))
     # Each viewer's camera frames the arena for its own window: the narrow one from higher up.
@@ -725,11 +725,11 @@ def test_second_browser_and_disconnect(app, browser, page):
     click_button(page, "Follow a random robot")
     wait_until(lambda: viewers[first.client_id].robot is not None, what="the first viewer's robot")
     mine = viewers[first.client_id].robot
-    page.get_by_text(f"Following robot {mine} (click another, or stop).", exact=True).wait_for(timeout=10_000)
+    page.get_by_text(f"Following robot {mine} (click another, or stop).", exact=True).wait_for()
     click_button(other, "Follow a random robot")
     wait_until(lambda: viewers[second.client_id].robot is not None, what="the second viewer's robot")
     theirs = viewers[second.client_id].robot
-    other.get_by_text(f"Following robot {theirs} (click another, or stop).", exact=True).wait_for(timeout=10_000)
+    other.get_by_text(f"Following robot {theirs} (click another, or stop).", exact=True).wait_for()
     wait_until(lambda: {r.index for r in app.runner.latest.followed} == {mine, theirs}, what="both robots followed")
     assert viewers[first.client_id].robot == mine  # the second's choice left the first's alone
     if theirs != mine:
@@ -757,7 +757,7 @@ def test_recording_downloads_a_standalone_page(app, browser, page, tmp_path):
     wait_until(lambda: app.panel.record.recorder is not None, what="recording")
     frames = app.frames_drawn
     wait_until(lambda: app.frames_drawn > frames + 10, what="some frames")
-    with page.expect_download(timeout=60_000) as info:
+    with page.expect_download() as info:
         click_button(page, "Stop and download")
     # Named after what runs (the goal the earlier tests left) and when.
     name = info.value.suggested_filename
@@ -772,6 +772,6 @@ def test_recording_downloads_a_standalone_page(app, browser, page, tmp_path):
     errors = []
     replay.on("pageerror", lambda e: errors.append(str(e)))
     replay.goto(path.as_uri())
-    replay.locator("canvas").first.wait_for(timeout=30_000)
+    replay.locator("canvas").first.wait_for()
     assert not errors
     replay.close()

@@ -51,7 +51,7 @@ def open_page(app, browser, width: int, height: int):
     page = context.new_page()
     before = set(app.server.get_clients())
     page.goto(f"http://127.0.0.1:{app.port}/")
-    page.get_by_text("Goal shape", exact=True).wait_for(timeout=30_000)
+    page.get_by_text("Goal shape", exact=True).wait_for()
     client = wait_until(lambda: next((c for k, c in app.server.get_clients().items() if k not in before), None),
                         what="the page to connect")
     return context, page, client
@@ -172,7 +172,7 @@ def status(page) -> str:
 
 
 def status_says(page, text: str) -> None:
-    page.get_by_text(text, exact=False).first.wait_for(timeout=15_000)
+    page.get_by_text(text, exact=False).first.wait_for()
 
 
 def choose(page, label: str, option: str) -> None:
@@ -180,7 +180,7 @@ def choose(page, label: str, option: str) -> None:
     for _ in range(5):
         field.click()
         item = page.get_by_role("option", name=option, exact=True)
-        item.wait_for(state="visible", timeout=10_000)
+        item.wait_for(state="visible")
         item.click()
         try:
             wait_until(lambda: item.count() == 0 or not item.is_visible(), 3, f"{label} closed")
