@@ -180,7 +180,7 @@ def test_compiled_block_adds_equal_one_numpy_add_per_light_bit_for_bit():
             np.subtract(block, kernel, out=block)
         else:
             block += np.float32(w) * kernel
-    lights._compiled_add_blocks()(values, kernel, x0, y0, weights)
+    lights.compiled_add_blocks(values, kernel, x0, y0, weights)
     assert np.array_equal(values.view(np.uint32), expected.view(np.uint32))
     lights.add_blocks(values, kernel, x0[:0], y0[:0], weights[:0])  # no light: nothing to do
     assert np.array_equal(values.view(np.uint32), expected.view(np.uint32))

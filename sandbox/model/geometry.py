@@ -11,6 +11,8 @@ import math
 import numpy as np
 from shapely.geometry import Polygon
 
+from sandbox.model.lazy_numba import compiled_at_first_use
+
 
 def signed_area(vertices: np.ndarray) -> float:
     """Shoelace area: positive for counter-clockwise vertices."""
@@ -104,22 +106,7 @@ def distance_to_outline(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
     v = np.ascontiguousarray(vertices, dtype=float).reshape(-1, 2)
     if len(v) == 0:
         return np.full(len(p), np.inf)
-    return _compiled_min_distance()(p, v)
-
-
-_compiled = None
-
-
-def _compiled_min_distance():
-    """The compiled loop, compiled (or loaded from numba's cache) at its first use: importing numba
-    took a quarter of the web server's start, and the server needs the loop only once a drawn goal
-    is previewed (its outlines)."""
-    global _compiled
-    if _compiled is None:
-        from numba import njit
-
-        _compiled = njit(cache=True)(_min_distance_to_closed_polyline)
-    return _compiled
+    return _compiled_min_distance(p, v)
 
 
 def _min_distance_to_closed_polyline(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
@@ -140,6 +127,11 @@ def _min_distance_to_closed_polyline(points: np.ndarray, vertices: np.ndarray) -
                 best = d
         out[i] = best
     return out
+
+
+#: The compiled loop, compiled at its first use: the server needs it only once a drawn goal is previewed
+#: (its outlines).
+_compiled_min_distance = compiled_at_first_use(_min_distance_to_closed_polyline)
 
 
 def points_in_polygon(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
@@ -167,3 +159,4 @@ def simplify(vertices: np.ndarray, tolerance: float) -> np.ndarray:
     if (signed_area(coords) > 0) != (signed_area(vertices) > 0):
         coords = coords[::-1]
     return coords
+

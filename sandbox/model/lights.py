@@ -35,6 +35,7 @@ from __future__ import annotations
 import numpy as np
 
 from sandbox.model.config import Config
+from sandbox.model.lazy_numba import compiled_at_first_use
 
 
 def light_centres(config: Config) -> np.ndarray:
@@ -187,7 +188,7 @@ def add_blocks(values: np.ndarray, kernel: np.ndarray, x0: np.ndarray, y0: np.nd
     numpy add per light computes, bit for bit (the same float32 operations, in the same order for
     each sample; a weight of 1 or -1 adds or subtracts the kernel as it is).
 
-    Compiled (:func:`_compiled_add_blocks`), it goes row by row of ``values``, adding every light's
+    Compiled (:data:`compiled_add_blocks`), it goes row by row of ``values``, adding every light's
     kernel row there while the row stays in the processor's cache: a light's block is 240 x 240
     samples (230 KB), a pattern change adds 55 lights on average, and adding them block by block
     streamed each block through memory (33 µs a light)."""
@@ -215,18 +216,9 @@ def add_blocks(values: np.ndarray, kernel: np.ndarray, x0: np.ndarray, y0: np.nd
                     segment[j] = segment[j] + scaled * k[j]
 
 
-_compiled = None
-
-
-def _compiled_add_blocks():
-    """:func:`add_blocks` compiled (or loaded from numba's cache) at its first use: the web server
-    imports this module, never changes a pattern, and does not load numba."""
-    global _compiled
-    if _compiled is None:
-        from numba import njit
-
-        _compiled = njit(cache=True)(add_blocks)
-    return _compiled
+#: :func:`add_blocks` compiled at its first use: the web server imports this module, never changes a
+#: pattern, and does not load numba.
+compiled_add_blocks = compiled_at_first_use(add_blocks)
 
 
 class LightField:
@@ -282,7 +274,7 @@ class LightField:
     def _add_lights(self, indices: np.ndarray, weights: np.ndarray) -> None:
         """Add ``weights[ix, iy]`` times the kernel block of each light in ``indices``, in that order."""
         x0, y0 = self._block_starts(indices)
-        _compiled_add_blocks()(self._values, self.kernel, x0, y0, weights[indices[:, 0], indices[:, 1]])
+        compiled_add_blocks(self._values, self.kernel, x0, y0, weights[indices[:, 0], indices[:, 1]])
 
     def _block_starts(self, indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Where each light's block starts in the sample array (x row, y column)."""
