@@ -20,9 +20,10 @@ def started(config: Config, **kwargs) -> Runner:
 
 
 def test_a_held_runner_stops_at_the_held_step_and_runs_to_a_step_while_paused():
-    runner = started(SMALL)
+    runner = started(SMALL, playing=False)  # held before it plays: a runner that played first had passed 40
     try:
         runner.hold(40)
+        runner.set_playing(True)
         wait_until(lambda: runner.latest.step == 40, what="the runner to reach the held step")
         frame = runner.latest.frame
         wait_until(lambda: runner.latest.frame >= frame + 5, what="five more frames")
