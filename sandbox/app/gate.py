@@ -41,6 +41,7 @@ import viser
 import viser.infra._infra as viser_infra
 import websockets
 
+from sandbox.app import wakeups
 from sandbox.app.access import Access, Grant
 from sandbox.app.inbox import Inbox
 
@@ -209,6 +210,7 @@ def start_server(access: Access, *, host: str, port: int, label: str, verbose: b
     global _gate_being_built
     check_viser()
     _install()
+    wakeups.install()
     gate = Gate(access)
     with _building:
         _gate_being_built = gate
