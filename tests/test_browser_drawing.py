@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.browsing import BROWSER_MARKS
+from tests.browsing import BROWSER_MARKS, playwright_api
 from tests.waiting import wait_until
 
 pytestmark = BROWSER_MARKS
@@ -60,7 +60,7 @@ def open_page(app, browser, width: int, height: int):
 @pytest.fixture(scope="module")
 def page(app, browser):
     context, page, client = open_page(app, browser, 1600, 1000)
-    page.client = client
+    page.client, page.app = client, app
     wait_until(lambda: camera_settled(client, app.runner.latest.world_config), what="the camera framing")
     page.canvas = canvas_box(page)  # asked once: a busy page answers layout questions slowly
     zoom_in(page, client, ZOOMED_HEIGHT)
@@ -172,7 +172,14 @@ def status(page) -> str:
 
 
 def status_says(page, text: str) -> None:
-    page.get_by_text(text, exact=False).first.wait_for()
+    """The Draw folder's status line on the page says ``text``. A failure tells a server that never
+    wrote it from a page that never drew it (twice under two suites at once, cause not found)."""
+    try:
+        page.get_by_text(text, exact=False).first.wait_for()
+    except playwright_api.Error as exc:
+        server_says = page.app.panel.shape.draw.status.content if hasattr(page, "app") else "?"
+        raise AssertionError(f"the page did not show {text!r} ({type(exc).__name__}); the server's status "
+                             f"line says {server_says!r}") from None
 
 
 def choose(page, label: str, option: str) -> None:
