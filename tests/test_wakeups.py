@@ -44,4 +44,3 @@ def test_a_buffer_built_after_install_has_the_loop_safe_event(loop):
     buffer = AsyncMessageBuffer(loop, persistent_messages=False)
     assert isinstance(buffer.message_event, wakeups.LoopSafeEvent)
     assert buffer.message_event._owner is loop
-

@@ -159,4 +159,3 @@ def simplify(vertices: np.ndarray, tolerance: float) -> np.ndarray:
     if (signed_area(coords) > 0) != (signed_area(vertices) > 0):
         coords = coords[::-1]
     return coords
-

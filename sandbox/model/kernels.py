@@ -288,5 +288,5 @@ def warm_up() -> None:
     if body_memory.SETTERS is not None:  # compiled (or loaded); no body is set
         body_memory.set_velocities(np.zeros(1, dtype=np.uintp), np.zeros((1, 4)), 0, *body_memory.SETTERS)
     lights.compiled_add_blocks(np.zeros((2, 2), dtype=np.float32), np.ones((1, 1), dtype=np.float32),
-                                  np.zeros(1, dtype=np.intp), np.zeros(1, dtype=np.intp), np.ones(1))
+                               np.zeros(1, dtype=np.intp), np.zeros(1, dtype=np.intp), np.ones(1))
     _warm = True
