@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import re
 import shlex
+import shutil
 import signal
 import subprocess
 import sys
@@ -237,7 +238,11 @@ class Server:
     """``python -m sandbox serve ...`` in a process (and process group) of its own."""
 
     def __init__(self, args: list[str], cwd: Path):
-        self.proc = subprocess.Popen([sys.executable, "-m", "sandbox", *args], cwd=cwd, env=environment(),
+        # In a session of its own (so that stop() can end its group), it would outlive a test process
+        # that is killed: one such server still ran 13 minutes later. setpriv (util-linux) has the
+        # kernel send it SIGTERM when this process ends, as a service manager would.
+        guard = ["setpriv", "--pdeathsig", "TERM", "--"] if shutil.which("setpriv") else []
+        self.proc = subprocess.Popen([*guard, sys.executable, "-m", "sandbox", *args], cwd=cwd, env=environment(),
                                      stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                                      start_new_session=True)
         self.output: list[str] = []
