@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sandbox.app import palette
-from sandbox.app.runner import Runner
+from sandbox.app.runner import Runner, frames_owed, next_frame_due
 from sandbox.model.config import Config
 from tests.waiting import frames_pass, paused_step, wait_until
 
@@ -86,6 +86,22 @@ def test_shape_change_and_selection(runner):
 
 def test_speed_is_measured(runner):
     wait_until(lambda: runner.steps_per_second() > 0 and runner.frames_per_second() > 0)
+
+
+def test_a_late_frame_takes_the_steps_it_missed_and_a_stall_is_let_go():
+    # Frames every 0.1 s, catching up on at most 0.25 s. A frame due at 1.0 s:
+    assert frames_owed(1.0, now=0.98, interval=0.1, most_behind=0.25) == 1  # early (a command woke the loop)
+    assert frames_owed(1.0, now=1.05, interval=0.1, most_behind=0.25) == 1  # on time
+    assert frames_owed(1.0, now=1.23, interval=0.1, most_behind=0.25) == 3  # 0.23 s late: 2 frames missed
+    assert frames_owed(1.0, now=2.0, interval=0.1, most_behind=0.25) == 3  # 1 s late: 0.25 s caught up on
+    # The frame after: due 0.1 s after the last frame stepped for. That frame, due at 1.0 s, stepped
+    # for 3 frames (1.0, 1.1, 1.2); at 1.25 s the next is due at 1.3 s.
+    assert next_frame_due(1.0 + 2 * 0.1, now=1.25, interval=0.1, most_behind=0.25) == pytest.approx(1.3)
+    # Done at 1.5 s with one frame stepped: 1.1 s lies 0.4 s past, beyond 0.25 s: the schedule restarts.
+    assert next_frame_due(1.0, now=1.5, interval=0.1, most_behind=0.25) == 1.5
+    # The fastest setting catches up on one frame only, as before (its frames fill their time).
+    assert next_frame_due(1.0, now=1.3, interval=0.1, most_behind=0.1) == 1.3
+    assert next_frame_due(1.0, now=1.15, interval=0.1, most_behind=0.1) == pytest.approx(1.1)
 
 
 def test_headless_advance_without_threads():

@@ -36,9 +36,29 @@ Command = Callable[["Simulation"], Any]
 FASTEST = 100
 FASTEST_CHUNK = 10
 
+#: How far (s) the loop may fall behind its frames' schedule and still catch up. A frame that is
+#: late (the machine busy with a browser, a garbage collection) takes the steps of the frames it
+#: missed too, and one snapshot: so a speed setting is the rate the world runs at, and a loop short
+#: of time spends it on steps, not on pictures nobody sees. Further behind (the machine stalled) the
+#: rest is let go, as a game's fixed-step loop caps the time it catches up on, rather than racing.
+CATCH_UP = 0.25
+
 log = logging.getLogger("sandbox.app.runner")
 
 
+def frames_owed(due: float, now: float, interval: float, most_behind: float) -> int:
+    """How many frames' steps the frame that was ``due`` takes, at ``now``: its own, and one for each
+    whole ``interval`` it is late by, counting at most ``most_behind`` seconds of lateness."""
+    late = min(max(now - due, 0.0), most_behind)
+    return 1 + int(late // interval)
+
+
+def next_frame_due(due: float, now: float, interval: float, most_behind: float) -> float:
+    """When the frame after the one that was ``due`` is due, at ``now``: one ``interval`` after it,
+    unless that lies more than ``most_behind`` seconds in the past; then ``now`` (the lost time is
+    let go)."""
+    following = due + interval
+    return now if following < now - most_behind else following
 
 
 def wait_for(post: Callable, command: Command, timeout: float) -> Any:
@@ -379,30 +399,29 @@ class Runner(FramePublisher):
 
     def _loop(self) -> None:
         interval = 1.0 / self.fps
-        next_frame = time.perf_counter()
+        due = time.perf_counter()  # when the next frame's steps are due
         while not self._stop.is_set():
+            fastest = self.steps_per_frame >= FASTEST
+            frames = 1 if fastest else frames_owed(due, time.perf_counter(), interval, CATCH_UP)
             try:
-                self._frame_of_steps(next_frame + interval)
+                self._frame_of_steps(due + interval, frames)
             except Exception as exc:  # noqa: BLE001 - a bug: pause and say so rather than freeze the page
                 self.errors.append(exc)
                 log.exception("the simulation loop failed; paused")
                 self.playing = False
-            next_frame += interval
             now = time.perf_counter()
-            if next_frame < now - interval:  # fell behind: do not try to catch up
-                next_frame = now
-            delay = next_frame - now
-            if not self.playing:
-                delay = max(delay, 0.0)
-                # Paused: sleep until a command arrives (or a frame's time passes).
-            if delay > 0:
+            due = next_frame_due(due + (frames - 1) * interval, now, interval,
+                                 most_behind=interval if fastest else CATCH_UP)
+            delay = due - now
+            if delay > 0:  # sleep until the next frame is due, or a command arrives
                 self._wake.wait(delay)
                 self._wake.clear()
 
-    def _frame_of_steps(self, deadline: float) -> None:
-        """One frame: the waiting commands, the steps (if playing), the series and a snapshot."""
+    def _frame_of_steps(self, deadline: float, frames: int = 1) -> None:
+        """One frame: the waiting commands, ``frames`` frames' steps (if playing), the series and a
+        snapshot. ``deadline``: when the fastest setting stops stepping."""
         self._run_commands()
-        allowed = self._steps_allowed(self.steps_per_frame)
+        allowed = self._steps_allowed(self.steps_per_frame * frames)
         if self.playing and allowed > 0:
             if self.steps_per_frame >= FASTEST:
                 self._step(deadline=deadline)  # as many steps as fit in one frame
