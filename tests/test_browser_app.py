@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import io
 import re
+import time
 from pathlib import Path
 
 import numpy as np
@@ -756,6 +757,37 @@ def test_second_browser_and_disconnect(app, browser, page):
     wait_until(lambda: app.runner.followed == (), what="nobody following")
     steps = app.runner.latest.step
     wait_until(lambda: app.runner.latest.step > steps + 20, what="the simulation to keep running")
+    assert not app.runner.errors
+
+
+def test_a_page_gets_no_more_frames_than_it_draws(app, browser):
+    """Issue 24, item 2 (sandbox.app.pacing): a page that draws slowly gets fewer frames, not a backlog."""
+    from sandbox.app.pacing import MOST_WAIT
+
+    pacer = app.gate.pacer
+    before = set(app.server.get_clients())
+    slow = browser.new_page(viewport={"width": 800, "height": 600})
+    slow.goto(f"http://127.0.0.1:{app.port}/")
+    slow.get_by_text("Goal shape", exact=True).wait_for()
+    cid = next(iter(wait_until(lambda: set(app.server.get_clients()) - before, what="the page to connect")))
+    wait_until(lambda: cid in pacer.paced, what="the page to report a drawn frame")
+    # Its main thread busy for 300 ms at each animation frame: it draws at most 3 frames a second.
+    slow.evaluate("""() => { const hog = () => { const end = performance.now() + 300;
+                     while (performance.now() < end) {}
+                     if (!window.__stopHog) requestAnimationFrame(hog); };
+                     requestAnimationFrame(hog); }""")
+    app.lockstep.set_playing(True)
+    made, got, drew = app.frames_drawn, pacer.windows[cid], pacer.reports[cid]
+    start = time.monotonic()
+    wait_until(lambda: app.frames_drawn >= made + 45, timeout=120, what="45 frames")  # 3 s at 15 frames/s
+    seconds = time.monotonic() - start
+    made, got, drew = app.frames_drawn - made, pacer.windows[cid] - got, pacer.reports[cid] - drew
+    # One window per frame it drew, or per MOST_WAIT without one (and the one it was waiting with).
+    assert got <= drew + seconds / MOST_WAIT + 2, (made, got, drew, seconds)
+    assert got < made * 0.7, (made, got, drew, seconds)
+    slow.evaluate("() => { window.__stopHog = true; }")
+    slow.close()
+    wait_until(lambda: cid not in app.server.get_clients(), what="the page to leave")
     assert not app.runner.errors
 
 

@@ -65,6 +65,19 @@ class RawClient:
             types.extend(m.get("type", "?") for m in decode(raw))
         return types
 
+    def first(self, message_type: str, seconds: float) -> dict | None:
+        """The first message of ``message_type`` the server sends within ``seconds``."""
+        deadline = time.monotonic() + seconds
+        while (left := deadline - time.monotonic()) > 0:
+            try:
+                raw = self.ws.recv(timeout=left)
+            except TimeoutError:
+                break
+            for message in decode(raw):
+                if message.get("type") == message_type:
+                    return message
+        return None
+
     def close(self) -> None:
         self.ws.close()
 

@@ -22,6 +22,10 @@ refuses to start on a viser without them):
 3. **Incoming messages.** The server's (and each connection's) dispatch of
    incoming messages goes through :class:`sandbox.app.inbox.Inbox` first,
    which refuses what the grant does not allow and handles uploads itself.
+4. **The shared scene's windows.** Each connection's windows of the
+   broadcast buffer pass through :class:`sandbox.app.pacing.Pacer`, which
+   holds them for a page until it reports drawing the last (the report is
+   an address this gate answers, behind the same checks as the page).
 
 The page is not a boundary: everything a control can trigger is checked here
 or in the callback, whatever the page shows.
@@ -40,10 +44,14 @@ from typing import Any, Callable
 import viser
 import viser.infra._infra as viser_infra
 import websockets
+from viser._messages import RunJavascriptMessage
+from viser.infra._async_message_buffer import AsyncMessageBuffer
 
 from sandbox.app import wakeups
 from sandbox.app.access import Access, Grant
 from sandbox.app.inbox import Inbox
+from sandbox.app.pacing import PATH as DRAWN_PATH
+from sandbox.app.pacing import Pacer
 
 #: The viser release whose internals this module wraps (pinned in pyproject.toml and by a test).
 WRITTEN_FOR = "1.1.1"
@@ -74,6 +82,7 @@ class Gate:
         self._handshaken: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # raw connection -> Grant
         self._grants: dict[int, Grant] = {}
         self._lock = threading.Lock()
+        self.pacer = Pacer()
 
     # ------------------------------------------------------------ handshake
     def process_request(self, viser_answer: Callable | None) -> Callable:
@@ -91,6 +100,9 @@ class Gate:
                 log.warning("refused %s %s from %s: %s", "websocket" if upgrade else "request",
                             request.path.split("?")[0], peer, decision.reason)
                 return connection.respond(decision.status, decision.reason + "\n")
+            if not upgrade and request.path.startswith(DRAWN_PATH):  # a page drew a frame
+                known = self.pacer.drawn(request.path[len(DRAWN_PATH):].split("?")[0])
+                return connection.respond(http.HTTPStatus.NO_CONTENT if known else http.HTTPStatus.NOT_FOUND, "")
             if upgrade:
                 self._handshaken[connection] = decision.grant
                 limit = CONTROL_MESSAGE_BYTES if decision.grant.controls else WATCH_MESSAGE_BYTES
@@ -121,6 +133,7 @@ class Gate:
                 await dispatch(client_id, message)
 
         infra._handle_incoming_message = guarded
+        self.pacer.pace(infra._broadcast_buffer)
         self.ready = True
 
     def grant(self, client_id: int) -> Grant | None:
@@ -150,8 +163,11 @@ class Gate:
                 await dispatch(client_id, message)
 
         connection._handle_incoming_message = guarded
+        # The page reports the frames it draws, so it gets no more than it draws (sandbox.app.pacing).
+        connection.queue_message(RunJavascriptMessage(source=self.pacer.script_for(connection.client_id)))
 
     async def _on_disconnect(self, connection: Any) -> None:
+        self.pacer.forget(connection.client_id)
         with self._lock:
             self._grants.pop(connection.client_id, None)
         if self.inbox is not None:
@@ -199,6 +215,7 @@ def check_viser() -> None:
     infra = viser_infra.WebsockServer
     missing = [name for name in ("_handle_incoming_message", "on_client_connect", "on_client_disconnect")
                if not hasattr(infra, name)]
+    missing += [] if hasattr(AsyncMessageBuffer, "window_generator") else ["AsyncMessageBuffer.window_generator"]
     if not hasattr(viser_infra, "websockets") or missing:
         raise GateError(f"sandbox.app.gate was written for viser {WRITTEN_FOR} and cannot guard viser "
                         f"{viser.__version__} (missing {missing or ['websockets']}); install viser=={WRITTEN_FOR}")

@@ -1,0 +1,133 @@
+"""Send each viewer what it draws (issue 24, item 2).
+
+The frame thread changes the shared scene 30 times a second, and viser
+sends every change to every page. A page that draws in software (a
+classroom laptop, a headless test browser) draws 7-12 of them: the rest
+cost bytes and the page's time to apply, and are never seen.
+
+viser's client reports nothing per drawn frame, but it runs the Javascript
+the server sends (``RunJavascriptMessage``, viser's own way to load
+plotly). At connect, each page gets :data:`REPORT_JS` with a token of its
+own. The script marks the page's WebGL draw calls, and at the first
+animation frame after a draw it asks ``/__drawn/<token>`` (one request at a
+time): "I drew". The gate answers that address (:meth:`Pacer.drawn`).
+
+The shared scene leaves the server in windows, one connection at a time
+(viser's window generator over the broadcast buffer). A page that has
+reported once is paced: after each window it gets, the next waits until it
+reports a drawn frame again, or :data:`MOST_WAIT` passes (a hidden tab
+stops drawing). Meanwhile the buffer keeps only the newest of each node's
+updates (viser culls the older), so the next window carries the current
+frame, never a backlog. A page that never reports (viser's embed, a
+websocket client of our own) is not paced.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import secrets
+from collections import Counter
+from typing import Any, AsyncGenerator
+
+#: Where a page reports a drawn frame.
+PATH = "/__drawn/"
+#: Longest a page waits for the scene's next window when it reports no drawing (s).
+MOST_WAIT = 1.0
+
+REPORT_JS = """(() => {
+  window.__phototaxisDrawn = "%(path)s%(token)s";  // a reconnected page reports under its new token
+  if (window.__phototaxisReporting) return;
+  window.__phototaxisReporting = true;
+  let drew = false, asking = false;
+  const proto = window.WebGL2RenderingContext && WebGL2RenderingContext.prototype;
+  if (!proto) return;
+  for (const name of ["drawArrays", "drawElements", "drawArraysInstanced", "drawElementsInstanced",
+                      "drawRangeElements"]) {
+    const draw = proto[name];
+    if (typeof draw !== "function") continue;
+    proto[name] = function (...args) { drew = true; return draw.apply(this, args); };
+  }
+  const tick = () => {
+    if (drew && !asking) {
+      drew = false;
+      asking = true;
+      fetch(window.__phototaxisDrawn, {cache: "no-store", credentials: "same-origin"})
+        .catch(() => {}).finally(() => { asking = false; });
+    }
+    requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
+})();"""
+
+
+class Pacer:
+    """Which page reports under which token, and the windows of the shared scene held for each."""
+
+    def __init__(self) -> None:
+        self._client_of: dict[str, int] = {}
+        self._token_of: dict[int, str] = {}
+        self._drawn: dict[int, asyncio.Event] = {}
+        self.paced: set[int] = set()  # pages that have reported a drawn frame
+        #: per page: reports heard, and windows of the shared scene sent
+        self.reports: Counter = Counter()
+        self.windows: Counter = Counter()
+
+    # ------------------------------------------------------------ pages
+    def script_for(self, client_id: int) -> str:
+        """The reporting script for a page that just connected (on the event loop)."""
+        token = secrets.token_urlsafe(16)
+        self._client_of[token], self._token_of[client_id] = client_id, token
+        self._drawn[client_id] = asyncio.Event()
+        return REPORT_JS % {"path": PATH, "token": token}
+
+    def drawn(self, token: str) -> bool:
+        """A page reports a drawn frame (on the event loop): True if the token is a page's."""
+        client_id = self._client_of.get(token)
+        if client_id is None:
+            return False
+        self.reports[client_id] += 1
+        self.paced.add(client_id)
+        self._drawn[client_id].set()
+        return True
+
+    def forget(self, client_id: int) -> None:
+        token = self._token_of.pop(client_id, None)
+        self._client_of.pop(token, None)
+        self.paced.discard(client_id)
+        self.reports.pop(client_id, None)
+        self.windows.pop(client_id, None)
+        event = self._drawn.pop(client_id, None)
+        if event is not None:
+            event.set()  # a window held for the page goes (and its connection ends)
+
+    # ---------------------------------------------------------- windows
+    def pace(self, buffer: Any) -> None:
+        """Hold the windows ``buffer`` (viser's broadcast buffer) sends each paced page."""
+        generator = buffer.window_generator
+
+        def window_generator(client_id: int, *args: Any, **kwargs: Any) -> AsyncGenerator:
+            return self._paced(generator(client_id, *args, **kwargs), client_id, buffer.max_window_size)
+
+        buffer.window_generator = window_generator
+
+    async def _paced(self, windows: AsyncGenerator, client_id: int, full: int) -> AsyncGenerator:
+        """``windows``, each after the page's report of drawing the last. A ``full`` window (viser cuts
+        them at that many messages) may end inside a frame: the rest follows at once."""
+        try:
+            while True:
+                try:
+                    window = await windows.__anext__()
+                except StopAsyncIteration:
+                    return
+                drawn = self._drawn.get(client_id)
+                if drawn is not None:  # (None: the page has left)
+                    drawn.clear()  # the next report is of a frame drawn after this window came
+                    self.windows[client_id] += 1
+                yield window
+                if drawn is not None and client_id in self.paced and len(window) < full:
+                    try:
+                        await asyncio.wait_for(drawn.wait(), MOST_WAIT)
+                    except asyncio.TimeoutError:
+                        pass
+        finally:
+            await windows.aclose()
