@@ -31,6 +31,8 @@ def test_a_page_reports_drawn_frames_under_its_own_token_only(app):
     assert cid not in pacer.paced  # not paced before it reports
     assert report(app, token) == 204 and pacer.reports[cid] == 1 and cid in pacer.paced
     assert report(app, "not-a-token") == 404
+    for bad in ("", "../" + token, token + "/x", token[:-1], "%00", "x" * 4000):  # nothing but the token itself
+        assert report(app, bad) in (404, 414), bad
     assert report(app, token, host=f"rebind.evil.example:{app.port}") == 403  # the gate's checks come first
     assert pacer.reports[cid] == 1
     client.close()
