@@ -5,7 +5,7 @@ lets any client set any property of any control (``disabled`` is drawn by
 the page, never enforced), buffers uploads without a limit and broadcasts
 their acknowledgements into the backlog every new viewer replays. It has no
 hook for any of this, so this module reaches into its websocket server, in
-three documented places, all of them private to viser 1.1.1
+four documented places, all of them private to viser 1.1.1
 (:data:`WRITTEN_FOR`; a test pins the version, and :func:`start_server`
 refuses to start on a viser without them):
 
