@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 
 from sandbox.app.pacing import MOST_WAIT, PATH
-from tests.test_security import app, connected, http_status, own_page  # noqa: F401 - app is a fixture
+from tests.test_security import app, connected, http_status, own_page, shared_app  # noqa: F401 - fixtures
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until
 
@@ -63,3 +63,11 @@ def test_a_paced_page_gets_a_window_per_drawn_frame_and_while_silent_one_a_secon
     assert pacer.windows[cid] - before >= 5
     paced.close()
     silent.close()
+
+
+def test_a_watching_page_on_a_shared_server_is_paced_too(shared_app):
+    # Without the token a page only watches (test_security), but it draws like any page: its reports count.
+    watcher, wid, token = page_with_token(shared_app)
+    assert shared_app.gate.grant(wid).controls is False
+    assert report(shared_app, token) == 204 and wid in shared_app.gate.pacer.paced
+    watcher.close()
