@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import re
 
-from sandbox.app.pacing import MOST_WAIT, PATH
+from sandbox.app.pacing import CALM, MOST_WAIT, PATH
 from tests.test_security import app, connected, http_status, own_page, shared_app  # noqa: F401 - fixtures
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until
@@ -61,6 +61,11 @@ def test_a_paced_page_gets_a_window_per_drawn_frame_and_while_silent_one_a_secon
         assert report(app, token) == 204
         wait_until(lambda: pacer.windows[cid] > sent, what="the next window after a report")
     assert pacer.windows[cid] - before >= 5
+    # A page that keeps up again says so once, and is sent everything without reporting.
+    assert report(app, token + CALM) == 204 and cid not in pacer.paced
+    calm, theirs = pacer.windows[cid], pacer.windows[other]
+    wait_until(lambda: pacer.windows[other] >= theirs + 20, timeout=120, what="20 more windows to the unpaced")
+    assert pacer.windows[cid] - calm >= 10, (pacer.windows[cid] - calm, pacer.windows[other] - theirs)
     paced.close()
     silent.close()
 

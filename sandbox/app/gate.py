@@ -101,7 +101,7 @@ class Gate:
                             request.path.split("?")[0], peer, decision.reason)
                 return connection.respond(decision.status, decision.reason + "\n")
             if not upgrade and request.path.startswith(DRAWN_PATH):  # a page drew a frame
-                known = self.pacer.drawn(request.path[len(DRAWN_PATH):].split("?")[0])
+                known = self.pacer.drawn(request.path[len(DRAWN_PATH):])
                 return connection.respond(http.HTTPStatus.NO_CONTENT if known else http.HTTPStatus.NOT_FOUND, "")
             if upgrade:
                 self._handshaken[connection] = decision.grant

@@ -8,9 +8,14 @@ cost bytes and the page's time to apply, and are never seen.
 viser's client reports nothing per drawn frame, but it runs the Javascript
 the server sends (``RunJavascriptMessage``, viser's own way to load
 plotly). At connect, each page gets :data:`REPORT_JS` with a token of its
-own. The script marks the page's WebGL draw calls, and at the first
-animation frame after a draw it asks ``/__drawn/<token>`` (one request at a
-time): "I drew". The gate answers that address (:meth:`Pacer.drawn`).
+own. The script marks the page's WebGL draw calls. While the page is busy
+(an animation frame came more than :data:`BUSY_GAP_MS` after the last), it
+asks ``/__drawn/<token>`` at the first animation frame after a draw (one
+request at a time): "I drew". After a second with no such gap it says
+``/__drawn/<token>?calm`` once, and reports no more until it is busy again:
+a page that keeps up (a laptop with a graphics card) costs the server no
+requests (a report costs it about half a millisecond). The gate answers
+that address (:meth:`Pacer.drawn`).
 
 The shared scene leaves the server in windows, one connection at a time
 (viser's window generator over the broadcast buffer). A page that has
@@ -19,7 +24,7 @@ reports a drawn frame again, or :data:`MOST_WAIT` passes (a hidden tab
 stops drawing). Meanwhile the buffer keeps only the newest of each node's
 updates (viser culls the older), so the next window carries the current
 frame, never a backlog. A page that never reports (viser's embed, a
-websocket client of our own) is not paced.
+websocket client of our own), or says it is calm, is not paced.
 """
 
 from __future__ import annotations
@@ -33,12 +38,16 @@ from typing import Any, AsyncGenerator
 PATH = "/__drawn/"
 #: Longest a page waits for the scene's next window when it reports no drawing (s).
 MOST_WAIT = 1.0
+#: A page is busy while its animation frames come further apart than this (ms): it draws under 20 a second.
+BUSY_GAP_MS = 50
+#: What a page adds to its address when it keeps up again.
+CALM = "?calm"
 
 REPORT_JS = """(() => {
   window.__phototaxisDrawn = "%(path)s%(token)s";  // a reconnected page reports under its new token
   if (window.__phototaxisReporting) return;
   window.__phototaxisReporting = true;
-  let drew = false, asking = false;
+  let drew = false, asking = false, busy = false, last = null, calmSince = null;
   const proto = window.WebGL2RenderingContext && WebGL2RenderingContext.prototype;
   if (!proto) return;
   for (const name of ["drawArrays", "drawElements", "drawArraysInstanced", "drawElementsInstanced",
@@ -47,12 +56,28 @@ REPORT_JS = """(() => {
     if (typeof draw !== "function") continue;
     proto[name] = function (...args) { drew = true; return draw.apply(this, args); };
   }
-  const tick = () => {
-    if (drew && !asking) {
+  const ask = (suffix) => {
+    asking = true;
+    fetch(window.__phototaxisDrawn + suffix, {cache: "no-store", credentials: "same-origin"})
+      .catch(() => {}).finally(() => { asking = false; });
+  };
+  const tick = (now) => {
+    if (last !== null && now - last > %(busy_gap)d) {
+      busy = true;
+      calmSince = null;
+    } else if (busy) {
+      calmSince = calmSince === null ? now : calmSince;
+      if (now - calmSince > 1000 && !asking) {
+        busy = false;
+        ask("%(calm)s");
+      }
+    }
+    last = now;
+    if (busy && drew && !asking) {
       drew = false;
-      asking = true;
-      fetch(window.__phototaxisDrawn, {cache: "no-store", credentials: "same-origin"})
-        .catch(() => {}).finally(() => { asking = false; });
+      ask("");
+    } else if (!busy) {
+      drew = false;  // a draw while keeping up needs no report
     }
     requestAnimationFrame(tick);
   };
@@ -78,16 +103,21 @@ class Pacer:
         token = secrets.token_urlsafe(16)
         self._client_of[token], self._token_of[client_id] = client_id, token
         self._drawn[client_id] = asyncio.Event()
-        return REPORT_JS % {"path": PATH, "token": token}
+        return REPORT_JS % {"path": PATH, "token": token, "busy_gap": BUSY_GAP_MS, "calm": CALM}
 
-    def drawn(self, token: str) -> bool:
-        """A page reports a drawn frame (on the event loop): True if the token is a page's."""
-        client_id = self._client_of.get(token)
+    def drawn(self, report: str) -> bool:
+        """A page reports (on the event loop): ``<token>`` a drawn frame, ``<token>?calm`` that it keeps
+        up again (it is then sent everything). True if the token is a page's."""
+        calm = report.endswith(CALM)
+        client_id = self._client_of.get(report[:-len(CALM)] if calm else report)
         if client_id is None:
             return False
-        self.reports[client_id] += 1
-        self.paced.add(client_id)
-        self._drawn[client_id].set()
+        if calm:
+            self.paced.discard(client_id)
+        else:
+            self.reports[client_id] += 1
+            self.paced.add(client_id)
+        self._drawn[client_id].set()  # a window held for the page goes
         return True
 
     def forget(self, client_id: int) -> None:
