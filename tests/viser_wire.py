@@ -52,31 +52,29 @@ class RawClient:
         self.send("FileTransferPart", source_component_uuid=component, transfer_uuid=transfer, part_index=index,
                   content=content)
 
-    def received_types(self, seconds: float, until: frozenset[str] = frozenset()) -> list[str]:
-        """The types of the messages the server sends within ``seconds``, or until every type in
-        ``until`` has come (a wait on a condition; without ``until``, a window for what must not come)."""
-        types: list[str] = []
-        deadline = time.monotonic() + seconds
-        while (left := deadline - time.monotonic()) > 0 and not (until and until <= set(types)):
-            try:
-                raw = self.ws.recv(timeout=left)
-            except TimeoutError:
-                break
-            types.extend(m.get("type", "?") for m in decode(raw))
-        return types
-
-    def first(self, message_type: str, seconds: float) -> dict | None:
-        """The first message of ``message_type`` the server sends within ``seconds``."""
+    def _messages(self, seconds: float):
+        """The messages the server sends within ``seconds``, as they come."""
         deadline = time.monotonic() + seconds
         while (left := deadline - time.monotonic()) > 0:
             try:
                 raw = self.ws.recv(timeout=left)
             except TimeoutError:
+                return
+            yield from decode(raw)
+
+    def received_types(self, seconds: float, until: frozenset[str] = frozenset()) -> list[str]:
+        """The types of the messages the server sends within ``seconds``, or until every type in
+        ``until`` has come (a wait on a condition; without ``until``, a window for what must not come)."""
+        types: list[str] = []
+        for message in self._messages(seconds):
+            types.append(message.get("type", "?"))
+            if until and until <= set(types):
                 break
-            for message in decode(raw):
-                if message.get("type") == message_type:
-                    return message
-        return None
+        return types
+
+    def first(self, message_type: str, seconds: float) -> dict | None:
+        """The first message of ``message_type`` the server sends within ``seconds``."""
+        return next((m for m in self._messages(seconds) if m.get("type") == message_type), None)
 
     def close(self) -> None:
         self.ws.close()
