@@ -121,6 +121,20 @@ def dismiss_notifications(page) -> None:
 
 
 # --------------------------------------------------------------------- tests
+def turned_degrees(client) -> float:
+    """How far a page's top-down view is turned from north-up, as the server last heard its camera (a
+    camera straight above is turned by the small horizontal offset between it and what it looks at)."""
+    dx, dy = (np.asarray(client.camera.position) - np.asarray(client.camera.look_at))[:2]
+    return float(np.degrees(np.arctan2(dx, -dy)))
+
+
+def cameras_seen(app) -> list[str]:
+    """Each page's camera as the server last heard it (for a failure's message)."""
+    return [f"page {client.client_id}: at {np.round(client.camera.position, 3)}, looking at "
+            f"{np.round(client.camera.look_at, 3)}, turned {turned_degrees(client):.1f} deg"
+            for client in app.server.get_clients().values()]
+
+
 def test_page_loads_and_draws_the_arena(app, page):
     from PIL import Image
 
@@ -249,9 +263,13 @@ def test_run_controls(app, page):
     thumb = page.get_by_role("slider").first  # "Steps per frame", the first slider of the panel
     speed = runner.steps_per_frame
     thumb.focus()
-    thumb.press("ArrowRight")
-    thumb.press("ArrowRight")
+    thumb.press("ArrowRight", delay=200)  # held like a hand holds it: viser's camera turns 50 degrees a second
+    thumb.press("ArrowRight", delay=200)
     wait_until(lambda: runner.steps_per_frame == speed + 2, what="the speed to change")
+    # The arrows moved the slider, and only the slider: the view is not turned (sandbox.app.page_keys).
+    client = next(iter(app.server.get_clients().values()))
+    wait_until_steady(lambda: tuple(np.round(client.camera.position, 3)), quiet=1.0, timeout=30)
+    assert abs(turned_degrees(client)) < 1.0, cameras_seen(app)
     click_button(page, "Play")
     wait_until(lambda: runner.playing, what="play")
     page.get_by_label("Show sensed light", exact=True).check()
@@ -572,7 +590,7 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
         if abs(right[1] - left[1]) < 0.5:
             break
     metres_per_pixel = (right[0] - left[0]) / 120
-    assert metres_per_pixel > 0 and abs(right[1] - left[1]) < 0.5
+    assert metres_per_pixel > 0 and abs(right[1] - left[1]) < 0.5, (left, right, cameras_seen(app))
     radius = float(app.panel.lamp.radius.value)
 
     def lit_about(centre: np.ndarray) -> bool:

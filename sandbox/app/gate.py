@@ -52,6 +52,7 @@ from sandbox.app.access import Access, Grant
 from sandbox.app.inbox import Inbox
 from sandbox.app.pacing import PATH as DRAWN_PATH
 from sandbox.app.pacing import Pacer
+from sandbox.app.page_keys import KEYS_JS
 
 #: The viser release whose internals this module wraps (pinned in pyproject.toml and by a test).
 WRITTEN_FOR = "1.1.1"
@@ -163,8 +164,10 @@ class Gate:
                 await dispatch(client_id, message)
 
         connection._handle_incoming_message = guarded
-        # The page reports the frames it draws, so it gets no more than it draws (sandbox.app.pacing).
-        connection.queue_message(RunJavascriptMessage(source=self.pacer.script_for(connection.client_id)))
+        # The page reports the frames it draws, so it gets no more than it draws (sandbox.app.pacing), and
+        # arrows pressed on a slider do not also turn its camera (sandbox.app.page_keys).
+        for source in (self.pacer.script_for(connection.client_id), KEYS_JS):
+            connection.queue_message(RunJavascriptMessage(source=source))
 
     async def _on_disconnect(self, connection: Any) -> None:
         self.pacer.forget(connection.client_id)
