@@ -579,18 +579,29 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
         wait_until(lambda: app.panel.lamp._centre != before, what="the lamp moved")
         return np.array(app.panel.lamp._centre)
 
-    # Two clicks tell how the page's pixels map onto the floor (a top-down camera: one scale, y flipped).
-    # A camera still easing into place skews them (on a loaded machine their y once differed by 1.8 m,
-    # and once by 4.4 m after the page had reported no move for half a second), so wait for every
-    # page's camera to rest, and measure again while the two clicks do not land level.
+    # Three clicks tell how the page's pixels map onto the floor: a camera straight above maps them by a
+    # turn, one scale and a flip (its turn is the page's own: viser turns it on arrow keys and drags). A
+    # camera still easing into place between the clicks gives no such map (on a loaded machine two clicks
+    # once landed 4.4 m apart in y after the page had reported no move for half a second), so wait for
+    # every page's camera to rest, and measure again while the map is not one.
+    pixels = np.array([[cx - 60, cy], [cx + 60, cy], [cx, cy - 60]])
     for _ in range(4):
         wait_until_steady(lambda: [tuple(np.round(c.camera.position, 2)) for c in app.server.get_clients().values()],
                           quiet=1.0, timeout=30)
-        left, right = click_floor(cx - 60, cy), click_floor(cx + 60, cy)
-        if abs(right[1] - left[1]) < 0.5:
+        floors = np.array([click_floor(*pixel) for pixel in pixels])
+        # floor = pixel @ linear + offset, from the three clicks
+        solved = np.linalg.solve(np.column_stack([pixels, np.ones(3)]), floors)
+        linear, offset = solved[:2], solved[2]
+        scales = np.linalg.norm(linear, axis=0)
+        if np.linalg.det(linear) < 0 and abs(scales[0] / scales[1] - 1) < 0.05 and \
+                abs(linear[:, 0] @ linear[:, 1]) < 0.05 * scales.prod():
             break
-    metres_per_pixel = (right[0] - left[0]) / 120
-    assert metres_per_pixel > 0 and abs(right[1] - left[1]) < 0.5, (left, right, cameras_seen(app))
+    assert np.linalg.det(linear) < 0 and abs(scales[0] / scales[1] - 1) < 0.05 and \
+        abs(linear[:, 0] @ linear[:, 1]) < 0.05 * scales.prod(), (floors, cameras_seen(app))
+
+    def pixel_of(floor: np.ndarray) -> tuple[float, float]:
+        return tuple(np.linalg.solve(linear.T, np.asarray(floor) - offset))
+
     radius = float(app.panel.lamp.radius.value)
 
     def lit_about(centre: np.ndarray) -> bool:
@@ -598,13 +609,12 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
         pitch = runner.latest.world_config.light_pitch
         return len(lit) > 0 and np.hypot(*((lit + 0.5) * pitch - centre).T).max() <= radius
 
-    wait_until(lambda: lit_about(right), what="the lights about the click, and none elsewhere")
+    wait_until(lambda: lit_about(floors[-1]), what="the lights about the click, and none elsewhere")
     wait_until(lambda: not app.view.handles["light_outline"].visible, what="the paper's outline hidden")
     # Click on a robot: the lamp lights it, and it charges (green: more than half full).
     robot = int(np.argmin(runner.latest.robot_charges))
     target = runner.latest.robot_positions[robot]
-    centre = click_floor(cx + (target[0] - (left[0] + right[0]) / 2) / metres_per_pixel,
-                         cy - (target[1] - left[1]) / metres_per_pixel)
+    centre = click_floor(*pixel_of(target))
     assert np.hypot(*(centre - target)) < 1.5
     capacity = runner.latest.world_config.capacity
     wait_until(lambda: ((np.hypot(*(runner.latest.robot_positions - centre).T) <= radius)
@@ -615,15 +625,13 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
     page.get_by_label("A click", exact=True).click()
     page.get_by_role("option", name="paints lights on", exact=True).click()
     wait_until(lambda: app.panel.lamp.click_does.value == "paints lights on", what="the brush")
-    lamp_pixel = (cx + (centre[0] - (left[0] + right[0]) / 2) / metres_per_pixel,
-                  cy - (centre[1] - left[1]) / metres_per_pixel)
     away = -1 if centre[0] > runner.latest.world_config.centre else 1  # 12 m towards the arena's middle
-    click_floor(lamp_pixel[0] + away * 12 / metres_per_pixel, lamp_pixel[1])
+    click_floor(*pixel_of(centre + [away * 12, 0]))
     wait_until(lambda: (runner.latest.intensities > 0).sum() > 1.5 * lit_lamp, what="a painted patch beside the lamp")
     page.get_by_label("A click", exact=True).click()
     page.get_by_role("option", name="erases lights", exact=True).click()
     wait_until(lambda: app.panel.lamp.click_does.value == "erases lights", what="the eraser")
-    click_floor(*lamp_pixel)
+    click_floor(*pixel_of(centre))
     ix, iy = (centre / runner.latest.world_config.light_pitch).astype(int)
     wait_until(lambda: runner.latest.intensities[ix, iy] == 0 and runner.latest.intensities.any(),
                what="the lamp's lights erased, the painted ones kept")
