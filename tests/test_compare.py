@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sandbox.app.compare import COMPARE_CASES, SAME, Lockstep, partner_config, side_config
+from sandbox.app.compare import COMPARE_CASES, LEAD_FRAMES, SAME, Lockstep, partner_config, side_config
 from sandbox.app.runner import Runner
 from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 from sandbox.model.config import CASES, Config, ConfigError
@@ -48,6 +48,29 @@ def test_steps_allowed_by_a_hold_are_counted_by_hand():
     assert runner._steps_allowed(25) == 0
     runner.hold(None)
     assert runner._steps_allowed(25) == 25
+
+
+def test_the_lead_is_six_frames_of_steps_by_hand():
+    """The target lies LEAD_FRAMES (6) frames ahead of the slower world: 6 x 25 = 150 steps at the default
+    speed; at the fastest setting, 6 frames at the measured rate (3,000 steps/s at 30 frames/s: 600),
+    and never under two chunks of 10."""
+
+    class Main:
+        steps_per_frame, fps = 25, 30.0
+
+        def subscribe(self, listener):
+            pass
+
+        def steps_per_second(self):
+            return 3000.0
+
+    main = Main()
+    lockstep = Lockstep(main)
+    assert lockstep._lead() == 150
+    main.steps_per_frame = 100  # FASTEST
+    assert lockstep._lead() == 600
+    main.steps_per_second = lambda: 10.0
+    assert lockstep._lead() == 20
 
 
 def test_partner_config_takes_the_cases_goal_and_strategies_and_nothing_else():
@@ -107,11 +130,11 @@ def test_both_worlds_start_from_the_same_layout(pair):
     assert np.array_equal(main.latest.robot_positions, partner.latest.robot_positions)
 
 
-def test_playing_worlds_stay_within_two_frames_and_pause_on_the_same_step(pair):
+def test_playing_worlds_stay_within_the_lead_and_pause_on_the_same_step(pair):
     lockstep, main, partner = pair
     _reset(lockstep)
     lockstep.set_playing(True)
-    lead = 2 * main.steps_per_frame
+    lead = LEAD_FRAMES * main.steps_per_frame
     gaps = []
     for _ in range(30):
         frame = main.latest.frame
@@ -132,7 +155,7 @@ def test_a_slow_world_sets_the_pace(pair):
     partner.set_speed(1)  # as if its machine were five times slower
     lockstep.set_playing(True)
     wait_until(lambda: partner.latest.step >= 40, what="the slow world to step")
-    assert main.latest.step <= partner.latest.step + 2 * main.steps_per_frame + main.steps_per_frame
+    assert main.latest.step <= partner.latest.step + LEAD_FRAMES * main.steps_per_frame + main.steps_per_frame
 
 
 def test_unpaired_the_running_world_goes_on_alone(pair):
