@@ -289,8 +289,13 @@ def test_the_keyboard_runs_the_sandbox(app, page):
         page.keyboard.press("Space")
         wait_until(lambda: not runner.playing, what="space to pause")
     before = paused_step(runner)
-    page.keyboard.press("s")
+    client = next(iter(app.server.get_clients().values()))
+    looking_at = tuple(client.camera.look_at)
+    page.keyboard.press("s", delay=200)  # held like a hand holds it: viser's camera backs away while s is down
     wait_until(lambda: runner.latest.step == before + runner.latest.world_config.update_every, what="s to step")
+    # s stepped, and only stepped: the view did not move (sandbox.app.page_keys).
+    wait_until_steady(lambda: tuple(np.round(client.camera.look_at, 3)), quiet=1.0, timeout=30)
+    assert np.allclose(client.camera.look_at, looking_at, atol=1e-3), cameras_seen(app)
     page.keyboard.press("r")
     wait_until(lambda: runner.latest.step == 0, what="r to reset")
     client_id = next(iter(app.server.get_clients()))
