@@ -73,6 +73,21 @@ def test_the_lead_is_six_frames_of_steps_by_hand():
     assert lockstep._lead() == 20
 
 
+def test_the_right_curve_is_read_at_the_left_worlds_steps_by_hand():
+    """Each world samples at the end of its own frames: the right one's samples at 0, 100 and 210 (values
+    0, 10, 32), read at the left's 0, 105, 205 and 305: 0; 10 + 22 x 5/110 = 11; 10 + 22 x 105/110 = 31;
+    and nothing past its last sample."""
+    from types import SimpleNamespace
+
+    from sandbox.app.panel.metrics import curve_at
+
+    samples = [SimpleNamespace(step=step, fraction_in_goal=value)
+               for step, value in ((0, 0.0), (100, 10.0), (210, 32.0))]
+    read = curve_at(np.array([0, 105, 205, 305], np.float32), samples, "fraction_in_goal")
+    assert np.allclose(read[:3], [0.0, 11.0, 31.0]) and np.isnan(read[3])
+    assert np.isnan(curve_at(np.array([0.0, 5.0]), [], "fraction_in_goal")).all()
+
+
 def test_partner_config_takes_the_cases_goal_and_strategies_and_nothing_else():
     base = Config(robots=50, flare=1.5, chase=2.0, outline="offset", seed=7)
     switch = partner_config(base, "star-switch")

@@ -33,6 +33,18 @@ CHARTS = (("chart_goal", "fraction_in_goal", "in goal", "#ff5ca8"),
           ("chart_charged", "charged_robots", "with charge", "#2ecc40"))
 
 
+def curve_at(steps: np.ndarray, samples: list, field: str) -> np.ndarray:
+    """``field`` of ``samples`` (one world's, in step order) at ``steps`` (the other world's), drawn
+    straight between two samples; NaN outside them (no curve where that world has not been). Each world
+    samples at the end of its own frames, and two worlds in lockstep may end them on different steps
+    (up to compare.LEAD_FRAMES frames apart), so the two series rarely share a step."""
+    if not samples:
+        return np.full(len(steps), np.nan, np.float32)
+    at = np.array([s.step for s in samples], np.float64)
+    values = np.array([getattr(s, field) for s in samples], np.float64)
+    return np.interp(steps, at, values, left=np.nan, right=np.nan).astype(np.float32)
+
+
 class MetricsFolder:
     def __init__(self, gui: Any, runner: Any, compared: Callable[[], Any] = lambda: None):
         """``compared()``: compare mode's second runner, or None; its curves join the charts."""
@@ -101,14 +113,12 @@ class MetricsFolder:
         self._charted, self._charted_at = key, now
         shown = [series[i] for i in chart_indices(len(series), CHART_POINTS)]
         steps = np.array([s.step for s in shown], np.float32)
-        by_step = {s.step: s for s in other or ()}
         # (The app sends a frame's scene and panel changes in one batch: series and data arrive together.)
         for attr, field, label, colour in CHARTS:
             chart = getattr(self, attr)
             data = [steps, np.array([getattr(s, field) for s in shown], np.float32)]
-            if other is not None:  # the second world's value at the same steps (lockstep: it has them)
-                data.append(np.array([getattr(by_step[s.step], field) if s.step in by_step else np.nan
-                                      for s in shown], np.float32))
+            if other is not None:  # the second world's curve, read at this world's steps
+                data.append(curve_at(steps, other, field))
             if attr == "chart_goal":
                 data.append(self.mark_series(steps).astype(np.float32))
             series_shown = self._series(label, colour, names, marks=attr == "chart_goal")
