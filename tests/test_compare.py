@@ -234,7 +234,7 @@ def test_learns_show_me_runs_the_case_without_and_with_the_strategy(comparing_ap
     # The compared world steps only in step with this one: once it has played, both run from the same
     # start (this world's square may have run alone for a moment, between the case and the comparison).
     wait_until(lambda: app.comparison.runner.latest.step > 100, what="the worlds to play")
-    assert abs(app.runner.latest.step - app.comparison.runner.latest.step) <= 3 * app.runner.steps_per_frame
+    assert abs(app.runner.latest.step - app.comparison.runner.latest.step) <= (LEAD_FRAMES + 1) * app.runner.steps_per_frame
 
 
 def test_compare_with_the_same_world_under_the_papers_lights():
