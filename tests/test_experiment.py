@@ -154,7 +154,7 @@ def test_dask_local_cluster(tmp_path):
     distributed = pytest.importorskip("distributed")
     # One worker process: the trials still travel to another process and back (2 would cost 1.5 s more).
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:
         out = tmp_path / "dask"
         assert sweep(out, "--scheduler", cluster.scheduler_address) == 0
     check_outputs(out, ["square", "square-flare"], [0, 1])
