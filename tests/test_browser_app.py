@@ -591,6 +591,13 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
     # once landed 4.4 m apart in y after the page had reported no move for half a second), so wait for
     # every page's camera to rest, and measure again while the map is not one.
     pixels = np.array([[cx - 60, cy], [cx + 60, cy], [cx, cy - 60]])
+
+    def from_above(linear: np.ndarray) -> bool:
+        """Whether a pixels-to-floor map is a turn, one scale (within 5 %) and a flip."""
+        scales = np.linalg.norm(linear, axis=0)
+        return bool(np.linalg.det(linear) < 0 and abs(scales[0] / scales[1] - 1) < 0.05
+                    and abs(linear[:, 0] @ linear[:, 1]) < 0.05 * scales.prod())
+
     for _ in range(4):
         wait_until_steady(lambda: [tuple(np.round(c.camera.position, 2)) for c in app.server.get_clients().values()],
                           quiet=1.0, timeout=30)
@@ -598,12 +605,9 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
         # floor = pixel @ linear + offset, from the three clicks
         solved = np.linalg.solve(np.column_stack([pixels, np.ones(3)]), floors)
         linear, offset = solved[:2], solved[2]
-        scales = np.linalg.norm(linear, axis=0)
-        if np.linalg.det(linear) < 0 and abs(scales[0] / scales[1] - 1) < 0.05 and \
-                abs(linear[:, 0] @ linear[:, 1]) < 0.05 * scales.prod():
+        if from_above(linear):
             break
-    assert np.linalg.det(linear) < 0 and abs(scales[0] / scales[1] - 1) < 0.05 and \
-        abs(linear[:, 0] @ linear[:, 1]) < 0.05 * scales.prod(), (floors, cameras_seen(app))
+    assert from_above(linear), (floors, cameras_seen(app))
 
     def pixel_of(floor: np.ndarray) -> tuple[float, float]:
         return tuple(np.linalg.solve(linear.T, np.asarray(floor) - offset))

@@ -77,15 +77,11 @@ def test_the_right_curve_is_read_at_the_left_worlds_steps_by_hand():
     """Each world samples at the end of its own frames: the right one's samples at 0, 100 and 210 (values
     0, 10, 32), read at the left's 0, 105, 205 and 305: 0; 10 + 22 x 5/110 = 11; 10 + 22 x 105/110 = 31;
     and nothing past its last sample."""
-    from types import SimpleNamespace
-
     from sandbox.app.panel.metrics import curve_at
 
-    samples = [SimpleNamespace(step=step, fraction_in_goal=value)
-               for step, value in ((0, 0.0), (100, 10.0), (210, 32.0))]
-    read = curve_at(np.array([0, 105, 205, 305], np.float32), samples, "fraction_in_goal")
+    read = curve_at(np.array([0, 105, 205, 305], np.float32), np.array([0, 100, 210]), np.array([0.0, 10.0, 32.0]))
     assert np.allclose(read[:3], [0.0, 11.0, 31.0]) and np.isnan(read[3])
-    assert np.isnan(curve_at(np.array([0.0, 5.0]), [], "fraction_in_goal")).all()
+    assert np.isnan(curve_at(np.array([0.0, 5.0]), np.array([]), np.array([]))).all()
 
 
 def test_partner_config_takes_the_cases_goal_and_strategies_and_nothing_else():
@@ -234,7 +230,8 @@ def test_learns_show_me_runs_the_case_without_and_with_the_strategy(comparing_ap
     # The compared world steps only in step with this one: once it has played, both run from the same
     # start (this world's square may have run alone for a moment, between the case and the comparison).
     wait_until(lambda: app.comparison.runner.latest.step > 100, what="the worlds to play")
-    assert abs(app.runner.latest.step - app.comparison.runner.latest.step) <= (LEAD_FRAMES + 1) * app.runner.steps_per_frame
+    apart = abs(app.runner.latest.step - app.comparison.runner.latest.step)
+    assert apart <= (LEAD_FRAMES + 1) * app.runner.steps_per_frame
 
 
 def test_compare_with_the_same_world_under_the_papers_lights():

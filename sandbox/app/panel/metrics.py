@@ -33,15 +33,13 @@ CHARTS = (("chart_goal", "fraction_in_goal", "in goal", "#ff5ca8"),
           ("chart_charged", "charged_robots", "with charge", "#2ecc40"))
 
 
-def curve_at(steps: np.ndarray, samples: list, field: str) -> np.ndarray:
-    """``field`` of ``samples`` (one world's, in step order) at ``steps`` (the other world's), drawn
-    straight between two samples; NaN outside them (no curve where that world has not been). Each world
-    samples at the end of its own frames, and two worlds in lockstep may end them on different steps
-    (up to compare.LEAD_FRAMES frames apart), so the two series rarely share a step."""
-    if not samples:
+def curve_at(steps: np.ndarray, at: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """One world's curve (``values`` sampled at steps ``at``, in step order) read at ``steps`` (the other
+    world's), drawn straight between two samples; NaN outside them (no curve where that world has not
+    been). Each world samples at the end of its own frames, and two worlds in lockstep may end them on
+    different steps (up to compare.LEAD_FRAMES frames apart), so the two series rarely share a step."""
+    if len(at) == 0:
         return np.full(len(steps), np.nan, np.float32)
-    at = np.array([s.step for s in samples], np.float64)
-    values = np.array([getattr(s, field) for s in samples], np.float64)
     return np.interp(steps, at, values, left=np.nan, right=np.nan).astype(np.float32)
 
 
@@ -113,12 +111,13 @@ class MetricsFolder:
         self._charted, self._charted_at = key, now
         shown = [series[i] for i in chart_indices(len(series), CHART_POINTS)]
         steps = np.array([s.step for s in shown], np.float32)
+        other_steps = None if other is None else np.array([s.step for s in other], np.float64)
         # (The app sends a frame's scene and panel changes in one batch: series and data arrive together.)
         for attr, field, label, colour in CHARTS:
             chart = getattr(self, attr)
             data = [steps, np.array([getattr(s, field) for s in shown], np.float32)]
             if other is not None:  # the second world's curve, read at this world's steps
-                data.append(curve_at(steps, other, field))
+                data.append(curve_at(steps, other_steps, np.array([getattr(s, field) for s in other], np.float64)))
             if attr == "chart_goal":
                 data.append(self.mark_series(steps).astype(np.float32))
             series_shown = self._series(label, colour, names, marks=attr == "chart_goal")
