@@ -39,6 +39,7 @@ import io
 import logging
 import threading
 import weakref
+from concurrent.futures import Future
 from typing import Any, Callable
 
 import viser
@@ -53,6 +54,7 @@ from sandbox.app.inbox import Inbox
 from sandbox.app.pacing import PATH as DRAWN_PATH
 from sandbox.app.pacing import Pacer
 from sandbox.app.page_keys import KEYS_JS
+from sandbox.app.viser_seam import route_callbacks
 
 #: The viser release whose internals this module wraps (pinned in pyproject.toml and by a test).
 WRITTEN_FOR = "1.1.1"
@@ -225,8 +227,11 @@ def check_viser() -> None:
 
 
 def start_server(access: Access, *, host: str, port: int, label: str, verbose: bool = False,
-                 inbox: Callable[[Gate], Inbox] | None = None) -> tuple[viser.ViserServer, Gate]:
-    """A viser server behind a gate for ``access``; ``inbox(gate)`` builds the message checks."""
+                 inbox: Callable[[Gate], Inbox] | None = None,
+                 callbacks: Callable[..., Future] | None = None) -> tuple[viser.ViserServer, Gate]:
+    """A viser server behind a gate for ``access``; ``inbox(gate)`` builds the message checks;
+    ``callbacks(fn, *args)``, if given, runs every callback viser would run on its thread pool (the
+    app's event queue), from before the first page can connect."""
     global _gate_being_built
     check_viser()
     _install()
@@ -240,6 +245,8 @@ def start_server(access: Access, *, host: str, port: int, label: str, verbose: b
         finally:
             _gate_being_built = None
     try:
+        if callbacks is not None:  # before the gate opens: no page's callback goes anywhere else
+            route_callbacks(server, callbacks)
         gate.attach(server, inbox(gate) if inbox else Inbox(server, gate))
     except BaseException:
         server.stop()
