@@ -77,7 +77,6 @@ class App:
             return kind(partner_config, fps=fps, steps_per_frame=self.runner.steps_per_frame,
                         program_time_limit=program_time_limit, **kwargs)
 
-        self._frame_lock = threading.Lock()
         self.lockstep = Lockstep(self.runner)
         try:
             self.server, self.gate = start_server(self.access, host=host, port=port, label=TITLE, verbose=verbose,
@@ -90,7 +89,7 @@ class App:
             read_icons_once()
             self._configure_page()
             self.view = SceneView(self.server.scene, self.runner.latest, caption_over_construction=not whole_arena)
-            self.comparison = Comparison(self.server, self.lockstep, make_runner, self._frame_lock,
+            self.comparison = Comparison(self.server, self.lockstep, make_runner,
                                          on_layout=self._reframe_all, on_crash=self._on_partner_crash,
                                          caption_over_construction=not whole_arena, events=self.events)
             # Loading a program runs a Python file on this machine: the page offers it only where a
@@ -132,16 +131,15 @@ class App:
 
     # ------------------------------------------------- events (all on the event thread)
     def _on_frame(self, snap: Snapshot) -> None:
-        with self._frame_lock:
-            # The scene and the panel's read-outs of one snapshot in one batch: the page applies a
-            # batch at once, so what it shows comes from one step.
-            with self.server.atomic():
-                self.view.update(snap)
-                self.comparison.draw()  # compare mode's second world, in the same picture
-                self.panel.update(snap)
-            self.panel.inspector.draw(snap)  # each viewer's own marks, in its own messages
-            self.panel.on_frame_drawn()
-            self.frames_drawn += 1
+        # The scene and the panel's read-outs of one snapshot in one batch: the page applies a
+        # batch at once, so what it shows comes from one step.
+        with self.server.atomic():
+            self.view.update(snap)
+            self.comparison.draw()  # compare mode's second world, in the same picture
+            self.panel.update(snap)
+        self.panel.inspector.draw(snap)  # each viewer's own marks, in its own messages
+        self.panel.on_frame_drawn()
+        self.frames_drawn += 1
 
     def _on_disconnect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
@@ -195,7 +193,7 @@ class App:
     def _reframe_all(self, beside: float | None) -> None:
         """Compare mode began or ended: every page frames both worlds, or the one."""
         self.panel.framing.beside = beside
-        with self._frame_lock, self.server.atomic():  # beside the second world, the caption goes under the arena
+        with self.server.atomic():  # beside the second world, the caption goes under the arena
             self.view.set_caption_below(beside is not None, self.runner.latest)
         for client in list(self.server.get_clients().values()):
             if client.client_id not in self.panel.inspector.followers:
