@@ -541,6 +541,7 @@ def test_behind_a_proxy_a_page_is_this_machines_only_when_the_proxy_is_trusted()
     for proxy in ({"X-Forwarded-For": "127.0.0.1"}, {"Forwarded": "for=127.0.0.1"}, {"X-Real-IP": "127.0.0.1"}):
         assert grant(plain, proxy) == Grant("control", False, "127.0.0.1"), proxy
     assert not grant(plain, {"Origin": "https://classroom.example"}).programs
+    assert Access.for_server("127.0.0.1", trust_proxy=True).token  # visitors come from afar: control needs one
     trusted = Access.for_server("0.0.0.0", token=TOKEN, trust_proxy=True)
     assert grant(trusted, {"X-Forwarded-For": "127.0.0.1, 203.0.113.9"}) == Grant("control", False, "203.0.113.9")
     assert grant(trusted, {"X-Forwarded-For": "203.0.113.9, 127.0.0.1"}) == Grant("control", True, "127.0.0.1")

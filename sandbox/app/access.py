@@ -156,8 +156,8 @@ class Access:
     def for_server(cls, listen_host: str, *, token: str | None = None, viewers: str = WATCH,
                    allow_programs: bool = False, allow_hosts: Iterable[str] = (),
                    allow_origins: Iterable[str] = (), trust_proxy: bool = False) -> "Access":
-        """The rules for a server on ``listen_host``: shared beyond this machine, it needs a token
-        (a new one unless given); on loopback, only if one is given."""
+        """The rules for a server on ``listen_host``: shared beyond this machine or behind a trusted proxy,
+        it needs a token (a new one unless given); otherwise only if one is given."""
         if viewers not in (WATCH, "none"):
             raise ValueError(f"viewers must be 'watch' or 'none', not {viewers!r}")
         if token and not well_formed_token(token):
@@ -167,7 +167,7 @@ class Access:
         bad = [o for o, key in origins.items() if key is None]
         if bad:
             raise ValueError(f"--allow-origin {bad[0]!r} is not an origin such as https://example.org:8443")
-        if token is None and is_shared(listen_host):
+        if token is None and (is_shared(listen_host) or trust_proxy):  # behind a proxy, visitors come from afar
             token = new_token()
         return cls(listen_host=listen_host, token=token or None, viewers=viewers, allow_programs=allow_programs,
                    allowed_hosts=frozenset(h.lower() for h in allow_hosts),

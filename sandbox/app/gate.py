@@ -13,9 +13,11 @@ refuses to start on a viser without them):
    (it serves the page with it). Inside viser's infra module only, the name
    ``websockets`` is replaced by a view whose ``asyncio.server.serve`` wraps
    that function with :meth:`Gate.process_request`, which applies
-   :mod:`sandbox.app.access` to every HTTP request and websocket upgrade, and
-   caps message sizes. While a server is being built and until its gate is
-   attached, every request is refused (the gate fails closed).
+   :mod:`sandbox.app.access` to every HTTP request and websocket upgrade,
+   caps message sizes and counts connections (room kept for pages with the
+   token, a limit per address for the others). While a server is being built
+   and until its gate is attached, every request is refused (the gate fails
+   closed).
 2. **Each connection's grant.** An infra-level connect callback (it runs
    before the connection's first message is read) takes the grant the
    handshake decided for that raw connection.
