@@ -69,7 +69,7 @@ MAX_CONNECTIONS = 64
 #: Of those, the ones kept for pages with the token: pages without it never hold more than the rest, so
 #: the presenter connects however many others try.
 TOKEN_RESERVE = 8
-#: Pages without the token from one address (sandbox.app.access.address_group: all of this machine is one).
+#: Pages without the token from one address (sandbox.app.access.address_group: every loopback address is one).
 WATCHERS_PER_ADDRESS = 16
 
 log = logging.getLogger("sandbox.app.gate")
