@@ -66,8 +66,8 @@ CONTROL_MESSAGE_BYTES = 1024 * 1024
 WATCH_MESSAGE_BYTES = 64 * 1024
 #: Frames websockets may hold unread per connection (its default is 16).
 MAX_QUEUE = 1
-#: Open connections at once, watching pages included.
-MAX_CONNECTIONS = 64
+#: Open connections at once, watching pages included: a class of 64 watching pages and 8 with the token.
+MAX_CONNECTIONS = 72
 #: Of those, the ones kept for pages with the token: pages without it never hold more than the rest, so
 #: the presenter connects however many others try.
 TOKEN_RESERVE = 8
