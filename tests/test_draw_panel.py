@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.panel.draw import PICK_TEMPLATE, status_text
+from sandbox.app.draw_view import DIM_OPACITY  # noqa: I001 - after the panel, which imports it first
 from sandbox.model.geometry import signed_area
 from sandbox.shapes.templates import template_vertices
 from tests.test_security import connected, make_app, own_page, uuid_of, wait_until
@@ -47,6 +48,7 @@ def test_clicks_add_snapped_points_only_while_drawing(draw):
     assert not draw.click((10.2, 9.9))  # not drawing: the inspector's click
     draw._set_drawing(True)
     assert draw.view._pad is not None  # drags on the floor place points now
+    assert draw.view._pad.opacity == DIM_OPACITY > 0.3  # and the live scene is dimmed under the drawing
     for x, y in [(10.2, 9.9), (13.8, 10.1), (14.1, 14.2)]:
         assert draw.click((x, y))
     assert draw.points == [(10.0, 10.0), (14.0, 10.0), (14.0, 14.0)]
