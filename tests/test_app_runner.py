@@ -555,3 +555,22 @@ def test_the_inspector_says_which_dot_is_which_photocell_and_what_doing_means(ru
                                                             pal.SENSOR_COLOUR_NAMES)]
     assert len(pal.SENSOR_COLOUR_NAMES) == len(pal.SENSOR_COLOURS) == 4
     assert "**Commanded**" in text and "how it really moves" in text
+
+
+def test_explain_the_result_says_where_the_strays_lie_and_rings_them(app):
+    """Issue 40, item 5: on demand, the share, where the boxes outside the goal lie, what 100 % means,
+    what ran; the boxes outside are ringed on the floor until a new world starts."""
+    folder = app.panel.result
+    wait_until(lambda: app.runner.latest.step > 50, what="a few steps")
+    snap = app.runner.latest
+    text = app.events.call(folder.explain, snap)
+    outside = int((~snap.box_in_goal).sum())
+    assert f"({len(snap.box_in_goal) - outside} of {len(snap.box_in_goal)})" in text
+    assert f"Of the {outside} boxes outside the goal" in text and "perfect packing" in text
+    assert "**Ran:** circle" in text and folder.highlight.value
+    assert folder.rings.visible and len(folder.rings.points) == outside
+    world = snap.world_key
+    app.runner.reset()
+    wait_until(lambda: app.runner.latest.world_key != world, what="a new world")
+    wait_until(lambda: not folder.highlight.value and not folder.rings.visible, what="the rings off")
+    assert "press *Explain the result* again" in folder.text.content

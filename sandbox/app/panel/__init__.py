@@ -27,6 +27,7 @@ from sandbox.app.panel.metrics import MetricsFolder
 from sandbox.app.panel.parameters import ParametersFolder
 from sandbox.app.panel.program import ProgramFolder
 from sandbox.app.panel.recording import RecordFolder
+from sandbox.app.panel.result import ResultFolder
 from sandbox.app.panel.run import RunFolder
 from sandbox.app.panel.shape import ShapeFolder
 from sandbox.app.panel.strategies import StrategiesFolder
@@ -65,9 +66,10 @@ class Panel:
         self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark, post=post)
         self.compare = CompareFolder(gui, runner, comparison, on_change=self.metrics.mark, post=post)
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
+        self.result = ResultFolder(gui, runner, server.scene)
         self.record = RecordFolder(gui, server, runner)
         self.folders = (self.run, self.compare, self.shape, self.advice, self.strategies, self.program, self.lamp,
-                        self.challenge, self.metrics, self.inspector, self.record, self.parameters)
+                        self.challenge, self.metrics, self.result, self.inspector, self.record, self.parameters)
         snap = runner.latest
         self._build_legend(gui)
         for folder in self.folders:

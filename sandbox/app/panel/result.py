@@ -1,0 +1,85 @@
+"""The Result folder: why the run stands where it does (issue 40, item 5).
+
+*Explain the result* says how many boxes are in the goal, where the others lie
+(:mod:`sandbox.model.explain`: near the goal, heaped in a corner of the
+construction area, against its wall, elsewhere), what 100 % would mean, and
+which outline and strategies ran; and it rings the boxes outside the goal on
+the floor, following them, until it is turned off or a new world starts.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import viser
+
+from sandbox.app.snapshot import Snapshot, case_name
+from sandbox.model.explain import PERFECT_PACKING, place_strays, strays_in_words
+
+#: The rings around the boxes outside the goal: orange, under the boxes, wider than them.
+RING_COLOUR = (255, 140, 0)
+Z_RING = 0.015  # between the lit cells (0.01) and the boxes (0.02)
+
+
+def explanation(snap: Snapshot) -> str:
+    """The result in a few lines of markdown (see the module's docstring)."""
+    cfg = snap.world_config
+    in_goal = np.asarray(snap.box_in_goal, bool)
+    strays = place_strays(snap.box_positions, in_goal, snap.goal_outline, cfg.centre, cfg.construction_size,
+                          2 * cfg.box_apothem)
+    share = 100 * snap.sample.fraction_in_goal
+    ran = case_name(snap.shape_name, snap.strategies)
+    outline = "the goal scaled" if snap.family == "scaled" else "the goal's edge at a distance (offset)"
+    return (f"**{share:.1f} %** of the boxes are in the goal ({int(in_goal.sum())} of {len(in_goal)}) at step "
+            f"{snap.step:,}. {strays_in_words(strays, 2 * cfg.box_apothem)} Ringed in orange on the floor.\n\n"
+            f"{PERFECT_PACKING}\n\n**Ran:** {ran}; the band follows {outline}.")
+
+
+class ResultFolder:
+    def __init__(self, gui: Any, runner: Any, scene: Any):
+        self.gui, self.runner, self.scene = gui, runner, scene
+        self.rings: Any = None
+        self._world: int | None = None  # the world explained; a new one turns the rings off
+
+    def build(self, snap: Snapshot) -> None:
+        with self.gui.add_folder("Result", expand_by_default=False):
+            self.text = self.gui.add_markdown("Where the boxes outside the goal lie, and what 100 % would mean.")
+            self.explain_button = self.gui.add_button("Explain the result", icon=viser.Icon.HELP,
+                                                      hint="Say where the boxes outside the goal lie and ring "
+                                                           "them on the floor")
+            self.highlight = self.gui.add_checkbox("Ring boxes outside the goal", False,
+                                                   hint="Orange rings around the boxes outside the goal")
+        self.explain_button.on_click(lambda event: self.explain())
+        self.highlight.on_update(lambda event: self._show_rings(self.runner.latest))
+
+    def explain(self, snap: Snapshot | None = None) -> str:
+        """Explain the running world's result now, and ring its stray boxes."""
+        snap = snap or self.runner.latest
+        self.text.content = text = explanation(snap)
+        self._world = snap.world_key
+        self.highlight.value = True
+        self._show_rings(snap)
+        return text
+
+    def update(self, snap: Snapshot) -> None:
+        if self.highlight.value and self._world is not None and snap.world_key != self._world:
+            self.highlight.value = False  # a new world: the old explanation no longer holds
+            self.text.content = "A new world started: press *Explain the result* again."
+        self._show_rings(snap)
+
+    def _show_rings(self, snap: Snapshot) -> None:
+        outside = snap.box_positions[~np.asarray(snap.box_in_goal, bool)] if self.highlight.value else None
+        if outside is None or len(outside) == 0:
+            if self.rings is not None:
+                self.rings.visible = False
+            return
+        points = np.zeros((len(outside), 3), np.float32)
+        points[:, :2] = outside
+        if self.rings is None:
+            self.rings = self.scene.add_point_cloud(
+                "/result/strays", points, RING_COLOUR, point_size=1.6 * snap.world_config.box_circumradius,
+                point_shape="circle", point_shading="flat", position=(0.0, 0.0, Z_RING))
+        else:
+            self.rings.points = points
+            self.rings.visible = True
