@@ -231,18 +231,21 @@ class Comparison:
 
     def __init__(self, server: Any, lockstep: Lockstep, make_runner: Callable[..., Any],
                  draw_lock: Any, on_layout: Callable[[float | None], None],
-                 on_crash: Callable[[str], None] = lambda why: None, caption_over_construction: bool = False):
+                 on_crash: Callable[[str], None] = lambda why: None, caption_over_construction: bool = False,
+                 events: Any = None):
         """``on_crash(why)`` hears that the compared world's process died (compare mode then ends: a
         restarted world would start again from step 0, far behind the running one);
         ``caption_over_construction``: where its caption sits, as the running world's (a classroom's
-        pages frame the construction areas)."""
+        pages frame the construction areas); ``events``: the app's event queue, where the compared
+        world is adopted and dropped (None: in the calling thread)."""
         self.caption_over_construction = caption_over_construction
         self.server, self.lockstep, self._make_runner = server, lockstep, make_runner
         self._draw_lock, self._on_layout, self._on_crash = draw_lock, on_layout, on_crash
+        self._events = events
         self.view: Any = None
         self.label: str | None = None
         self._drawn: int | None = None  # the compared world's frame last drawn
-        self._lock = threading.Lock()  # one start or end at a time
+        self._starting = threading.Lock()  # one new world's process starting at a time
 
     @property
     def runner(self) -> Any:
@@ -253,46 +256,59 @@ class Comparison:
         """How far right of the running world the compared one is drawn (m)."""
         return self.lockstep.main.latest.world_config.arena_size + COMPARE_GAP
 
+    def _on_events(self, fn: Callable, *args: Any) -> Any:
+        """Run ``fn`` on the app's event thread and wait for it (inline when already there)."""
+        return fn(*args) if self._events is None else self._events.call(fn, *args, timeout=60.0)
+
     def begin(self, config: Config, shape: Any, label: str) -> None:
         """Compare with a world of ``config`` and ``shape`` from the running world's seed: both start
         again from step 0, playing if the running one was. Blocks while the new world's process
-        starts (a second or two): call it off the page's threads."""
-        with self._lock:
-            self._end()
-            main = self.lockstep.main
-            playing, seed = main.playing, main.latest.seed
+        starts (a second or two): call it off the event thread (the start happens here, the
+        adoption on the event thread)."""
+        with self._starting:
+            seed = self.lockstep.main.latest.seed
             partner = self._make_runner(config, shape=shape, seed=seed, playing=False)
             try:
                 partner.start()
-                with self._draw_lock, self.server.atomic():
-                    view = SceneView(self.server.scene, partner.latest, root=self.ROOT, offset=(self.beside, 0.0),
-                                     caption_over_construction=self.caption_over_construction)
+                self._on_events(self._adopt, partner, label)
             except BaseException:
                 partner.stop()
                 raise
-            with self._draw_lock:
-                self.view, self.label, self._drawn = view, label, partner.latest.frame
-            if hasattr(partner, "on_crash"):  # a process of its own
-                partner.on_crash(lambda why, partner=partner: self._crashed(partner, why))
-            self.lockstep.pair(partner)
-            # Both from step 0 (held there while they are built), then playing if the running world was;
-            # also if a world could not be rebuilt (its process died, say).
-            self.lockstep.reset(None, on_done=lambda _: self.lockstep.set_playing(playing),
-                                on_error=lambda _: self.lockstep.set_playing(playing))
+
+    def _adopt(self, partner: Any, label: str) -> None:
+        """Pair the started ``partner`` with the running world and draw it (on the event thread)."""
+        self._end()
+        playing = self.lockstep.main.playing
+        with self._draw_lock, self.server.atomic():
+            view = SceneView(self.server.scene, partner.latest, root=self.ROOT, offset=(self.beside, 0.0),
+                             caption_over_construction=self.caption_over_construction)
+        with self._draw_lock:
+            self.view, self.label, self._drawn = view, label, partner.latest.frame
+        if hasattr(partner, "on_crash"):  # a process of its own
+            partner.on_crash(lambda why, partner=partner: self._post(self._crashed, partner, why))
+        self.lockstep.pair(partner)
+        # Both from step 0 (held there while they are built), then playing if the running world was;
+        # also if a world could not be rebuilt (its process died, say).
+        self.lockstep.reset(None, on_done=lambda _: self.lockstep.set_playing(playing),
+                            on_error=lambda _: self.lockstep.set_playing(playing))
         self._on_layout(self.beside)
+
+    def _post(self, fn: Callable, *args: Any) -> None:
+        if self._events is None:
+            fn(*args)
+        else:
+            self._events.post(fn, *args)
 
     def end(self) -> None:
         """The running world goes on alone."""
-        with self._lock:
-            ended = self._end()
-        if ended:
+        if self._end():
             self._on_layout(None)
 
     def _crashed(self, partner: Any, why: str) -> None:
         if partner is not self.runner:
             return
         self._on_crash(why)
-        threading.Thread(target=self.end, daemon=True, name="compare-end").start()  # not on the receiver
+        self.end()
 
     def _end(self) -> bool:
         partner = self.lockstep.unpair()

@@ -39,6 +39,7 @@ import io
 import logging
 import threading
 import weakref
+from concurrent.futures import Future
 from typing import Any, Callable
 
 import viser
@@ -51,6 +52,7 @@ from sandbox.app.pacing import PATH as DRAWN_PATH
 from sandbox.app.pacing import Pacer
 from sandbox.app.page_keys import KEYS_JS
 from sandbox.app.viser_seam import WRITTEN_FOR  # noqa: F401 - where the tests look for it
+
 #: Largest websocket message a client may send: an upload part is 512 KiB (viser's client).
 CONTROL_MESSAGE_BYTES = 1024 * 1024
 #: A watching page sends nothing but its camera.
@@ -175,8 +177,11 @@ def _gated_serve(*args: Any, **kwargs: Any) -> Any:
 
 
 def start_server(access: Access, *, host: str, port: int, label: str, verbose: bool = False,
-                 inbox: Callable[[Gate], Inbox] | None = None) -> tuple[viser.ViserServer, Gate]:
-    """A viser server behind a gate for ``access``; ``inbox(gate)`` builds the message checks. Refuses
+                 inbox: Callable[[Gate], Inbox] | None = None,
+                 callbacks: Callable[..., Future] | None = None) -> tuple[viser.ViserServer, Gate]:
+    """A viser server behind a gate for ``access``; ``inbox(gate)`` builds the message checks;
+    ``callbacks(fn, *args)``, if given, runs every callback viser would run on its thread pool (the
+    app's event queue), from before the first page can connect. Refuses
     (:class:`sandbox.app.viser_seam.ViserMismatch`) on a viser that lacks what the seam uses."""
     global _gate_being_built
     viser_seam.check()
@@ -191,6 +196,8 @@ def start_server(access: Access, *, host: str, port: int, label: str, verbose: b
         finally:
             _gate_being_built = None
     try:
+        if callbacks is not None:  # before the gate opens: no page's callback goes anywhere else
+            viser_seam.route_callbacks(server, callbacks)
         gate.attach(server, inbox(gate) if inbox else Inbox(server, gate))
     except BaseException:
         server.stop()

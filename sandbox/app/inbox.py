@@ -18,6 +18,7 @@ broadcasts them into the backlog every new page replays).
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import math
 import threading
@@ -271,9 +272,7 @@ class Inbox:
                                  transferred_bytes=transfer.received)
         close = messages.RemoveNotificationMessage(uuid=f"upload-{transfer_uuid}")
         for seconds in UPLOAD_NOTICE_CLOSED_AFTER:
-            timer = threading.Timer(seconds, self._send, (transfer.client_id, close))
-            timer.daemon = True
-            timer.start()
+            _later(seconds, self._send, transfer.client_id, close)
 
     def _end_upload_in_page(self, client_id: int, message: Any, size: int) -> None:
         """Close the page's own 'Uploading...' notice and free its button (viser's client waits for
@@ -381,3 +380,12 @@ def _megabytes(n: int) -> str:
 
 def _safe_name(name: Any) -> str:
     return str(name).replace("\n", " ")[:80] or "the file"
+
+
+def _later(seconds: float, fn: Callable[..., None], *args: Any) -> None:
+    """Run ``fn(*args)`` in ``seconds`` on the server's event loop, where messages are checked (no
+    thread of its own); outside a loop (a test calling the inbox directly), at once."""
+    try:
+        asyncio.get_running_loop().call_later(seconds, fn, *args)
+    except RuntimeError:
+        fn(*args)

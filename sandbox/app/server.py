@@ -22,13 +22,14 @@ from typing import Any
 
 from sandbox.app.access import WATCH, Access, is_loopback_host, is_shared
 from sandbox.app.compare import Comparison, Lockstep, side_config
+from sandbox.app.events import EventQueue
 from sandbox.app.gate import start_server
 from sandbox.app.icons import read_icons_once
 from sandbox.app.panel import Panel
 from sandbox.app.panel.framing import PRESENTER, WHOLE_ARENA
 from sandbox.app.process import ProcessRunner
 from sandbox.app.runner import Runner, wait_for
-from sandbox.app.scene import SceneView, configure_scene, frame_arena
+from sandbox.app.scene import SceneView, configure_scene
 from sandbox.app.snapshot import Snapshot
 from sandbox.app.viser_seam import ViserMismatch
 from sandbox.app.viser_seam import check as check_viser
@@ -65,6 +66,9 @@ class App:
         #: Who may connect and what each page may do (sandbox.app.access); shared beyond this machine,
         #: control needs the token in :attr:`url`.
         self.access = access or Access.for_server(host, allow_programs=allow_programs)
+        #: The one queue every change of the app's state goes through (docs/code.md, "Threads"). It is
+        #: served from the end of this constructor on: no callback runs before the app exists.
+        self.events = EventQueue()
         kind = ProcessRunner if process else Runner
         # The simulation process starts (about a second) while the server and the panel are built.
         self.runner = kind(config, shape=shape, fps=fps, steps_per_frame=steps_per_frame, playing=playing,
@@ -78,8 +82,10 @@ class App:
         self._frame_lock = threading.Lock()
         self.lockstep = Lockstep(self.runner)
         try:
-            self.server, self.gate = start_server(self.access, host=host, port=port, label=TITLE, verbose=verbose)
+            self.server, self.gate = start_server(self.access, host=host, port=port, label=TITLE, verbose=verbose,
+                                                  callbacks=self.events.submit)
         except BaseException:
+            self.events.stop()
             self.runner.stop()  # do not leave the simulation process behind
             raise
         try:
@@ -88,31 +94,33 @@ class App:
             self.view = SceneView(self.server.scene, self.runner.latest, caption_over_construction=not whole_arena)
             self.comparison = Comparison(self.server, self.lockstep, make_runner, self._frame_lock,
                                          on_layout=self._reframe_all, on_crash=self._on_partner_crash,
-                                         caption_over_construction=not whole_arena)
+                                         caption_over_construction=not whole_arena, events=self.events)
             # Loading a program runs a Python file on this machine: the page offers it only where a
             # connection may do it (served to this machine, or --allow-programs); the gate decides per page.
             offered = self.access.allow_programs or not is_shared(host)
             self.panel = Panel(self.server, self.runner, self.view, self.comparison, allow_programs=offered,
                                may_load_programs=self.gate.may_load_programs,
-                               default_view=WHOLE_ARENA if whole_arena else PRESENTER)
-            for client in list(self.server.get_clients().values()):  # came while the panel was built
-                self.panel.welcome(client)
+                               default_view=WHOLE_ARENA if whole_arena else PRESENTER, events=self.events)
         except BaseException:
+            self.events.stop()
             self.server.stop()  # do not leave a half-built server listening
             self.runner.stop()
             raise
         self.frames_drawn = 0
-        self.runner.subscribe(self._on_frame)
+        self.runner.subscribe(lambda snap: self.events.post_latest("frame", self._on_frame, snap))
         if process:
-            self.runner.on_crash(self._on_crash)
+            self.runner.on_crash(lambda why: self.events.post(self._on_crash, why))
         # With no viewer for a while, stop stepping (a forgotten demo should not heat the room).
         self.keep_running, self.idle_pause_seconds = keep_running, idle_pause_seconds
-        self.auto_paused = False
+        self.auto_paused = False  # owned by the event thread, as everything below
         self._last_viewer = time.monotonic()
-        self._stopping = threading.Event()
+        #: Each page's camera is fitted to the arena as the page tells its shape, until this (monotonic) time.
+        self._fitting: dict[int, tuple[float, float | None]] = {}
+        # viser replays these for pages that came while the app was built: through the queue, once each.
         self.server.on_client_connect(self._on_connect)
         self.server.on_client_disconnect(self._on_disconnect)
         self._controller = controller
+        self.events.open()
 
     # ------------------------------------------------------------ set-up
     def _configure_page(self) -> None:
@@ -124,6 +132,7 @@ class App:
         server.gui.main_panel.set_width(420)
         configure_scene(server, self.config, whole=self.whole_arena)
 
+    # ------------------------------------------------- events (all on the event thread)
     def _on_frame(self, snap: Snapshot) -> None:
         with self._frame_lock:
             # The scene and the panel's read-outs of one snapshot in one batch: the page applies a
@@ -138,9 +147,8 @@ class App:
 
     def _on_disconnect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
-        panel = getattr(self, "panel", None)
-        if panel is not None:
-            panel.farewell(client.client_id)
+        self._fitting.pop(client.client_id, None)
+        self.panel.farewell(client.client_id)
 
     def _on_connect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
@@ -148,39 +156,43 @@ class App:
         if failed:
             client.add_notification("The simulation cannot start", failed[0].upper() + failed[1:] + ".",
                                     color="red", auto_close_seconds=None)
-        panel = getattr(self, "panel", None)  # a page may connect while the panel is built
-        if panel is not None:
-            panel.welcome(client)
+        self.panel.welcome(client)
         if self.auto_paused:  # after the page's own parts exist: the frames it then gets are for it
             self.auto_paused = False
             self.lockstep.set_playing(True)
         # Fit the arena to this viewer's window as it tells its shape: its camera reports come while the
-        # page lays itself out, and on a loaded machine the last one many seconds later. A page that
-        # follows a robot has its camera moved by the inspector instead.
-        def fit() -> None:
-            fitted, deadline = None, time.monotonic() + FIT_SECONDS
-            while time.monotonic() < deadline and client.client_id in self.server.get_clients():
-                aspect = client.camera.aspect
-                panel = getattr(self, "panel", None)  # a page may connect while the panel is built
-                following = panel is not None and client.client_id in panel.inspector.followers
-                if aspect and aspect != fitted and not following:
-                    if panel is not None:
-                        panel.framing.apply(client)  # as this viewer's View says
-                    else:
-                        frame_arena(client, self.runner.latest.world_config, whole=self.whole_arena)
-                    fitted = aspect
-                time.sleep(0.25)
+        # page lays itself out, and on a loaded machine the last one many seconds later.
+        self._fitting[client.client_id] = (time.monotonic() + FIT_SECONDS, None)
+        client.camera.on_update(lambda camera, client=client: self._on_camera(client))
+        self._fit(client)
 
-        threading.Thread(target=fit, daemon=True).start()
+    def _on_camera(self, client: Any) -> None:
+        """A page's camera moved or its window changed shape (viser's camera report)."""
+        self._fit(client)
 
-    def _watch_viewers(self) -> None:
-        while not self._stopping.wait(1.0):
-            if self.server.get_clients():
-                self._last_viewer = time.monotonic()
-            elif (not self.keep_running and self.runner.playing
-                  and time.monotonic() - self._last_viewer >= self.idle_pause_seconds):
-                self.auto_paused = True
-                self.lockstep.set_playing(False)
+    def _fit(self, client: Any) -> None:
+        """While a page lays itself out, frame the arena for its window's shape (unless it follows a
+        robot: then the inspector moves its camera)."""
+        fitting = self._fitting.get(client.client_id)
+        if fitting is None:
+            return
+        until, fitted = fitting
+        if time.monotonic() > until:
+            del self._fitting[client.client_id]
+            return
+        aspect = client.camera.aspect
+        if aspect and aspect != fitted and client.client_id not in self.panel.inspector.followers:
+            self.panel.framing.apply(client)  # as this viewer's View says
+            self._fitting[client.client_id] = (until, aspect)
+
+    def _check_viewers(self) -> None:
+        """Every second: with no viewer for a while, pause (unless --keep-running)."""
+        if self.server.get_clients():
+            self._last_viewer = time.monotonic()
+        elif (not self.keep_running and self.runner.playing
+              and time.monotonic() - self._last_viewer >= self.idle_pause_seconds):
+            self.auto_paused = True
+            self.lockstep.set_playing(False)
 
     def _reframe_all(self, beside: float | None) -> None:
         """Compare mode began or ended: every page frames both worlds, or the one."""
@@ -233,13 +245,13 @@ class App:
             except Exception as exc:
                 self.stop()
                 raise UserError(f"the compared world cannot start: {exc}") from None
-        threading.Thread(target=self._watch_viewers, name="phototaxis-viewers", daemon=True).start()
+        self.events.every(1.0, self._check_viewers)
         return self
 
     def stop(self) -> None:
-        self._stopping.set()
         self.panel.advice.stop()
         self.panel.challenge.stop()
+        self.events.stop()  # no event runs from here on: what follows owns the app's state alone
         self.comparison.end()
         self.runner.stop()
         with contextlib.redirect_stdout(io.StringIO()):  # viser says goodbye on stdout

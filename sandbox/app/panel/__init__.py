@@ -1,7 +1,8 @@
 """The control panel: one small class per folder, each with ``build(snap)``
 and ``update(snap)``, in the order the page shows them.
 
-Every callback runs on a viser thread. None of them touches the simulation:
+Every callback runs on the app's event thread (:mod:`sandbox.app.events`),
+one at a time, as do the frames' updates. None of them touches the simulation:
 they go through the runner (commands, controls). The parameter folders are
 generated from the model's declaration.
 """
@@ -37,10 +38,12 @@ class Panel:
     ``view`` is the scene (it shows the heat map); the shape being drawn has its own nodes (draw_view)."""
 
     def __init__(self, server: Any, runner: Any, view: Any, comparison: Comparison, *, allow_programs: bool = True,
-                 may_load_programs: Any = None, default_view: str = WHOLE_ARENA):
+                 may_load_programs: Any = None, default_view: str = WHOLE_ARENA, events: Any = None):
         """``comparison``: compare mode's second world (:mod:`sandbox.app.compare`); play, pause, step,
-        reset and speed act on its :class:`~sandbox.app.compare.Lockstep`."""
+        reset and speed act on its :class:`~sandbox.app.compare.Lockstep`. ``events``: the app's event
+        queue (:mod:`sandbox.app.events`), where work done in threads of its own puts its results."""
         gui = server.gui
+        post = events.post if events is not None else (lambda fn, *args: fn(*args))
         self.runner = runner
         self.comparison = comparison
         lockstep = comparison.lockstep
@@ -59,7 +62,7 @@ class Panel:
                                      may_load=may_load_programs)
         self.lamp = LampFolder(gui, runner, on_change=self.metrics.mark)
         self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark)
-        self.compare = CompareFolder(gui, runner, comparison, on_change=self.metrics.mark)
+        self.compare = CompareFolder(gui, runner, comparison, on_change=self.metrics.mark, post=post)
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
         self.record = RecordFolder(gui, server, runner)
         self.folders = (self.run, self.compare, self.shape, self.advice, self.strategies, self.program, self.lamp,

@@ -19,8 +19,11 @@ CHOICES = (NOTHING, SAME, *COMPARE_CASES)
 
 
 class CompareFolder:
-    def __init__(self, gui: Any, runner: Any, comparison: Comparison, on_change: Callable[[str], None]):
+    def __init__(self, gui: Any, runner: Any, comparison: Comparison, on_change: Callable[[str], None],
+                 post: Callable[..., None] = lambda fn, *args: fn(*args)):
+        """``post(fn, *args)``: run on the app's event thread (the worker that starts a world reports there)."""
         self.gui, self.runner, self.comparison, self._on_change = gui, runner, comparison, on_change
+        self._post = post
         self._busy = threading.Lock()  # one change of comparison at a time
         self._starting = False
         self._quiet = False  # set while the dropdown is set from here, not by a page
@@ -52,25 +55,37 @@ class CompareFolder:
         threading.Thread(target=self._choose, args=(choice, client), daemon=True, name="compare").start()
 
     def _choose(self, choice: str, client: Any) -> None:
+        """In a thread of its own (a world's process starting blocks); what it changes, it changes on
+        the app's event thread."""
         with self._busy:
             if choice == NOTHING:
-                if self.comparison.runner is not None:
-                    self.comparison.end()
-                    self._on_change("compare: off")
+                self._post(self._ended, client)
                 return
             self.status.content = "Starting the second world..."
             try:
                 config, shape = self._partner(choice)
                 self.comparison.begin(config, shape, choice)
             except Exception as exc:  # a refused goal or a process that would not start: say so
-                notify_error(client, "Cannot compare", str(exc))
-                self.show(NOTHING if self.comparison.runner is None else self.comparison.label)
+                self._post(self._refused, client, exc)
                 return
-            finally:
-                self._starting = False
-            self._on_change(f"compare: {choice}")
-            notify(client, "Comparing", "Both worlds start again from step 0 with the same seed; the second one "
-                   "is to the right.", "blue")
+            self._post(self._began, choice, client)
+
+    def _ended(self, client: Any) -> None:
+        self._starting = False
+        if self.comparison.runner is not None:
+            self.comparison.end()
+            self._on_change("compare: off")
+
+    def _refused(self, client: Any, exc: Exception) -> None:
+        self._starting = False
+        notify_error(client, "Cannot compare", str(exc))
+        self.show(NOTHING if self.comparison.runner is None else self.comparison.label)
+
+    def _began(self, choice: str, client: Any) -> None:
+        self._starting = False
+        self._on_change(f"compare: {choice}")
+        notify(client, "Comparing", "Both worlds start again from step 0 with the same seed; the second one "
+               "is to the right.", "blue")
 
     def show(self, choice: str) -> None:
         """The dropdown shows ``choice`` (without acting on it; a config file's name is not a choice)."""

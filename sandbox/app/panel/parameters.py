@@ -5,7 +5,6 @@ new world wait for the next reset and are listed until then."""
 
 from __future__ import annotations
 
-import threading
 from typing import Any
 
 import numpy as np
@@ -95,21 +94,17 @@ class ParametersFolder:
         def failed(exc: BaseException) -> None:
             notify_error(client, f"{name} not changed", str(exc))
             # Put the control back to the value in force.
-            current = getattr(self.runner.latest.config, name)
-            threading.Thread(target=lambda: setattr(handle, "value", current), daemon=True).start()
+            handle.value = getattr(self.runner.latest.config, name)
 
         self.runner.update_config({name: value}, on_done=done, on_error=failed)
 
     def _show_profile_values(self, settings: Config) -> None:
         """After a change of profile, show the values it set (they apply on reset)."""
 
-        def show() -> None:
-            for p in params():
-                handle = self.controls.get(p.name)
-                if p.profiled and handle is not None and handle.value != getattr(settings, p.name):
-                    handle.value = getattr(settings, p.name)
-
-        threading.Thread(target=show, daemon=True).start()
+        for p in params():
+            handle = self.controls.get(p.name)
+            if p.profiled and handle is not None and handle.value != getattr(settings, p.name):
+                handle.value = getattr(settings, p.name)
 
 
 def _step_for(value: float) -> float:
