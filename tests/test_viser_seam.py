@@ -10,7 +10,6 @@ import re
 import sys
 from pathlib import Path
 
-import pytest
 import viser
 
 SANDBOX = Path(__file__).resolve().parent.parent / "sandbox"

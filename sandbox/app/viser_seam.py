@@ -8,10 +8,12 @@ in viser it is, why we need it, and how :func:`check` finds it. :func:`check` ru
 built and refuses to start, in one line naming the installed viser and what it lacks, when any row is
 missing; nothing then fails half-way through a connection. ``tests/test_viser_seam.py`` fails when
 any other module of ``sandbox`` names a private viser module or name. Where viser has a public way
-(a handle's ``value``, the handle classes, ``on_client_connect``), the app uses it.
+that says the same (a control's ``value``, the handle classes), the app uses it; a handle's public
+properties do not always say what the page was sent (a button group's ``disabled`` is always False),
+so the inbox reads :func:`props`.
 
-A private module is imported only here, and only when used, so that a viser without it still lets
-the app be imported and :func:`check` say what is missing.
+A private module is imported only here, and where a viser may lack it, without failing: the app can
+still be imported, and :func:`check` says what is missing.
 """
 
 from __future__ import annotations
@@ -83,6 +85,8 @@ USES: tuple[Use, ...] = (
         "the same checks before the page's own handlers (its camera, its own controls)", arguments=2),
     Use("a connection's message queue", f"{INFRA}:WebsockClientConnection.queue_message",
         "scripts of ours for one page at connect, and messages for one page only", arguments=1),
+    Use("a connection's client id", f"{INFRA}:WebsockClientConnection.client_id",
+        "grants, pacing and uploads are kept per client id", ASSIGNED),
     # ------------------------------------------------------------- the pacing (sandbox.app.pacing)
     Use("the shared scene's message buffer", f"{INFRA}:WebsockServer._broadcast_buffer",
         "its windows are paced per page", ASSIGNED),
