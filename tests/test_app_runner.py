@@ -198,6 +198,42 @@ def test_upload_validation_leaves_the_simulation_alone(app):
     wait_until(lambda: app.runner.latest.shape_name == "t.wkt")
 
 
+def test_using_a_goal_starts_it_afresh_with_the_same_seed(app):
+    """Issue 40, item 1: a goal used (drawn, a template, an upload, a pick) starts a new world on it
+    from step 0 with the same seed; the outline and strategies go back to auto and off unless kept."""
+    runner, shape, strategies = app.runner, app.panel.shape, app.panel.strategies
+    client = FakeClient()
+    app.events.call(strategies.controls["switch"][0].__setattr__, "value", True)  # a strategy on, by hand
+    wait_until(lambda: runner.latest.strategies["switch"] > 0, what="switch on")
+    wait_until(lambda: runner.latest.step > 200, what="a while of the circle")
+    seed, world = runner.latest.seed, runner.latest.world_key
+    square = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]])
+    app.events.call(shape.use, square, "square.txt", client)
+    snap = wait_until(lambda: runner.latest.world_key != world and runner.latest, what="a new world")
+    assert snap.shape_name == "square.txt" and snap.seed == seed and snap.step < 50
+    assert snap.strategies["switch"] == 0 and snap.config.outline == "auto"
+    assert not strategies.controls["switch"][0].value and strategies.outline.value == "auto"
+    wait_until(lambda: client.notes, what="the notice")
+    title, body = client.notes[-1][:2]
+    assert title == "Goal changed" and f"from step 0 with seed {seed}" in body and "strategies off" in body
+    assert app.panel.metrics.marks[-1] == (0, "shape square.txt")
+    # Kept: the strategies stay as the user set them.
+    app.events.call(strategies.controls["switch"][0].__setattr__, "value", True)
+    wait_until(lambda: runner.latest.strategies["switch"] > 0, what="switch on again")
+    app.events.call(shape.keep.__setattr__, "value", True)
+    world = runner.latest.world_key
+    app.events.call(shape.use, square * 1.5, "bigger.txt", client)
+    snap = wait_until(lambda: runner.latest.world_key != world and runner.latest, what="another new world")
+    assert snap.shape_name == "bigger.txt" and snap.strategies["switch"] > 0 and snap.seed == seed
+    wait_until(lambda: "kept" in client.notes[-1][1], what="the notice saying so")
+    # A goal refused (it does not fit the arena) leaves the running world alone.
+    world = runner.latest.world_key
+    sliver = np.array([[0.0, 0.0], [1000.0, 0.0], [1000.0, 0.01], [0.0, 0.01]])  # too long for the arena
+    app.events.call(shape.use, sliver, "sliver.txt", client)
+    wait_until(lambda: client.notes[-1][0] == "Shape not used", what="the refusal")
+    assert runner.latest.world_key == world and runner.latest.shape_name == "bigger.txt"
+
+
 def test_a_paper_case_starts_the_case_and_the_dropdown_shows_what_runs(app):
     """Issue 24, item 2: picking a case resets the world with it (same seed, step 0); the dropdown
     shows the case that runs, or custom."""

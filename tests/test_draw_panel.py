@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from sandbox.app.panel.draw import PICK_TEMPLATE, status_text
+from sandbox.app.draw_view import DIM_OPACITY  # noqa: I001 - after the panel, which imports it first
+from sandbox.model.geometry import signed_area
 from sandbox.shapes.templates import template_vertices
 from tests.test_security import connected, make_app, own_page, uuid_of, wait_until
 from tests.viser_wire import RawClient
@@ -46,6 +48,7 @@ def test_clicks_add_snapped_points_only_while_drawing(draw):
     assert not draw.click((10.2, 9.9))  # not drawing: the inspector's click
     draw._set_drawing(True)
     assert draw.view._pad is not None  # drags on the floor place points now
+    assert draw.view._pad.opacity == DIM_OPACITY > 0.3  # and the live scene is dimmed under the drawing
     for x, y in [(10.2, 9.9), (13.8, 10.1), (14.1, 14.2)]:
         assert draw.click((x, y))
     assert draw.points == [(10.0, 10.0), (14.0, 10.0), (14.0, 14.0)]
@@ -140,12 +143,24 @@ def test_a_page_picks_a_template_types_points_and_uses_them(app, draw, page):
     page.set_value(uuid_of(draw.typed), "[[0, 0], [6, 0], [6, 6], [0, 6]]")
     wait_until(lambda: draw.typed.value.startswith("[["), what="the typed JSON")
     page.click(uuid_of(draw.apply))
-    wait_until(lambda: draw.points == [(0.0, 0.0), (6.0, 0.0), (6.0, 6.0), (0.0, 6.0)], what="the typed square")
+    # Issue 40, item 3: typed points are a shape in their own coordinates, shown centred in the arena at
+    # the size it will be built (the goal's area: the boxes' total area).
+    wait_until(lambda: len(draw.points) == 4 and draw.points[0] != SQUARE[0], what="the typed square")
+    snap = app.runner.latest
+    goal = snap.goal_vertices if snap.goal_vertices is not None else snap.goal_outline
+    half, c = abs(signed_area(np.asarray(goal))) ** 0.5 / 2, snap.world_config.centre
+    np.testing.assert_allclose(draw.points, [(c - half, c - half), (c + half, c - half), (c + half, c + half),
+                                             (c - half, c + half)], atol=2e-3)
     key = app.runner.latest.goal_key
     page.click(uuid_of(draw.close))
     wait_until(lambda: app.runner.latest.goal_key != key and app.runner.latest.shape_name == "drawn",
                what="the typed square in use")
-    assert draw.points == [] and not draw.drawing
+    assert len(draw.points) == 4 and not draw.drawing  # kept, to tweak and use again
+    # Edit this goal: the running goal comes back as the drawing's points.
+    draw._change([])
+    page.click(uuid_of(draw.edit))
+    wait_until(lambda: len(draw.points) == 4, what="the running goal as points")
+    np.testing.assert_allclose(draw.points, app.runner.latest.goal_vertices, atol=1e-3)
 
 
 def test_the_gate_refuses_what_a_page_cannot_do(app, draw, page):

@@ -157,7 +157,7 @@ def test_stopping_the_app_ends_a_reference_run_at_once():
     folder.status, folder.scores = Markdown(), Markdown()
     r = Round("Ada", 10**9, 0, world=1, score=0.4, at_step=10**9)  # a reference that would run for days
     folder._score_the_paper(r, (Config(robots=20, boxes=30), 0, None))
-    wait_until(lambda: folder._pool is not None and getattr(folder._pool, "_processes", None), what="the worker")
+    wait_until(lambda: folder._pool is not None, what="the worker")
     folder.stop()
     wait_until(lambda: "no reference" in folder.status.content, timeout=20, what="the run ended")
     assert folder.best == {"Ada": 0.4} and r.paper is None

@@ -9,7 +9,10 @@ a refusal is the gate's doing and not a broken client."""
 from __future__ import annotations
 
 import http.client
+import ipaddress
 import socket
+import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -18,7 +21,7 @@ import websockets.exceptions
 import websockets.sync.client
 
 from sandbox.app.access import Access, Grant
-from sandbox.app.gate import WRITTEN_FOR
+from sandbox.app.gate import MAX_CONNECTIONS, TOKEN_RESERVE, WATCHERS_PER_ADDRESS, WRITTEN_FOR
 from sandbox.model.config import Config
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until, wait_until_steady
@@ -112,7 +115,7 @@ def test_a_disabled_control_never_acts(app, tmp_path):
     program = tmp_path / "evil.py"
     program.write_text(f"open({str(marker)!r}, 'w').write('ran')\nclass Evil:\n    def update(self, o): return None\n")
     folder = app.panel.program
-    folder.use.disabled = True  # as a server shared without --allow-programs shows it
+    folder.use.disabled = True  # a disabled control, whatever disabled it
     client = RawClient(app.port, own_page(app))
     cid = connected(app, client)
     client.set_value(uuid_of(folder.path), f"{program}:Evil")
@@ -317,3 +320,254 @@ def test_a_watching_page_cannot_start_compare_mode(shared_app):
     wait_until(lambda: app.comparison.runner is not None, what="the presenter's comparison")
     watcher.close()
     presenter.close()
+
+
+# ------------------------------------------------------------- issue 39: the network holes
+def raw_request(port: int, request_line: bytes, headers: dict[str, bytes] | None = None) -> tuple[int, dict]:
+    """Send one HTTP request's exact bytes (what http.client would reject or encode); its status and headers."""
+    lines = [request_line, f"Host: 127.0.0.1:{port}".encode()]
+    lines += [name.encode() + b": " + value for name, value in (headers or {}).items()]
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+        sock.sendall(b"\r\n".join(lines) + b"\r\n\r\n")
+        head = b""
+        while b"\r\n\r\n" not in head:
+            chunk = sock.recv(65536)
+            if not chunk:
+                break
+            head += chunk
+    status_line, *header_lines = head.split(b"\r\n\r\n", 1)[0].decode("latin-1").split("\r\n")
+    return int(status_line.split()[1]), dict(line.split(": ", 1) for line in header_lines)
+
+
+def connect_many(port: int, headers_of: list[dict]) -> tuple[list[RawClient], list[int]]:
+    """Open one websocket per headers at once, as a flooding script would: those let in, and the statuses
+    of those refused."""
+    def attempt(headers: dict) -> RawClient | int:
+        try:
+            return RawClient(port, headers)
+        except websockets.exceptions.InvalidStatus as refused:
+            return refused.response.status_code
+
+    with ThreadPoolExecutor(max_workers=len(headers_of)) as pool:
+        outcomes = list(pool.map(attempt, headers_of))
+    return [o for o in outcomes if isinstance(o, RawClient)], [o for o in outcomes if isinstance(o, int)]
+
+
+def close_all(clients: list[RawClient]) -> None:
+    with ThreadPoolExecutor(max_workers=max(1, len(clients))) as pool:
+        list(pool.map(RawClient.close, clients))
+
+
+def presenter_controls(app) -> None:
+    """A page with the token connects and its change acts: the presenter is never locked out."""
+    presenter = RawClient(app.port, {**own_page(app), "Authorization": f"token {TOKEN}"})
+    connected(app, presenter)
+    shape = "star" if app.runner.latest.shape_name != "star" else "square"
+    presenter.set_value(uuid_of(app.panel.shape.shape), shape)
+    wait_until(lambda: app.runner.latest.shape_name == shape, what="the presenter's change")
+    presenter.close()
+
+
+def test_a_crowd_without_the_token_on_one_address_leaves_room_for_the_presenter(shared_app):
+    """Hole 1: 63 token-less websockets from this machine once filled the 64 connections and the teacher's
+    page was answered 503. One address now holds at most WATCHERS_PER_ADDRESS watching pages."""
+    app = shared_app
+    crowd, refused = connect_many(app.port, [{}] * 63)
+    assert len(crowd) == WATCHERS_PER_ADDRESS and set(refused) == {503}
+    presenter_controls(app)
+    assert all(client.ws.state.name == "OPEN" for client in crowd)  # the refusals cost the others nothing
+    close_all(crowd)
+
+
+@pytest.mark.slow
+def test_a_full_class_without_the_token_leaves_room_for_the_presenter():
+    """Hole 1, from many addresses (a class behind a proxy on this machine, --trust-proxy): with 63 pages
+    without the token connected, the teacher's page still connects and controls; pages without the token
+    take at most MAX_CONNECTIONS - TOKEN_RESERVE connections."""
+    app = make_app(access=Access.for_server("127.0.0.1", token=TOKEN, trust_proxy=True))
+    try:
+        students = [{"X-Forwarded-For": f"198.51.100.{n}"} for n in range(63)]
+        crowd, refused = connect_many(app.port, students)
+        assert len(crowd) == 63 and not refused
+        presenter_controls(app)
+        more, refused = connect_many(app.port, [{"X-Forwarded-For": f"198.51.101.{n}"} for n in range(3)])
+        assert len(crowd) + len(more) == MAX_CONNECTIONS - TOKEN_RESERVE and refused == [503, 503]
+        close_all(crowd + more)
+    finally:
+        app.stop()
+
+
+MALFORMED = {
+    "a non-ASCII token in the query": (b"GET /?token=%C3%A9 HTTP/1.1", {}),
+    "bytes that are not UTF-8 in the query": (b"GET /?token=%FF%FE HTTP/1.1", {}),
+    "raw UTF-8 in the query": ("GET /?token=\u00e9 HTTP/1.1".encode(), {}),
+    "a non-ASCII Authorization header": (b"GET / HTTP/1.1", {"Authorization": "token \u00e9".encode()}),
+    "a Latin-1 Authorization header": (b"GET / HTTP/1.1", {"Authorization": b"token \xe9t\xe9-secret"}),
+    "a token with a space": (b"GET / HTTP/1.1", {"Authorization": b"token classroom secret"}),
+    "a non-ASCII cookie": (b"GET / HTTP/1.1", {"Cookie": "phototaxis-token-PORT=\u00e9".encode()}),
+    "a quoted cookie": (b"GET / HTTP/1.1", {"Cookie": b'phototaxis-token-PORT="x"'}),
+}
+
+
+def test_a_malformed_token_is_refused_with_403_never_a_server_error(shared_app):
+    """Hole 6: a non-ASCII token (query, header or cookie) answered 500; any malformed token is now a 403
+    with one line, for the page and for the websocket, and the server goes on serving."""
+    app = shared_app
+    for what, (request_line, headers) in MALFORMED.items():
+        headers = {name: value.replace(b"PORT", str(app.port).encode()) for name, value in headers.items()}
+        status, _ = raw_request(app.port, request_line, headers)
+        assert status == 403, f"{what}: answered {status}"
+    with pytest.raises(websockets.exceptions.InvalidStatus) as refused:
+        RawClient(app.port, {"Cookie": f"phototaxis-token-{app.port}=caf\u00e9".encode("utf-8").decode("latin-1")})
+    assert refused.value.response.status_code == 403
+    assert raw_request(app.port, b"GET / HTTP/1.1")[0] == 200  # a page without a token still watches
+    presenter_controls(app)
+
+
+def test_the_link_with_the_token_works_over_a_stale_cookie(shared_app):
+    """A cookie left by an earlier server (another token, same port) no longer hides the link's token."""
+    app = shared_app
+    status, headers = raw_request(app.port, f"GET /?token={TOKEN} HTTP/1.1".encode(),
+                                  {"Cookie": f"phototaxis-token-{app.port}=an-older-token".encode()})
+    assert status == 302 and f"={TOKEN};" in headers["Set-Cookie"]
+
+
+OFF_SITE = ["//evil.example/", "///evil.example/", "/\\evil.example/", "/\\/evil.example", "\\\\evil.example",
+            "/%2F%2Fevil.example", "/%5Cevil.example", "https://evil.example/", "http:evil.example", "/.//evil.example",
+            "/a//evil.example", "/\tevil", "/@evil.example"]
+
+
+def test_the_token_redirect_goes_only_to_a_path_of_ours(shared_app):
+    """Hole 7: with a valid token, GET //evil.example/?token=T answered Location: //evil.example/ (an open
+    redirect); every target that is not a plain path of ours now goes to /."""
+    app = shared_app
+    for target in OFF_SITE:
+        status, headers = raw_request(app.port, f"GET {target}?token={TOKEN} HTTP/1.1".encode())
+        assert (status, headers["Location"]) == (302, "/"), f"{target!r} sent the page to {headers['Location']!r}"
+    status, headers = raw_request(app.port, f"GET /index.html?token={TOKEN}&x=1 HTTP/1.1".encode())
+    assert status == 302 and headers["Location"] == "/index.html"
+
+
+@pytest.fixture
+def classroom_app():
+    """A server shared beyond this machine, started as serve --host 0.0.0.0 starts it."""
+    a = make_app(host="0.0.0.0", access=Access.for_server("0.0.0.0", token=TOKEN))
+    yield a
+    a.stop()
+
+
+def program_file(tmp_path: Path, name: str) -> tuple[str, Path]:
+    """A program whose import leaves a marker file: its spec and the marker."""
+    marker = tmp_path / f"{name}.ran"
+    program = tmp_path / f"{name}.py"
+    program.write_text(f"open({str(marker)!r}, 'w').write('ran')\nclass P:\n    def update(self, o): return None\n")
+    return f"{program}:P", marker
+
+
+def notification(client: RawClient, title: str, seconds: float = 30.0) -> dict:
+    """The first notification titled ``title`` the server sends the client (waits for it)."""
+    deadline = time.monotonic() + seconds
+    while (left := deadline - time.monotonic()) > 0:
+        message = client.first("NotificationShowMessage", left)
+        if message is not None and message["props"]["title"] == title:
+            return message["props"]
+    raise AssertionError(f"no {title!r} notification within {seconds:.0f} s")
+
+
+def own_network_address() -> str | None:
+    """This machine's address on its network, if it has one: what a page that asked for the machine's
+    name comes from."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        try:
+            probe.connect(("203.0.113.1", 9))  # no packet is sent: the route's source address
+        except OSError:
+            return None
+        address = probe.getsockname()[0]
+    return None if ipaddress.ip_address(address).is_loopback else address
+
+
+def try_to_load(app, client: RawClient, spec: str) -> None:
+    client.set_value(uuid_of(app.panel.program.path), spec)
+    client.click(uuid_of(app.panel.program.use))
+
+
+def test_on_a_shared_server_the_teachers_own_page_loads_programs_and_others_are_told_why(classroom_app, tmp_path):
+    """Hole 9: docs/security.md says a page on this machine with the token may load programs on
+    --host 0.0.0.0; the folder was disabled there and a click refused silently. Now the teacher's page
+    loads one, and a page that may not (here: through a proxy, hole 10) is told why."""
+    app = classroom_app
+    assert not app.panel.program.use.disabled
+    teacher = RawClient(app.port, {**own_page(app), "Authorization": f"token {TOKEN}"})
+    connected(app, teacher)
+    spec, marker = program_file(tmp_path, "teachers")
+    try_to_load(app, teacher, spec)
+    wait_until(marker.exists, what="the teacher's program to load")
+    proxied = RawClient(app.port, {**own_page(app), "Authorization": f"token {TOKEN}", "X-Forwarded-For": "127.0.0.1"})
+    pid = connected(app, proxied)
+    assert app.gate.grant(pid) == Grant("control", False, "127.0.0.1")
+    spec, marker = program_file(tmp_path, "proxied")
+    try_to_load(app, proxied, spec)
+    assert "only a page opened on the server's own machine" in notification(proxied, "Program not used")["body"]
+    assert not marker.exists()
+    teacher.close()
+    proxied.close()
+
+
+def test_a_page_that_asked_for_this_machines_network_address_is_this_machines(classroom_app):
+    """The teacher opens the printed link (the machine's name, so its network address, not loopback) on the
+    server's own machine: that connection comes from this very address, and may load programs."""
+    app = classroom_app
+    address = own_network_address()
+    if address is None:
+        pytest.skip("this machine has no network address")
+    page = RawClient(app.port, {"Origin": f"http://{address}:{app.port}", "Authorization": f"token {TOKEN}"},
+                     host=address)
+    cid = connected(app, page)
+    assert app.gate.grant(cid) == Grant("control", True, address)
+    page.close()
+
+
+def test_behind_a_proxy_a_page_is_this_machines_only_when_the_proxy_is_trusted():
+    """Hole 10: behind a reverse proxy on this machine every visitor's connection is loopback. Without
+    --trust-proxy a request with proxy headers is not this machine's page, nor is a browser page of
+    another origin (what a proxy that adds no header passes on); with it, X-Forwarded-For's last address,
+    the one the proxy added, is the page's, and only from a connection that comes from this machine."""
+    headers = {"Host": "127.0.0.1:8080", "Authorization": f"token {TOKEN}"}
+
+    def grant(access: Access, extra: dict, peer: str = "127.0.0.1") -> Grant:
+        access.port = 8080
+        return access.decide({**headers, **extra}, "/", peer, websocket=True).grant
+
+    plain = Access.for_server("0.0.0.0", token=TOKEN, allow_origins=["https://classroom.example"])
+    assert grant(plain, {}).programs and grant(plain, {"Origin": "http://127.0.0.1:8080"}).programs
+    for proxy in ({"X-Forwarded-For": "127.0.0.1"}, {"Forwarded": "for=127.0.0.1"}, {"X-Real-IP": "127.0.0.1"}):
+        assert grant(plain, proxy) == Grant("control", False, "127.0.0.1"), proxy
+    assert not grant(plain, {"Origin": "https://classroom.example"}).programs
+    assert Access.for_server("127.0.0.1", trust_proxy=True).token  # visitors come from afar: control needs one
+    trusted = Access.for_server("0.0.0.0", token=TOKEN, trust_proxy=True)
+    assert grant(trusted, {"X-Forwarded-For": "127.0.0.1, 203.0.113.9"}) == Grant("control", False, "203.0.113.9")
+    assert grant(trusted, {"X-Forwarded-For": "203.0.113.9, 127.0.0.1"}) == Grant("control", True, "127.0.0.1")
+    assert grant(trusted, {"X-Forwarded-For": "[2001:db8::1]:4711"}).address == "2001:db8::1"
+    assert grant(trusted, {"X-Real-IP": "127.0.0.1"}) == Grant("control", False, "127.0.0.1")  # no X-Forwarded-For
+    assert grant(trusted, {}) == Grant("control", True, "127.0.0.1")  # a browser on this machine, straight in
+    # A connection from elsewhere (past the proxy) is not believed, whatever it says.
+    assert grant(trusted, {"X-Forwarded-For": "127.0.0.1"}, peer="192.0.2.7") == Grant("control", False, "192.0.2.7")
+
+
+def test_serve_trust_proxy_reaches_the_servers_rules_and_a_bad_token_is_one_line(monkeypatch, capsys):
+    from sandbox.app import server
+    from sandbox.commands import main
+
+    seen: dict = {}
+
+    def no_app(config, **kwargs):  # the rules serve built, without listening
+        seen.update(kwargs)
+        raise OSError(98, "Address already in use")
+
+    monkeypatch.setattr(server, "App", no_app)
+    assert main(["serve", "--host", "0.0.0.0", "--trust-proxy"]) == 2 and seen["access"].trust_proxy
+    assert main(["serve", "--host", "0.0.0.0"]) == 2 and not seen["access"].trust_proxy
+    capsys.readouterr()
+    assert main(["serve", "--token", "caf\u00e9-secret-42"]) == 2
+    said = capsys.readouterr().err.strip()
+    assert "--token must be" in said and "ASCII" in said and "\n" not in said

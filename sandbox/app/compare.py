@@ -224,13 +224,13 @@ class Comparison:
     in the scene, :data:`COMPARE_GAP` metres right of the running world's arena.
 
     ``make_runner(config, shape=..., seed=..., playing=...)`` builds a runner like the app's (a
-    process of its own); ``draw_lock`` is the lock the app draws under (:meth:`draw` is called
-    holding it); ``on_layout(beside)`` hears where the second world lies (None: gone), to frame the pages."""
+    process of its own); :meth:`draw` is called as the app draws a frame, on its event thread;
+    ``on_layout(beside)`` hears where the second world lies (None: gone), to frame the pages."""
 
     ROOT = "/compare"
 
     def __init__(self, server: Any, lockstep: Lockstep, make_runner: Callable[..., Any],
-                 draw_lock: Any, on_layout: Callable[[float | None], None],
+                 on_layout: Callable[[float | None], None],
                  on_crash: Callable[[str], None] = lambda why: None, caption_over_construction: bool = False,
                  events: Any = None):
         """``on_crash(why)`` hears that the compared world's process died (compare mode then ends: a
@@ -240,7 +240,7 @@ class Comparison:
         world is adopted and dropped (None: in the calling thread)."""
         self.caption_over_construction = caption_over_construction
         self.server, self.lockstep, self._make_runner = server, lockstep, make_runner
-        self._draw_lock, self._on_layout, self._on_crash = draw_lock, on_layout, on_crash
+        self._on_layout, self._on_crash = on_layout, on_crash
         self._events = events
         self.view: Any = None
         self.label: str | None = None
@@ -279,11 +279,10 @@ class Comparison:
         """Pair the started ``partner`` with the running world and draw it (on the event thread)."""
         self._end()
         playing = self.lockstep.main.playing
-        with self._draw_lock, self.server.atomic():
+        with self.server.atomic():
             view = SceneView(self.server.scene, partner.latest, root=self.ROOT, offset=(self.beside, 0.0),
                              caption_over_construction=self.caption_over_construction)
-        with self._draw_lock:
-            self.view, self.label, self._drawn = view, label, partner.latest.frame
+        self.view, self.label, self._drawn = view, label, partner.latest.frame
         if hasattr(partner, "on_crash"):  # a process of its own
             partner.on_crash(lambda why, partner=partner: self._post(self._crashed, partner, why))
         self.lockstep.pair(partner)
@@ -312,10 +311,9 @@ class Comparison:
 
     def _end(self) -> bool:
         partner = self.lockstep.unpair()
-        with self._draw_lock:
-            view, self.view, self.label = self.view, None, None
-            if view is not None:
-                view.remove()
+        view, self.view, self.label = self.view, None, None
+        if view is not None:
+            view.remove()
         if partner is not None:
             partner.stop()
         return partner is not None

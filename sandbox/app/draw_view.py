@@ -26,6 +26,9 @@ from sandbox.app.panel.common import floor_point
 #: Heights (m) above the floor: over everything the simulation draws (scene.Z_TOP is 0.12), the handles
 #: over the lines so that a press on a vertex grabs the vertex, not the pad under it.
 Z_PAD, Z_PREVIEW, Z_LINE, Z_HANDLE = 0.3, 0.32, 0.34, 0.4
+#: The veil over the live scene while drawing (the drag surface): dark enough that the outline, its
+#: numbers and the dashed preview read over lights, robots and boxes, light enough to see them move.
+DIM_COLOUR, DIM_OPACITY = (12, 14, 24), 0.55
 #: The drawn outline: bright and a fixed number of pixels thick at any zoom. Magenta, which nothing
 #: else on the floor is, and which the page's tone mapping leaves vivid (a bright green turns pale).
 LINE_COLOUR, LINE_PIXELS = (255, 0, 255), 7.0
@@ -204,7 +207,8 @@ class DrawView:
 
     # --------------------------------------------------------------- pad
     def set_pad(self, active: bool) -> None:
-        """The invisible drag surface over the floor, while drawing (else the camera orbits as usual)."""
+        """The drag surface over the floor, while drawing (else the camera orbits as usual): a dark veil
+        over everything the simulation draws and under the drawing, so that the outline reads."""
         with self._lock:
             if active and self._pad is None:
                 s = self.arena_size
@@ -212,7 +216,7 @@ class DrawView:
                 corners = np.array([(lo, lo, Z_PAD), (hi, lo, Z_PAD), (hi, hi, Z_PAD), (lo, hi, Z_PAD)], np.float32)
                 self._pad = self.scene.add_mesh_simple("/draw/pad", corners, np.array([(0, 1, 2), (0, 2, 3)],
                                                                                       np.uint32),
-                                                       color=(0, 0, 0), opacity=0.0, side="double",
+                                                       color=DIM_COLOUR, opacity=DIM_OPACITY, side="double",
                                                        cast_shadow=False, receive_shadow=False)
                 self._pad.on_drag(self._pad_drag)
             elif not active and self._pad is not None:
@@ -220,14 +224,14 @@ class DrawView:
                 self._pad = None
 
     # ------------------------------------------------------------- drags
-    # async: viser runs async drag callbacks in order on its event loop, so an update never
-    # overtakes its start; the panel's work per event is small.
-    async def _pad_drag(self, event: Any) -> None:
+    # Plain functions: viser hands them to the app's event queue (sandbox.app.events), which runs
+    # them in order, so an update never overtakes its start, and never beside another event.
+    def _pad_drag(self, event: Any) -> None:
         point = self._floor(event)
         if point is not None or event.phase == "end":
             self._on_pad_drag(event.phase, point)
 
-    async def _vertex_drag(self, event: Any) -> None:
+    def _vertex_drag(self, event: Any) -> None:
         point = self._floor(event)
         if event.instance_index is not None and (point is not None or event.phase == "end"):
             self._on_vertex_drag(int(event.instance_index), event.phase, point)

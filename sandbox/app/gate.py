@@ -13,9 +13,11 @@ and :func:`start_server` refuses to start on a viser that lacks any):
    (it serves the page with it). Inside viser's infra module only, the name
    ``websockets`` is replaced by a view whose ``asyncio.server.serve`` wraps
    that function with :meth:`Gate.process_request`, which applies
-   :mod:`sandbox.app.access` to every HTTP request and websocket upgrade, and
-   caps message sizes. While a server is being built and until its gate is
-   attached, every request is refused (the gate fails closed).
+   :mod:`sandbox.app.access` to every HTTP request and websocket upgrade,
+   caps message sizes and counts connections (room kept for pages with the
+   token, a limit per address for the others). While a server is being built
+   and until its gate is attached, every request is refused (the gate fails
+   closed).
 2. **Each connection's grant.** An infra-level connect callback (it runs
    before the connection's first message is read) takes the grant the
    handshake decided for that raw connection.
@@ -46,7 +48,7 @@ import viser
 import websockets
 
 from sandbox.app import viser_seam, wakeups
-from sandbox.app.access import Access, Grant
+from sandbox.app.access import Access, Grant, address_group, redirect_target
 from sandbox.app.inbox import Inbox
 from sandbox.app.pacing import PATH as DRAWN_PATH
 from sandbox.app.pacing import Pacer
@@ -59,8 +61,13 @@ CONTROL_MESSAGE_BYTES = 1024 * 1024
 WATCH_MESSAGE_BYTES = 64 * 1024
 #: Frames websockets may hold unread per connection (its default is 16).
 MAX_QUEUE = 1
-#: Open connections at once, watching pages included.
-MAX_CONNECTIONS = 64
+#: Open connections at once, watching pages included: a class of 64 watching pages and 8 with the token.
+MAX_CONNECTIONS = 72
+#: Of those, the ones kept for pages with the token: pages without it never hold more than the rest, so
+#: the presenter connects however many others try.
+TOKEN_RESERVE = 8
+#: Pages without the token from one address (sandbox.app.access.address_group: every loopback address is one).
+WATCHERS_PER_ADDRESS = 16
 
 log = logging.getLogger("sandbox.app.gate")
 
@@ -86,14 +93,17 @@ class Gate:
             upgrade = request.headers.get("Upgrade", "").lower() == "websocket"
             if not self.ready:
                 return connection.respond(http.HTTPStatus.SERVICE_UNAVAILABLE, "starting; try again\n")
-            if upgrade and len(self._grants) + len(self._handshaken) >= MAX_CONNECTIONS:
-                return connection.respond(http.HTTPStatus.SERVICE_UNAVAILABLE, "too many connections\n")
             peer = _peer(connection)
-            decision = self.access.decide(request.headers, request.path, peer, websocket=upgrade)
+            decision = self.access.decide(request.headers, request.path, peer, websocket=upgrade,
+                                          server_address=_server_address(connection))
             if decision.refused:
                 log.warning("refused %s %s from %s: %s", "websocket" if upgrade else "request",
                             request.path.split("?")[0], peer, decision.reason)
                 return connection.respond(decision.status, decision.reason + "\n")
+            no_room = self._no_room_for(decision.grant) if upgrade else ""
+            if no_room:
+                log.warning("refused websocket from %s: %s", decision.grant.address, no_room)
+                return connection.respond(http.HTTPStatus.SERVICE_UNAVAILABLE, no_room + "\n")
             if not upgrade and request.path.startswith(DRAWN_PATH):  # a page drew a frame
                 known = self.pacer.drawn(request.path[len(DRAWN_PATH):])
                 return connection.respond(http.HTTPStatus.NO_CONTENT if known else http.HTTPStatus.NOT_FOUND, "")
@@ -104,13 +114,32 @@ class Gate:
                 return None
             if decision.store_token:  # keep the token in a cookie and take it out of the address bar
                 response = connection.respond(http.HTTPStatus.FOUND, "")
-                response.headers["Location"] = request.path.split("?")[0] or "/"
+                response.headers["Location"] = redirect_target(request.path)  # ours: never another site
                 response.headers["Set-Cookie"] = self.access.set_cookie_header()
                 response.headers["Cache-Control"] = "no-store"
                 return response
             return viser_answer(connection, request) if viser_answer else None
 
         return answer
+
+    def _no_room_for(self, grant: Grant) -> str:
+        """Why a new connection with ``grant`` finds no room (empty when it does): at most
+        :data:`MAX_CONNECTIONS` in all; pages without the token leave :data:`TOKEN_RESERVE` of them free
+        and hold at most :data:`WATCHERS_PER_ADDRESS` from one address."""
+        with self._lock:
+            grants = list(self._grants.values())
+        grants += list(self._handshaken.values())
+        if len(grants) >= MAX_CONNECTIONS:
+            return "too many connections; try again later"
+        if grant.controls:
+            return ""
+        watching = [g for g in grants if not g.controls]
+        if len(watching) >= MAX_CONNECTIONS - TOKEN_RESERVE:
+            return "too many pages are watching; try again later"
+        group = address_group(grant.address)
+        if sum(address_group(g.address) == group for g in watching) >= WATCHERS_PER_ADDRESS:
+            return f"too many pages are watching from your address (at most {WATCHERS_PER_ADDRESS})"
+        return ""
 
     # ----------------------------------------------------------- connections
     def attach(self, server: viser.ViserServer, inbox: Inbox) -> None:
@@ -208,6 +237,16 @@ def start_server(access: Access, *, host: str, port: int, label: str, verbose: b
 def _peer(connection: Any) -> str:
     try:
         address = connection.remote_address
+    except Exception:  # noqa: BLE001 - a half-open socket has none
+        return ""
+    return str(address[0]) if address else ""
+
+
+def _server_address(connection: Any) -> str:
+    """The address the connection reached the server at (a page on this machine that asked for its network
+    name comes from this very address)."""
+    try:
+        address = connection.local_address
     except Exception:  # noqa: BLE001 - a half-open socket has none
         return ""
     return str(address[0]) if address else ""

@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from sandbox.app.access import WATCH, Access, is_loopback_host, is_shared
+from sandbox.app.access import WATCH, Access, is_loopback_host, is_shared, well_formed_token
 from sandbox.app.compare import Comparison, Lockstep, side_config
 from sandbox.app.events import EventQueue
 from sandbox.app.gate import start_server
@@ -79,7 +79,6 @@ class App:
             return kind(partner_config, fps=fps, steps_per_frame=self.runner.steps_per_frame,
                         program_time_limit=program_time_limit, **kwargs)
 
-        self._frame_lock = threading.Lock()
         self.lockstep = Lockstep(self.runner)
         try:
             self.server, self.gate = start_server(self.access, host=host, port=port, label=TITLE, verbose=verbose,
@@ -92,11 +91,11 @@ class App:
             read_icons_once()
             self._configure_page()
             self.view = SceneView(self.server.scene, self.runner.latest, caption_over_construction=not whole_arena)
-            self.comparison = Comparison(self.server, self.lockstep, make_runner, self._frame_lock,
+            self.comparison = Comparison(self.server, self.lockstep, make_runner,
                                          on_layout=self._reframe_all, on_crash=self._on_partner_crash,
                                          caption_over_construction=not whole_arena, events=self.events)
-            # Loading a program runs a Python file on this machine: the page offers it only where a
-            # connection may do it (served to this machine, or --allow-programs); the gate decides per page.
+            # Loading a program runs a Python file on this machine: every page may where the server is for
+            # this machine alone or --allow-programs, else only a page on this machine; the gate decides per page.
             offered = self.access.allow_programs or not is_shared(host)
             self.panel = Panel(self.server, self.runner, self.view, self.comparison, allow_programs=offered,
                                may_load_programs=self.gate.may_load_programs,
@@ -134,16 +133,15 @@ class App:
 
     # ------------------------------------------------- events (all on the event thread)
     def _on_frame(self, snap: Snapshot) -> None:
-        with self._frame_lock:
-            # The scene and the panel's read-outs of one snapshot in one batch: the page applies a
-            # batch at once, so what it shows comes from one step.
-            with self.server.atomic():
-                self.view.update(snap)
-                self.comparison.draw()  # compare mode's second world, in the same picture
-                self.panel.update(snap)
-            self.panel.inspector.draw(snap)  # each viewer's own marks, in its own messages
-            self.panel.on_frame_drawn()
-            self.frames_drawn += 1
+        # The scene and the panel's read-outs of one snapshot in one batch: the page applies a
+        # batch at once, so what it shows comes from one step.
+        with self.server.atomic():
+            self.view.update(snap)
+            self.comparison.draw()  # compare mode's second world, in the same picture
+            self.panel.update(snap)
+        self.panel.inspector.draw(snap)  # each viewer's own marks, in its own messages
+        self.panel.on_frame_drawn()
+        self.frames_drawn += 1
 
     def _on_disconnect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
@@ -197,7 +195,7 @@ class App:
     def _reframe_all(self, beside: float | None) -> None:
         """Compare mode began or ended: every page frames both worlds, or the one."""
         self.panel.framing.beside = beside
-        with self._frame_lock, self.server.atomic():  # beside the second world, the caption goes under the arena
+        with self.server.atomic():  # beside the second world, the caption goes under the arena
             self.view.set_caption_below(beside is not None, self.runner.latest)
         for client in list(self.server.get_clients().values()):
             if client.client_id not in self.panel.inspector.followers:
@@ -305,6 +303,10 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     sharing.add_argument("--allow-origin", metavar="URL", action="append", default=[],
                          help="also accept websockets from pages of this origin, e.g. https://example.org "
                               "(repeatable); the page's own origin always works")
+    sharing.add_argument("--trust-proxy", action="store_true",
+                         help="behind a reverse proxy on this machine that sets X-Forwarded-For: take a page's "
+                              "address from that header's last entry (by default a request with proxy headers is "
+                              "never this machine's page, and every page counts as the proxy's address)")
     p.add_argument("--keep-running", action="store_true",
                    help=f"keep simulating with no browser connected (by default it pauses after "
                         f"{IDLE_PAUSE_SECONDS:.0f} s without one and goes on when one connects)")
@@ -336,11 +338,13 @@ def serve_command(args: argparse.Namespace) -> int:
     if not 1 <= args.fps <= 240:
         raise UserError("--fps must be between 1 and 240")
     token = args.token if args.token is not None else os.environ.get("PHOTOTAXIS_TOKEN") or None
-    if token is not None and (len(token) < 8 or not token.isprintable() or " " in token):
-        raise UserError("--token must be at least 8 printable characters without spaces")
+    if token is not None and (len(token) < 8 or not well_formed_token(token)):
+        raise UserError("--token must be at least 8 characters of printable ASCII, without spaces, quotes, "
+                        "commas, semicolons or backslashes")
     try:
         access = Access.for_server(args.host, token=token, viewers=args.viewers, allow_programs=args.allow_programs,
-                                   allow_hosts=args.allow_host, allow_origins=args.allow_origin)
+                                   allow_hosts=args.allow_host, allow_origins=args.allow_origin,
+                                   trust_proxy=args.trust_proxy)
     except ValueError as exc:
         raise UserError(str(exc)) from None
     try:

@@ -54,14 +54,15 @@ class Panel:
         self.metrics = MetricsFolder(gui, runner, compared=lambda: comparison.runner)
         self.run = RunFolder(gui, runner, lockstep, show_field=lambda on: view.set_show_field(on, runner.latest),
                              after_reset=self._after_reset, framing=self.framing)
-        self.shape = ShapeFolder(gui, runner, server.scene, on_change=self.metrics.mark)
+        self.shape = ShapeFolder(gui, runner, server.scene, on_change=self.metrics.mark, reset=self.run.reset)
         self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark,
                                            reset=self.run.reset)
+        self.shape.back_to_defaults = self.strategies.back_to_defaults
         self.advice = AdviceFolder(gui, runner, use=self.strategies.use)
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
         self.lamp = LampFolder(gui, runner, on_change=self.metrics.mark)
-        self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark)
+        self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark, post=post)
         self.compare = CompareFolder(gui, runner, comparison, on_change=self.metrics.mark, post=post)
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
         self.record = RecordFolder(gui, server, runner)

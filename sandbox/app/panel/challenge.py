@@ -12,7 +12,6 @@ share of the session, by name.
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import threading
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -42,17 +41,21 @@ class Round:
 
 
 class ChallengeFolder:
-    def __init__(self, gui: Any, runner: Any, lockstep: Any, lamp: Any, on_change: Callable[[str], None]):
+    def __init__(self, gui: Any, runner: Any, lockstep: Any, lamp: Any, on_change: Callable[[str], None],
+                 post: Callable[..., None] = lambda fn, *args: fn(*args)):
         """The round's reset, play and pause act on ``lockstep``: in compare mode the second world (the
-        paper's lights, say) plays the round beside the player's."""
+        paper's lights, say) plays the round beside the player's. ``post(fn, *args)`` runs on the app's
+        event thread: the paper's reference run reports there."""
         self.gui, self.runner, self.lockstep, self.lamp, self._on_change = gui, runner, lockstep, lamp, on_change
+        self._post = post
         #: World steps a round lasts (tests shorten it).
         self.round_steps = ROUND_STEPS
         self.round: Round | None = None
         #: Each player's best share of the session, by name.
         self.best: dict[str, float] = {}
         self._lock = threading.RLock()
-        self._pool: cf.ProcessPoolExecutor | None = None
+        self._stopped = False
+        self._pool: Any = None  # the reference run's process pool (multiprocessing's: it can be terminated)
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -117,27 +120,32 @@ class ChallengeFolder:
     def _score_the_paper(self, r: Round, spec: tuple) -> None:
         config, seed, shape = spec
 
-        def run() -> None:
-            pool = cf.ProcessPoolExecutor(1, mp_context=simulation_context())
+        def run() -> None:  # in a thread of its own: the result goes back to the event thread
+            pool = simulation_context().Pool(1)
             self._pool = pool
             try:
-                paper = pool.submit(paper_share, config, seed, r.at_step, shape).result()
+                result = pool.apply_async(paper_share, (config, seed, r.at_step, shape))
+                while not result.ready() and not self._stopped:  # a terminated pool never answers
+                    result.wait(0.5)
+                if self._stopped:
+                    raise RuntimeError("the app stopped")
+                paper = result.get()
             except Exception as exc:  # a worker that could not run, or the app stopping: the round counts
-                self._show(r, problem=f"no reference: {exc}")
+                self._post(self._show, r, None, f"no reference: {exc}")
                 return
             finally:
-                pool.shutdown(wait=False, cancel_futures=True)
+                pool.terminate()
                 self._pool = None
-            self._show(r, paper)
+            self._post(self._show, r, paper)
 
         threading.Thread(target=run, daemon=True, name="challenge-reference").start()
 
     def stop(self) -> None:
         """The app is stopping: a reference run still going ends now, not when it finishes."""
+        self._stopped = True
         pool = self._pool
         if pool is not None:
-            for process in list(getattr(pool, "_processes", {}).values()):
-                process.terminate()
+            pool.terminate()
 
     def _show(self, r: Round, paper: float | None = None, problem: str = "") -> None:
         """The round's end: its score beside the paper's (or why there is none), and the best scores."""

@@ -17,6 +17,7 @@ from __future__ import annotations
 import threading
 from typing import Any, Callable
 
+import numpy as np
 import viser
 
 from sandbox.app.draw_view import DrawView
@@ -33,6 +34,7 @@ from sandbox.shapes.drawing import (
     snap,
     without_repeats,
 )
+from sandbox.model.geometry import fit_to_area, signed_area
 from sandbox.shapes.templates import placed, template_names, template_vertices
 
 SOURCE = "drawn shape"
@@ -117,7 +119,11 @@ class DrawFolder:
             self.status = gui.add_markdown("")
             self.toggle = gui.add_button("Start drawing", icon=viser.Icon.PENCIL)
             self.undo = gui.add_button("Undo last point", icon=viser.Icon.ARROW_BACK_UP, disabled=True)
-            self.close = gui.add_button("Close and use", icon=viser.Icon.CHECK, disabled=True)
+            self.close = gui.add_button("Close and use", icon=viser.Icon.CHECK, disabled=True,
+                                        hint="Start a new world on this goal (step 0, the same seed); the points "
+                                             "stay here to tweak")
+            self.edit = gui.add_button("Edit this goal", icon=viser.Icon.EDIT,
+                                       hint="Bring the running goal back here as numbered points")
             self.clear = gui.add_button("Clear", icon=viser.Icon.TRASH, disabled=True)
             self.template = gui.add_dropdown("Template", (PICK_TEMPLATE, *template_names()),
                                              initial_value=PICK_TEMPLATE,
@@ -135,6 +141,7 @@ class DrawFolder:
         self.undo.on_click(lambda event: self._change(self.points[:-1]))
         self.clear.on_click(lambda event: self._change([]))
         self.close.on_click(self._close_and_use)
+        self.edit.on_click(lambda event: self.edit_running_goal())
         self.template.on_update(self._pick_template)
         self.apply.on_click(self._apply_typed)
         self.snap_on.on_update(lambda event: self._sync_controls())
@@ -218,9 +225,15 @@ class DrawFolder:
                 notify_error(event.client, "Shape not used", str(exc))
                 return
             self._use(vertices, "drawn", event.client)
-            self.drawing = False
+            self.drawing = False  # the points stay: the goal can be tweaked and used again
             self.view.set_pad(False)
-            self._change([])
+            self._refresh()
+
+    def edit_running_goal(self) -> None:
+        """The running goal as the drawing's points (the circle as its polygon), to tweak and use again."""
+        snap = self.runner.latest
+        vertices = snap.goal_vertices if snap.goal_vertices is not None else snap.goal_outline
+        self._change(without_repeats([(round(float(x), 3), round(float(y), 3)) for x, y in vertices]))
 
     def _pick_template(self, event: viser.GuiEvent) -> None:
         name = self.template.value
@@ -239,7 +252,23 @@ class DrawFolder:
                 notify_error(event.client, "Points not applied", str(exc))
                 self._sync_controls()
                 return
-            self._change(without_repeats(points))  # typed points are not snapped: they are what was asked
+            # Typed points are a shape in their own coordinates: shown centred in the arena at the size it
+            # will be built (not snapped: they are what was asked).
+            self._change(self._centred_at_goal_size(without_repeats(points)))
+
+    def _centred_at_goal_size(self, points: list[Point]) -> list[Point]:
+        """``points`` scaled to the goal's area (the boxes' total area, as the running goal has it) and
+        centred in the arena; only centred while they are not yet a polygon."""
+        if not points:
+            return points
+        try:
+            validate_polygon(points, SOURCE)
+        except ShapeError:
+            return [tuple(p) for p in placed(np.asarray(points, float), self._centre).tolist()]
+        goal = self.runner.latest
+        area = abs(signed_area(goal.goal_vertices if goal.goal_vertices is not None else goal.goal_outline))
+        fitted = fit_to_area(np.asarray(points, float), area, np.asarray(self._centre, float))
+        return [(round(float(x), 3), round(float(y), 3)) for x, y in fitted]
 
     def _change(self, points: list[Point]) -> None:
         """The drawing is now ``points``: redraw, re-check, re-preview, and show them as text."""

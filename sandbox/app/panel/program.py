@@ -6,8 +6,10 @@ stays; one that fails while running (an exception, a pattern of the wrong
 shape) hands the lights back to the paper's controller and every viewer is
 told why. Loading runs a Python file on the server, so the server decides
 who may: a page opened on the server's own machine, or any controlling page
-with ``serve --allow-programs`` (:mod:`sandbox.app.access`). Going back to
-the paper's controller is always allowed to a controlling page.
+with ``serve --allow-programs`` (:mod:`sandbox.app.access`). The controls are
+the same on every page (viser's panel is shared), so a page that may not is
+told why when it asks. Going back to the paper's controller is always
+allowed to a controlling page.
 """
 
 from __future__ import annotations
@@ -21,9 +23,17 @@ from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.snapshot import Snapshot
 
 
+#: What a page that may not load programs is told (the rule: sandbox.app.access.Access.local_page).
+REFUSED = ("Loading light programs is not allowed from this page: only a page opened on the server's own "
+           "machine may load them (not through a proxy, unless the server was started with --trust-proxy), "
+           "or any page with the token if the server was started with --allow-programs.")
+
+
 class ProgramFolder:
     def __init__(self, gui: Any, runner: Any, server: Any, *, allowed: bool, on_change: Any, may_load: Any = None):
         self.gui, self.runner, self.server = gui, runner, server
+        #: Every controlling page may load a program (served to this machine alone, or --allow-programs);
+        #: otherwise only some may (a page on this machine), and the folder says so.
         self.allowed, self._on_change = allowed, on_change
         #: may_load(client): whether that page may load a program (the server's gate decides, per page).
         self._may_load = may_load or (lambda client: allowed)
@@ -36,13 +46,13 @@ class ProgramFolder:
             self.status = gui.add_markdown(self._status(snap))
             self.path = gui.add_text("Program", _example_spec(),
                                      hint="path/to/module.py:ClassName on the server's machine: a class with "
-                                          "update(observation) returning one intensity per light",
-                                     disabled=not self.allowed)
-            self.use = gui.add_button("Use this program", icon=viser.Icon.PLAYER_PLAY, disabled=not self.allowed)
+                                          "update(observation) returning one intensity per light")
+            self.use = gui.add_button("Use this program", icon=viser.Icon.PLAYER_PLAY)
             self.back = gui.add_button("Back to the paper's controller", icon=viser.Icon.ARROW_BACK_UP)
             if not self.allowed:
-                gui.add_markdown("*Shared beyond this machine: start with* `serve --allow-programs` *to load "
-                                 "programs from the page.*")
+                gui.add_markdown("*Shared beyond this machine: only a page opened on the server's own machine "
+                                 "loads programs (start with* `serve --allow-programs` *to let every page with "
+                                 "the token).*")
 
         @self.use.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -53,10 +63,9 @@ class ProgramFolder:
             self.load(None, event.client)
 
     def load(self, spec: str | None, client: Any) -> None:
-        if spec is not None and not (self.allowed and self._may_load(client)):
+        if spec is not None and not self._may_load(client):
             # Checked here, whatever the page shows: a program is a Python file run on this machine.
-            notify_error(client, "Program not used", "Loading light programs is not allowed from this page: "
-                         "open the sandbox on the server's own machine, or start it with serve --allow-programs.")
+            notify_error(client, "Program not used", REFUSED)
             return
         if spec is not None:
             path, sep, name = spec.rpartition(":")

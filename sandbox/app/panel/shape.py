@@ -29,9 +29,16 @@ UPLOAD_REFUSED = "File received, shape not used"
 
 
 class ShapeFolder:
-    def __init__(self, gui: Any, runner: Any, scene: Any, on_change: Callable[[str], None] = lambda what: None):
+    def __init__(self, gui: Any, runner: Any, scene: Any, on_change: Callable[..., None] = lambda what, *a: None,
+                 reset: Callable[..., None] | None = None):
+        """``reset(client, on_done=..., on_error=...)``: a new world with the same seed (the Run folder's,
+        which resets a compared world too); a goal used starts afresh with it."""
         self.gui, self.runner = gui, runner
         self._on_change = on_change
+        self._reset = reset
+        #: Puts the outline and strategies back to their defaults, shown and applied (the Strategies
+        #: folder's; the panel wires it once both folders exist).
+        self.back_to_defaults: Callable[[Any], None] = lambda client: None
         self.draw = DrawFolder(gui, runner, scene, use=self.use)
         #: What this panel last put in the dropdown: if it shows something else, a viewer picked it.
         self._shown: str | None = None
@@ -46,6 +53,9 @@ class ShapeFolder:
         with gui.add_folder("Goal shape"):
             self.shape = gui.add_dropdown("Shape", tuple(names), initial_value=current,
                                           hint="circle, or a polygon file from shapes/")
+            self.keep = gui.add_checkbox("Keep outline and strategies", False,
+                                         hint="A new goal starts afresh at step 0 with the same seed; off, the "
+                                              "outline goes back to auto and the strategies off")
             self.draw.build(snap)
             # The file chooser offers polygon files first; viser's own notice then says the bytes arrived,
             # and ours whether the shape is used.
@@ -115,19 +125,10 @@ class ShapeFolder:
         return True
 
     def use(self, vertices, name: str, client: Any, announce: bool = True, quiet: bool = False) -> None:
-        """Hand the goal to the simulation; it may still refuse one that does not fit the arena.
-        ``quiet``: part of another action (a paper case), which says what it did itself."""
-
-        def used(notes: list[str]) -> None:
-            if quiet:
-                return
-            self._on_change(f"shape {name}")
-            # One notice for the action: what is used, then what to know about it.
-            said = [f"Using {name}" + ("" if vertices is None else f" ({len(vertices)} vertices)")] if announce else []
-            said += [note[0].upper() + note[1:] for note in notes]
-            if said:
-                notify(client, "Goal changed" if announce else "About this goal", ". ".join(said) + ".",
-                       "green" if announce else "blue")
+        """Use a goal: a new world on it from step 0 with the same seed, the outline and strategies back
+        to their defaults unless *Keep outline and strategies* is on. The simulation may still refuse a
+        goal that does not fit the arena: then the running world goes on as it was. ``quiet``: part of
+        another action (a paper case), which sets the strategies, starts the world and says what it did."""
 
         def refused(exc: BaseException) -> None:
             notify_error(client, "Shape not used", str(exc))
@@ -135,7 +136,31 @@ class ShapeFolder:
             self._shown = running if running in self.shape.options else CUSTOM_SHAPE
             self.shape.value = self._shown  # the dropdown goes back to what runs
 
-        self.runner.set_shape(vertices, name, on_done=used, on_error=refused)
+        if quiet:
+            self.runner.set_shape(vertices, name, on_error=refused)
+            return
+        keep = bool(self.keep.value)
+
+        def fitted(notes: list[str]) -> None:  # the goal fits: start it afresh
+            if not keep:
+                self.back_to_defaults(client)
+            if self._reset is None:
+                started(notes)
+            else:
+                self._reset(client, on_done=lambda _: started(notes))
+
+        def started(notes: list[str]) -> None:
+            self._on_change(f"shape {name}", 0)  # the first step of the new world
+            # One notice for the action: what is used, how it started, then what to know about it.
+            what = f"Using {name}" + ("" if vertices is None else f" ({len(vertices)} vertices)")
+            if self._reset is not None:
+                what += f", from step 0 with seed {self.runner.latest.seed}"
+            said = [what, "Outline and strategies kept" if keep else "Outline back to auto, strategies off"]
+            said += [note[0].upper() + note[1:] for note in notes]
+            notify(client, "Goal changed" if announce else "About this goal", ". ".join(said) + ".",
+                   "green" if announce else "blue")
+
+        self.runner.set_shape(vertices, name, on_done=fitted, on_error=refused)
 
     def click(self, point: tuple[float, float]) -> bool:
         """A click on the floor: a new point while drawing (returns whether it was taken)."""

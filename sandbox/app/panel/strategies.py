@@ -102,6 +102,14 @@ class StrategiesFolder:
         self._show_strategies(values)
         self._on_change(f"outline {outline}, " + ", ".join(f"{k} {v:g}" for k, v in values.items() if v > 0))
 
+    def back_to_defaults(self, client: Any) -> None:
+        """The outline back to auto and every strategy off, shown and applied (a new goal starts so)."""
+        strategies = {s.name: 0.0 for s in STRATEGIES}
+        self.runner.update_config({"outline": "auto", **strategies},
+                                  on_error=lambda exc: notify_error(client, "Strategies not reset", str(exc)))
+        self.outline.value = "auto"
+        self._show_strategies(strategies)
+
     def _show_strategies(self, values: dict[str, float]) -> None:
         self._quiet = True
         try:
