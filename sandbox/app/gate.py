@@ -5,9 +5,9 @@ lets any client set any property of any control (``disabled`` is drawn by
 the page, never enforced), buffers uploads without a limit and broadcasts
 their acknowledgements into the backlog every new viewer replays. It has no
 hook for any of this, so this module reaches into its websocket server, in
-four documented places, all of them private to viser 1.1.1
-(:data:`WRITTEN_FOR`; a test pins the version, and :func:`start_server`
-refuses to start on a viser without them):
+four places, all of them private to viser 1.1.1 and reached through
+:mod:`sandbox.app.viser_seam` (its table lists each; a test pins the version,
+and :func:`start_server` refuses to start on a viser that lacks any):
 
 1. **The opening handshake.** viser hands websockets a ``process_request``
    (it serves the page with it). Inside viser's infra module only, the name
@@ -45,21 +45,16 @@ from concurrent.futures import Future
 from typing import Any, Callable
 
 import viser
-import viser.infra._infra as viser_infra
 import websockets
-from viser._messages import RunJavascriptMessage
-from viser.infra._async_message_buffer import AsyncMessageBuffer
 
-from sandbox.app import wakeups
+from sandbox.app import viser_seam, wakeups
 from sandbox.app.access import Access, Grant, address_group, redirect_target
 from sandbox.app.inbox import Inbox
 from sandbox.app.pacing import PATH as DRAWN_PATH
 from sandbox.app.pacing import Pacer
 from sandbox.app.page_keys import KEYS_JS
-from sandbox.app.viser_seam import route_callbacks
+from sandbox.app.viser_seam import WRITTEN_FOR  # noqa: F401 - where the tests look for it
 
-#: The viser release whose internals this module wraps (pinned in pyproject.toml and by a test).
-WRITTEN_FOR = "1.1.1"
 #: Largest websocket message a client may send: an upload part is 512 KiB (viser's client).
 CONTROL_MESSAGE_BYTES = 1024 * 1024
 #: A watching page sends nothing but its camera.
@@ -75,10 +70,6 @@ TOKEN_RESERVE = 8
 WATCHERS_PER_ADDRESS = 16
 
 log = logging.getLogger("sandbox.app.gate")
-
-
-class GateError(RuntimeError):
-    """The installed viser lacks what the gate wraps: refuse to serve without it."""
 
 
 class Gate:
@@ -155,17 +146,10 @@ class Gate:
         """Hook the built server's connections and dispatch, then open the gate."""
         self.server, self.inbox = server, inbox
         self.access.port = server.get_port()
-        infra = server._websock_server
-        infra.on_client_connect(self._on_connect)
-        infra.on_client_disconnect(self._on_disconnect)
-        dispatch = infra._handle_incoming_message
-
-        async def guarded(client_id: int, message: Any) -> None:
-            if inbox.admit(client_id, self.grant(client_id), message):
-                await dispatch(client_id, message)
-
-        infra._handle_incoming_message = guarded
-        self.pacer.pace(infra._broadcast_buffer)
+        viser_seam.on_connections(server, self._on_connect, self._on_disconnect)
+        viser_seam.guard_messages(server, lambda client_id, message:
+                                  inbox.admit(client_id, self.grant(client_id), message))
+        viser_seam.pace_windows(server, self.pacer.hold_windows)
         self.ready = True
 
     def grant(self, client_id: int) -> Grant | None:
@@ -177,7 +161,7 @@ class Gate:
         return grant is not None and grant.controls and grant.programs
 
     async def _on_connect(self, connection: Any) -> None:
-        raw = self.server._websock_server._live_connections.get(connection.client_id)
+        raw = viser_seam.raw_connection(self.server, connection.client_id)
         grant = self._handshaken.pop(raw, None) if raw is not None else None
         with self._lock:
             if grant is not None:
@@ -187,18 +171,14 @@ class Gate:
             if raw is not None:
                 await raw.close(1008, "refused")
             return
-        dispatch = connection._handle_incoming_message
         inbox = self.inbox
-
-        async def guarded(client_id: int, message: Any) -> None:  # this connection's own handlers (camera)
-            if inbox.admit_local(client_id, grant, message):
-                await dispatch(client_id, message)
-
-        connection._handle_incoming_message = guarded
+        # this connection's own handlers (its camera, its own controls)
+        viser_seam.guard_connection_messages(connection, lambda client_id, message:
+                                             inbox.admit_local(client_id, grant, message))
         # The page reports the frames it draws, so it gets no more than it draws (sandbox.app.pacing), and
         # arrows pressed on a slider do not also turn its camera (sandbox.app.page_keys).
         for source in (self.pacer.script_for(connection.client_id), KEYS_JS):
-            connection.queue_message(RunJavascriptMessage(source=source))
+            connection.queue_message(viser_seam.messages.RunJavascriptMessage(source=source))
 
     async def _on_disconnect(self, connection: Any) -> None:
         self.pacer.forget(connection.client_id)
@@ -225,45 +205,16 @@ def _gated_serve(*args: Any, **kwargs: Any) -> Any:
     return _serve(*args, **kwargs)
 
 
-class _View:
-    """A module seen through ``overrides`` (every other attribute is the module's own)."""
-
-    def __init__(self, module: Any, overrides: dict[str, Any]):
-        self._module, self._overrides = module, overrides
-
-    def __getattr__(self, name: str) -> Any:
-        return self._overrides[name] if name in self._overrides else getattr(self._module, name)
-
-
-def _install() -> None:
-    """Give viser's infra module a ``websockets`` whose ``asyncio.server.serve`` is gated (once)."""
-    if isinstance(viser_infra.websockets, _View):
-        return
-    server_view = _View(websockets.asyncio.server, {"serve": _gated_serve})
-    asyncio_view = _View(websockets.asyncio, {"server": server_view})
-    viser_infra.websockets = _View(websockets, {"asyncio": asyncio_view})
-
-
-def check_viser() -> None:
-    """Refuse to serve on a viser whose internals the gate does not know."""
-    infra = viser_infra.WebsockServer
-    missing = [name for name in ("_handle_incoming_message", "on_client_connect", "on_client_disconnect")
-               if not hasattr(infra, name)]
-    missing += [] if hasattr(AsyncMessageBuffer, "window_generator") else ["AsyncMessageBuffer.window_generator"]
-    if not hasattr(viser_infra, "websockets") or missing:
-        raise GateError(f"sandbox.app.gate was written for viser {WRITTEN_FOR} and cannot guard viser "
-                        f"{viser.__version__} (missing {missing or ['websockets']}); install viser=={WRITTEN_FOR}")
-
-
 def start_server(access: Access, *, host: str, port: int, label: str, verbose: bool = False,
                  inbox: Callable[[Gate], Inbox] | None = None,
                  callbacks: Callable[..., Future] | None = None) -> tuple[viser.ViserServer, Gate]:
     """A viser server behind a gate for ``access``; ``inbox(gate)`` builds the message checks;
     ``callbacks(fn, *args)``, if given, runs every callback viser would run on its thread pool (the
-    app's event queue), from before the first page can connect."""
+    app's event queue), from before the first page can connect. Refuses
+    (:class:`sandbox.app.viser_seam.ViserMismatch`) on a viser that lacks what the seam uses."""
     global _gate_being_built
-    check_viser()
-    _install()
+    viser_seam.check()
+    viser_seam.serve_websockets_through(_gated_serve)
     wakeups.install()
     gate = Gate(access)
     with _building:
@@ -275,7 +226,7 @@ def start_server(access: Access, *, host: str, port: int, label: str, verbose: b
             _gate_being_built = None
     try:
         if callbacks is not None:  # before the gate opens: no page's callback goes anywhere else
-            route_callbacks(server, callbacks)
+            viser_seam.route_callbacks(server, callbacks)
         gate.attach(server, inbox(gate) if inbox else Inbox(server, gate))
     except BaseException:
         server.stop()

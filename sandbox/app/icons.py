@@ -4,7 +4,8 @@ viser 1.1 reads each icon with ``svg_from_icon``, which opens and indexes its
 archive of about 5,000 icons for every new icon name: 0.07 s each, 1.3 s for
 the panel's 18 icons, every time a server starts. :func:`read_icons_once`
 puts in its place a reader with the same answers that indexes the archive
-once per process. If viser's layout changes, it leaves viser as it is.
+once per process (through :mod:`sandbox.app.viser_seam`). If viser's layout
+changes, it leaves viser as it is.
 """
 
 from __future__ import annotations
@@ -12,6 +13,8 @@ from __future__ import annotations
 import functools
 import threading
 import zipfile
+
+from sandbox.app import viser_seam
 
 _lock = threading.Lock()
 
@@ -33,17 +36,12 @@ def _reader(path: str):
 
 def read_icons_once() -> bool:
     """Make viser read its icons from an archive opened once; True if it did."""
-    try:
-        from viser import _gui_api, _gui_handles, _icons
-    except ImportError:
-        return False
-    if getattr(_gui_api.svg_from_icon, "reads_once", False):
+    viser_reader = viser_seam.icon_reader()
+    if getattr(viser_reader, "reads_once", False):
         return True
-    path = _icons.ICONS_DIR / "tabler-icons.zip"
-    if not path.is_file() or not all(hasattr(m, "svg_from_icon") for m in (_gui_api, _gui_handles, _icons)):
+    path = viser_seam.icon_archive()
+    if viser_reader is None or path is None:
         return False
     reader = _reader(str(path))
-    reader.reads_once, reader.viser_reader = True, _icons.svg_from_icon
-    for module in (_gui_api, _gui_handles, _icons):
-        module.svg_from_icon = reader
-    return True
+    reader.reads_once, reader.viser_reader = True, viser_reader
+    return viser_seam.read_icons_with(reader)

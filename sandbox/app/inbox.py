@@ -25,8 +25,7 @@ import threading
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from viser import _messages as messages
-from viser._gui_handles import (
+from viser import (
     GuiButtonGroupHandle,
     GuiButtonHandle,
     GuiCheckboxHandle,
@@ -37,7 +36,9 @@ from viser._gui_handles import (
     GuiUploadButtonHandle,
 )
 
+from sandbox.app import viser_seam
 from sandbox.app.access import Grant
+from sandbox.app.viser_seam import messages
 
 log = logging.getLogger("sandbox.app.inbox")
 
@@ -110,7 +111,7 @@ class Inbox:
         except BadValue as why:
             text, handle = why.args
             self._tell(client_id, "Value not used", text)
-            self._send(client_id, messages.GuiUpdateMessage(handle._impl.uuid, {"value": handle._impl.value}))
+            self._send(client_id, messages.GuiUpdateMessage(viser_seam.handle_uuid(handle), {"value": handle.value}))
             self._refused(client_id, message, text)
             return False
         except Refused as why:
@@ -159,12 +160,12 @@ class Inbox:
 
     def _control(self, client_id: int, uuid: str, kind: type | tuple) -> Any:
         """The shown, enabled control ``uuid`` of the given kind, shared or this page's own, or Refused."""
-        handle = self._handle(client_id, "_gui_input_handle_from_uuid", uuid)
-        if handle is None or handle._impl.removed:
+        handle = self._handle(client_id, viser_seam.input_handle, uuid)
+        if handle is None or viser_seam.is_removed(handle):
             raise Refused(f"no control {uuid!r}")
         if not isinstance(handle, kind):
             raise Refused(f"{_label(handle)} is a {type(handle).__name__}")
-        props = handle._impl.props
+        props = viser_seam.props(handle)
         if getattr(props, "disabled", False):
             raise Refused(f"{_label(handle)} is disabled")
         if not getattr(props, "visible", True):
@@ -173,20 +174,21 @@ class Inbox:
 
     def _command(self, client_id: int, uuid: str) -> Any:
         """The enabled keyboard command ``uuid`` (shared or this page's own), or Refused."""
-        handle = self._handle(client_id, "_command_handle_from_uuid", uuid)
-        if handle is None or handle._impl.removed:
+        handle = self._handle(client_id, viser_seam.command_handle, uuid)
+        if handle is None or viser_seam.is_removed(handle):
             raise Refused(f"no command {uuid!r}")
-        if handle._impl.props.disabled:
-            raise Refused(f"command {handle._impl.props.label!r} is disabled")
+        props = viser_seam.props(handle)
+        if props.disabled:
+            raise Refused(f"command {props.label!r} is disabled")
         return handle
 
-    def _handle(self, client_id: int, table: str, uuid: str) -> Any:
-        """The handle ``uuid`` in viser's ``table`` (by uuid) of the shared GUI, else of the sending
-        page's own GUI (a page cannot reach another page's), or None."""
-        handle = getattr(self.server.gui, table).get(uuid)
+    def _handle(self, client_id: int, lookup: Callable[[Any, str], Any], uuid: str) -> Any:
+        """The handle ``lookup(gui, uuid)`` finds in the shared GUI, else in the sending page's own GUI
+        (a page cannot reach another page's), or None."""
+        handle = lookup(self.server.gui, uuid)
         if handle is None:
             client = self._client(client_id)
-            handle = None if client is None else getattr(client.gui, table).get(uuid)
+            handle = None if client is None else lookup(client.gui, uuid)
         return handle
 
     def _check_update(self, client_id: int, message: Any) -> None:
@@ -198,7 +200,7 @@ class Inbox:
             if isinstance(handle, kind):
                 problem = check(handle, updates["value"])
                 if problem:
-                    raise BadValue(f"{handle._impl.props.label or 'value'}: {problem}", handle)
+                    raise BadValue(f"{viser_seam.props(handle).label or 'value'}: {problem}", handle)
                 return
 
     # -------------------------------------------------------------- uploads
@@ -263,12 +265,11 @@ class Inbox:
 
     def _finish(self, transfer_uuid: str, transfer: _Transfer) -> None:
         """Hand the whole file to the upload button's callbacks, as viser would."""
-        gui = self.server.gui
-        gui._current_file_upload_states[transfer_uuid] = {
-            "client_id": transfer.client_id, "filename": transfer.filename, "mime_type": transfer.mime_type,
-            "part_count": transfer.part_count, "parts": transfer.parts, "total_bytes": transfer.size,
-            "transferred_bytes": transfer.received, "lock": threading.Lock()}
-        gui._finish_file_upload(transfer.client_id, transfer_uuid, transfer.component)
+        viser_seam.finish_upload(self.server.gui, transfer_uuid, client_id=transfer.client_id,
+                                 component=transfer.component, filename=transfer.filename,
+                                 mime_type=transfer.mime_type, part_count=transfer.part_count,
+                                 parts=transfer.parts, total_bytes=transfer.size,
+                                 transferred_bytes=transfer.received)
         close = messages.RemoveNotificationMessage(uuid=f"upload-{transfer_uuid}")
         for seconds in UPLOAD_NOTICE_CLOSED_AFTER:
             _later(seconds, self._send, transfer.client_id, close)
@@ -288,7 +289,7 @@ class Inbox:
     def _send(self, client_id: int, message: Any) -> None:
         client = self._client(client_id)
         if client is not None:
-            client._websock_connection.queue_message(message)  # this page only, never the backlog
+            viser_seam.send_to(client, message)  # this page only, never the backlog
 
     def _tell(self, client_id: int, title: str, body: str) -> None:
         client = self._client(client_id)
@@ -317,7 +318,7 @@ class Inbox:
 
 # ------------------------------------------------------------------ values
 def _label(handle: Any) -> str:
-    return f"control {getattr(handle._impl.props, 'label', None) or handle._impl.uuid!r}"
+    return f"control {getattr(viser_seam.props(handle), 'label', None) or viser_seam.handle_uuid(handle)!r}"
 
 
 def _number(value: Any) -> float | None:
@@ -335,7 +336,7 @@ def _check_checkbox(handle: Any, value: Any) -> str | None:
 
 
 def _check_choice(handle: Any, value: Any) -> str | None:
-    options = handle._impl.props.options
+    options = viser_seam.props(handle).options
     return None if isinstance(value, str) and value in options else f"{str(value)[:40]!r} is not one of its options"
 
 
@@ -343,7 +344,8 @@ def _check_range(handle: Any, value: Any) -> str | None:
     number = _number(value)
     if number is None:
         return f"{str(value)[:40]!r} is not a finite number"
-    low, high = getattr(handle._impl.props, "min", None), getattr(handle._impl.props, "max", None)
+    props = viser_seam.props(handle)
+    low, high = getattr(props, "min", None), getattr(props, "max", None)
     if (low is not None and number < low) or (high is not None and number > high):
         shown = "" if low is None else _plain(low), "" if high is None else _plain(high)
         return f"{_plain(number)} is outside the allowed range [{shown[0]}, {shown[1]}]"

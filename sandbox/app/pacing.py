@@ -18,7 +18,8 @@ requests (a report cost it 0.6 ms of CPU, measured under load). The gate answers
 that address (:meth:`Pacer.drawn`).
 
 The shared scene leaves the server in windows, one connection at a time
-(viser's window generator over the broadcast buffer). A page that has
+(viser's window generator over the broadcast buffer, reached through
+:func:`sandbox.app.viser_seam.pace_windows`). A page that has
 reported once is paced: after each window it gets, the next waits until it
 reports a drawn frame again, or :data:`MOST_WAIT` passes (a hidden tab
 stops drawing). Meanwhile the buffer keeps only the newest of each node's
@@ -32,7 +33,7 @@ from __future__ import annotations
 import asyncio
 import secrets
 from collections import Counter
-from typing import Any, AsyncGenerator
+from typing import AsyncGenerator
 
 #: Where a page reports a drawn frame.
 PATH = "/__drawn/"
@@ -131,17 +132,9 @@ class Pacer:
             event.set()  # a window held for the page goes (and its connection ends)
 
     # ---------------------------------------------------------- windows
-    def pace(self, buffer: Any) -> None:
-        """Hold the windows ``buffer`` (viser's broadcast buffer) sends each paced page."""
-        generator = buffer.window_generator
-
-        def window_generator(client_id: int, *args: Any, **kwargs: Any) -> AsyncGenerator:
-            return self._paced(generator(client_id, *args, **kwargs), client_id, buffer.max_window_size)
-
-        buffer.window_generator = window_generator
-
-    async def _paced(self, windows: AsyncGenerator, client_id: int, full: int) -> AsyncGenerator:
-        """``windows``, each after the page's report of drawing the last. A ``full`` window (viser cuts
+    async def hold_windows(self, windows: AsyncGenerator, client_id: int, full: int) -> AsyncGenerator:
+        """``windows`` (one page's windows of the shared scene, :func:`sandbox.app.viser_seam.pace_windows`),
+        each after the page's report of drawing the last. A ``full`` window (viser cuts
         them at that many messages) may end inside a frame: the rest follows at once."""
         try:
             while True:

@@ -31,6 +31,8 @@ from sandbox.app.process import ProcessRunner
 from sandbox.app.runner import Runner, wait_for
 from sandbox.app.scene import SceneView, configure_scene
 from sandbox.app.snapshot import Snapshot
+from sandbox.app.viser_seam import ViserMismatch
+from sandbox.app.viser_seam import check as check_viser
 from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, config_from_args,
                          controller_from_args, program_time_limit)
 from sandbox.model.config import Config, ConfigError
@@ -315,6 +317,10 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 def serve_command(args: argparse.Namespace) -> int:
 
+    try:
+        check_viser()  # before anything starts: one line naming what this viser lacks
+    except ViserMismatch as exc:
+        raise UserError(str(exc)) from None
     config = config_from_args(args)
     compare = None
     if args.compare:

@@ -19,9 +19,8 @@ them even if another thread raised the flag first, so no wake-up is lost.
 from __future__ import annotations
 
 import asyncio
-import dataclasses
 
-from viser.infra import _async_message_buffer as buffers
+from sandbox.app import viser_seam
 
 
 class LoopSafeEvent(asyncio.Event):
@@ -33,10 +32,10 @@ class LoopSafeEvent(asyncio.Event):
 
     def set(self) -> None:
         if _running_loop() is self._owner:
-            self._value = False  # so that set() wakes the waiters even if a thread raised the flag
+            viser_seam.set_event_flag(self, False)  # so that set() wakes the waiters even if a thread raised it
             super().set()
         else:
-            self._value = True
+            viser_seam.set_event_flag(self, True)
 
 
 def _running_loop() -> asyncio.AbstractEventLoop | None:
@@ -48,18 +47,4 @@ def _running_loop() -> asyncio.AbstractEventLoop | None:
 
 def install() -> None:
     """Every message buffer viser builds from now on wakes its sender as above (once)."""
-    cls = buffers.AsyncMessageBuffer
-    if getattr(cls.__init__, "_loop_safe", False):
-        return
-    fields = {field.name for field in dataclasses.fields(cls)}
-    if not {"message_event", "event_loop"} <= fields:
-        raise RuntimeError("sandbox.app.wakeups does not know this viser's message buffer "
-                           "(no message_event or event_loop)")
-    built = cls.__init__
-
-    def __init__(self, *args, **kwargs) -> None:
-        built(self, *args, **kwargs)
-        self.message_event = LoopSafeEvent(self.event_loop)
-
-    __init__._loop_safe = True
-    cls.__init__ = __init__
+    viser_seam.give_message_buffers(LoopSafeEvent)
