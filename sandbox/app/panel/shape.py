@@ -5,7 +5,8 @@ the running simulation alone."""
 
 from __future__ import annotations
 
-import tempfile
+import logging
+import re
 from pathlib import Path
 from typing import Any, Callable
 
@@ -17,15 +18,21 @@ from sandbox.app.snapshot import Snapshot
 from sandbox.shapes import (
     ShapeError,
     builtin_shape_names,
-    load_polygon,
     polygon_to_text,
     shape_vertices,
 )
 from sandbox.shapes.formats import EXTENSIONS
+from sandbox.shapes.isolated import read_polygon_isolated
 
 CUSTOM_SHAPE = "(drawn or uploaded)"
 #: The title of a refused upload: viser's own notice beside it says the file arrived, which it did.
 UPLOAD_REFUSED = "File received, shape not used"
+#: Longest file name shown and kept for an uploaded shape (its extension is kept whole).
+NAME_LIMIT = 80
+#: What a file name may not hold: control characters (a NUL among them) and halves of surrogate pairs.
+_UNPRINTABLE = re.compile(r"[\x00-\x1f\x7f-\x9f\ud800-\udfff]")
+
+log = logging.getLogger("sandbox.app.panel.shape")
 
 
 class ShapeFolder:
@@ -97,21 +104,20 @@ class ShapeFolder:
             self._shown = shown
             self.shape.value = shown
 
-    def use_shape_file(self, filename: str, content: bytes, client: Any) -> bool:
-        """Validate an uploaded polygon file with the model's loader; use it or say why not."""
-        safe = Path(filename).name or "upload.txt"
+    def use_shape_file(self, filename: Any, content: bytes, client: Any) -> bool:
+        """Validate an uploaded polygon file with the model's loader, in a process of its own (a slow
+        file must not stall anyone's scene); use it or say why not. Every refusal is told to the page."""
+        name = upload_name(filename)
         try:
-            with tempfile.TemporaryDirectory() as tmp:
-                path = Path(tmp) / safe
-                path.write_bytes(content)
-                vertices = load_polygon(path)
+            vertices = read_polygon_isolated(bytes(content), name)
         except ShapeError as exc:
             notify_error(client, UPLOAD_REFUSED, str(exc))
             return False
-        except OSError as exc:
-            notify_error(client, UPLOAD_REFUSED, f"{safe}: cannot read the upload ({exc})")
+        except Exception as exc:  # noqa: BLE001 - whatever happened, the page hears of it and the run goes on
+            log.exception("upload %r could not be read", name)
+            notify_error(client, UPLOAD_REFUSED, f"{name}: could not be read ({type(exc).__name__})")
             return False
-        self.use(vertices, safe, client)
+        self.use(vertices, name, client)
         return True
 
     def use(self, vertices, name: str, client: Any, announce: bool = True, quiet: bool = False) -> None:
@@ -145,3 +151,14 @@ class ShapeFolder:
     draw_points = property(lambda self: self.draw.points)
     drawing = property(lambda self: self.draw.drawing)
     draw_close = property(lambda self: self.draw.close)
+
+
+def upload_name(filename: Any) -> str:
+    """A page's name for its file, fit to show and to name the shape: the last part of a path only,
+    no control characters, at most NAME_LIMIT characters with the extension (which gives the format)
+    kept; "upload.txt" when nothing is left."""
+    name = _UNPRINTABLE.sub("?", str(filename or "")).replace("\\", "/").rsplit("/", 1)[-1].strip()
+    if len(name) > NAME_LIMIT:
+        suffix = Path(name).suffix[:12]
+        name = name[:NAME_LIMIT - len(suffix) - 3] + "..." + suffix
+    return name if name not in ("", ".", "..") else "upload.txt"
