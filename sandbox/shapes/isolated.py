@@ -77,11 +77,12 @@ def _read_in_child(sending, data: bytes, name: str, memory_limit: int) -> None:
         answer = ("vertices", read_polygon_bytes(data, name))
     except ShapeError as error:
         answer = ("refused", str(error))
-    except MemoryError:
-        answer = ("refused", str(fail(name, f"needs more than {memory_limit // 2**20} MB to read")))
     except Exception as error:  # the file's fault too: nothing else runs in this process
-        answer = ("refused", str(fail(name, f"could not be read ({type(error).__name__}: "
-                                           f"{str(error)[:60] or 'no details'})")))
+        if isinstance(error, MemoryError) or "bad_alloc" in str(error):  # GEOS says it in C++
+            answer = ("refused", str(fail(name, f"needs more than {memory_limit // 2**20} MB to read")))
+        else:
+            answer = ("refused", str(fail(name, f"could not be read ({type(error).__name__}: "
+                                               f"{str(error)[:60] or 'no details'})")))
     sending.send(answer)
     sending.close()
 
