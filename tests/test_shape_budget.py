@@ -92,6 +92,14 @@ def test_arcs_with_flags_written_together_are_counted_on_the_low_side():
     assert path_points(d, CURVE_POINTS) <= len(_outline(svgelements.Path(d), "p.svg"))
 
 
+def test_a_run_of_digits_before_a_stray_letter_is_refused_at_once():
+    """The points check once tried every way to split the digits into numbers: 10 s for sixteen."""
+    data = SVG.format(f'<polygon points="0,0 1,0 {"1" * 40}x"/>').encode()
+    message, seconds, _ = refusal_cost(data, "digits.svg")
+    assert message == "digits.svg: the <polygon> points attribute is not a list of numbers"
+    assert seconds < SECONDS, f"{seconds:.2f} s"
+
+
 def test_a_star_of_many_crossings_is_refused_at_its_first():
     """Every edge of a {2999/1499} star crosses nearly every other: 4.5 million pairs, which listing
     all at once took half a minute (a 999-point star took 5 s)."""

@@ -1,8 +1,8 @@
 """How much work an SVG asks for, counted in its XML before svgelements reads it.
 
 svgelements parses and flattens in pure Python: a 780 KB path of 30,000 arcs
-took it 15 s and 200 MB before the vertex limit could refuse the 480,000
-points, and seven levels of ``<use>`` ten times each (2 KB) ask it for ten
+took 9.5 s and 209 MB at its peak before the vertex limit could refuse the
+480,000 points, and seven levels of ``<use>`` ten times each (2 KB) ask it for ten
 million copies. Counting is cheap (regular expressions over the attributes,
 one pass over the tree), so a file that could never be a usable goal is
 refused before that work starts.
@@ -26,7 +26,8 @@ from sandbox.shapes.validation import MAX_VERTICES
 MAX_ELEMENTS = 10_000
 #: Elements and points together: one shape at the vertex limit and room around it.
 WORK_LIMIT = MAX_ELEMENTS + MAX_VERTICES
-_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+#: A number in SVG's path and points syntax ("1.5.5" is 1.5 and .5).
+NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 _COMMANDS = "MmZzLlHhVvCcSsQqTtAa"
 #: One path command and the arguments that follow it (an exponent's e is not a command).
 _COMMAND_RUN = re.compile(rf"([{_COMMANDS}])([^{_COMMANDS}]*)")
@@ -65,7 +66,7 @@ def element_points(element: ET.Element, curve_points: int) -> int:
     if tag == "path":
         return path_points(element.get("d", ""), curve_points)
     if tag in ("polygon", "polyline"):
-        return len(_NUMBER.findall(element.get("points", ""))) // 2
+        return len(NUMBER.findall(element.get("points", ""))) // 2
     if tag in ("rect", "circle", "ellipse"):
         return _ROUND_ARCS * curve_points + _ROUND_LINES
     if tag == "line":
@@ -84,7 +85,7 @@ def path_points(d: str, curve_points: int) -> int:
             continue
         # An arc's flags may be written together ("0150" is 0, 1 and 50), which this counts as fewer
         # numbers: an estimate on the low side.
-        segments = math.ceil(len(_NUMBER.findall(run.group(2))) / _ARGUMENTS[kind])
+        segments = math.ceil(len(NUMBER.findall(run.group(2))) / _ARGUMENTS[kind])
         points += segments * (1 if kind in _STRAIGHT else curve_points)
         if points > MAX_VERTICES:
             break
