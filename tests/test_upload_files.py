@@ -140,6 +140,17 @@ def test_a_file_name_with_a_nul_byte_gets_a_notice_and_the_run_goes_on(app):
     uploader.close()
 
 
+def test_an_upload_shorter_than_announced_gets_a_notice(app):
+    """viser drops a file whose parts hold fewer bytes than announced, with a warning in the log."""
+    uploader = page(app)
+    component = app.panel.shape.upload._impl.uuid
+    transfer = uploader.start_upload(component, size=1000, parts=1, name="short\x00.txt")
+    uploader.upload_part(component, transfer, 0, b"0 0\n6 0\n3 5\n")
+    assert notice(uploader, "File not uploaded") == "short?.txt: 12 bytes arrived of the 1000 announced."
+    assert app.gate.inbox._transfers == {} and app.runner.latest.shape_name == "circle"
+    uploader.close()
+
+
 @pytest.mark.parametrize("sent, shown", [("a\x00b.svg", "a?b.svg"), ("C:\\Users\\me\\goal.txt", "goal.txt"),
                                          ("/etc/passwd", "passwd"), ("..", "upload.txt"), ("", "upload.txt"),
                                          ("\ud800.json", "?.json"), ("x" * 300 + ".wkt", "x" * 73 + "....wkt")])
