@@ -19,8 +19,8 @@ from sandbox.shapes.svg_budget import path_points
 from tests.test_cli import SMALL, phototaxis
 
 SVG = '<svg xmlns="http://www.w3.org/2000/svg" xmlns:xlink="http://www.w3.org/1999/xlink">{}</svg>'
-#: What the measurement allows the reader, on two cores shared by a whole test suite and more: it took
-#: 9.5 s and 200 MB of peak memory for 30,000 arcs before the count, 0.05 s and 3 MB after.
+#: What the measurement allows the reader, in CPU seconds and bytes: it took 9.5 s and 209 MB of peak
+#: memory for 30,000 arcs before the count, 0.05 s and 3 MB after.
 SECONDS, BYTES = 2.0, 50_000_000
 
 
@@ -40,13 +40,17 @@ def svg_of_cubics(count: int = 19_000) -> bytes:
 
 
 def refusal_cost(data: bytes, name: str) -> tuple[str, float, int]:
-    """The reader's message, its seconds and the peak of the memory Python allocated for it."""
+    """The reader's message, the CPU seconds it took (wall time on a loaded machine says more about
+    the machine) and the peak of the memory Python allocated for it (in a second reading: tracing
+    slows the first)."""
+    start = time.thread_time()
+    with pytest.raises(ShapeError) as refused:
+        read_polygon_bytes(data, name)
+    seconds = time.thread_time() - start
     tracemalloc.start()
     try:
-        start = time.perf_counter()
-        with pytest.raises(ShapeError) as refused:
+        with pytest.raises(ShapeError):
             read_polygon_bytes(data, name)
-        seconds = time.perf_counter() - start
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -70,11 +74,11 @@ def test_copies_and_floods_of_elements_are_refused_before_they_are_made():
     bomb = SVG.format(f'<defs>{"".join(levels)}</defs><use xlink:href="#p7"/>').encode()
     circle = SVG.format('<g id="a"><use href="#b"/></g><g id="b"><use href="#a"/></g>').encode()
     flood = SVG.format('<rect x="0" y="0" width="1" height="1"/>' * 20_000).encode()
-    deep = SVG.format("<g>" * 30_000 + '<path d="M0 0 L1 0 L0 1 Z"/>' + "</g>" * 30_000).encode()
+    deep = SVG.format("<g>" * 12_000 + '<path d="M0 0 L1 0 L0 1 Z"/>' + "</g>" * 12_000).encode()
     for name, data, words in [("bomb.svg", bomb, "more than 20,000 elements and points once its <use> copies"),
                               ("circle.svg", circle, "once its <use> copies are made"),
                               ("flood.svg", flood, "the SVG has 20,001 elements; at most 10,000 are read"),
-                              ("deep.svg", deep, "the SVG has 30,002 elements")]:
+                              ("deep.svg", deep, "the SVG has 12,002 elements")]:
         message, seconds, peak = refusal_cost(data, name)
         assert message.startswith(f"{name}: ") and words in message, message
         assert seconds < SECONDS and peak < BYTES, f"{name}: {seconds:.2f} s, {peak / 1e6:.0f} MB"
@@ -114,14 +118,15 @@ def test_a_star_of_many_crossings_is_refused_at_its_first():
 def test_run_refuses_a_megabyte_of_arcs_in_one_line(tmp_path):
     path = tmp_path / "big.svg"
     path.write_bytes(svg_of_arcs())
-    start = time.perf_counter()
+    start = time.thread_time()  # the command runs in this thread; its CPU time is what the file costs
     out = phototaxis("run", "--shape", str(path), *SMALL)
-    seconds = time.perf_counter() - start
+    seconds = time.thread_time() - start
     assert out.returncode == 2 and out.stderr.count("\n") == 1, out.stderr
     assert "big.svg: the <path> has more than 10,000 points" in out.stderr and "Traceback" not in out.stderr
-    assert seconds < 5.0, f"{seconds:.1f} s"
+    assert seconds < SECONDS, f"{seconds:.1f} s"
 
 
+@pytest.mark.slow  # the first child of a test worker starts the fork server: seconds on a loaded machine
 def test_an_upload_is_read_in_a_child_within_its_time_and_memory():
     """The page's reader: a good file's vertices come back; a file too slow or too large for the
     child's limits is refused in one line, the child ended (0.01 s is less than a child takes to start,
