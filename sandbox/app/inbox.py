@@ -21,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
+import re
 import threading
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -248,10 +249,16 @@ class Inbox:
             complete = not over and len(transfer.parts) == transfer.part_count
             if complete:
                 del self._transfers[message.transfer_uuid]
+            short = complete and transfer.received != transfer.size
         if over:
             self._tell(client_id, "File not uploaded", f"{_safe_name(transfer.filename)}: more bytes arrived "
                                                       f"than the {transfer.size} announced.")
             raise Refused("an upload sent more than it announced")
+        if short:  # viser would drop it with a warning in the log and nothing on the page
+            self._end_upload_in_page(client_id, message, size=transfer.size)
+            self._tell(client_id, "File not uploaded", f"{_safe_name(transfer.filename)}: {transfer.received} "
+                                                      f"bytes arrived of the {transfer.size} announced.")
+            raise Refused("an upload sent less than it announced")
         self._send(client_id, messages.FileTransferPartAck(
             source_component_uuid=transfer.component, transfer_uuid=message.transfer_uuid,
             transferred_bytes=transfer.received, total_bytes=transfer.size))
@@ -379,7 +386,8 @@ def _megabytes(n: int) -> str:
 
 
 def _safe_name(name: Any) -> str:
-    return str(name).replace("\n", " ")[:80] or "the file"
+    """A file's name fit to show: no control characters (a NUL among them), at most 80 characters."""
+    return re.sub(r"[\x00-\x1f\x7f\ud800-\udfff]", "?", str(name).replace("\n", " "))[:80] or "the file"
 
 
 def _later(seconds: float, fn: Callable[..., None], *args: Any) -> None:

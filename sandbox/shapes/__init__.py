@@ -3,6 +3,8 @@ validation, and the built-in shapes.
 
 - :mod:`.formats`     plain text, JSON / GeoJSON, WKT: parse and load
 - :mod:`.svg`         SVG (through svgelements)
+- :mod:`.svg_budget`  what an SVG asks for, counted before it is read
+- :mod:`.isolated`    a file read in a child process, under a time and memory limit (uploads)
 - :mod:`.validation`  what makes an outline usable
 - :mod:`.builtin`     the shapes/ folder, by name
 """

@@ -200,6 +200,12 @@ def load_polygon(path) -> np.ndarray:
                     f"under {MAX_BYTES // 1_000_000} MB")
     with path.open("rb") as handle:
         data = handle.read(MAX_BYTES + 1)
+    return read_polygon_bytes(data, name)
+
+
+def read_polygon_bytes(data: bytes, name: str) -> np.ndarray:
+    """A polygon file's bytes (an upload, or a file read by :func:`load_polygon`) parsed; ``name``
+    gives the format by its extension and names the file in messages."""
     if len(data) > MAX_BYTES:
         raise fail(name, f"is larger than {MAX_BYTES // 1_000_000} MB; that is too large "
                     "to be a polygon file")
@@ -210,5 +216,3 @@ def load_polygon(path) -> np.ndarray:
     except UnicodeDecodeError as error:
         raise fail(name, f"is not UTF-8 text (bad byte at offset {error.start})") from None
     return parse_polygon(text, source=name)
-
-

@@ -16,6 +16,9 @@ MIN_RELATIVE_AREA = 1e-9       # area / (bounding-box size)^2 below this is "zer
 #: Coordinates beyond this are refused: only the shape matters, and squares of
 #: larger numbers overflow double precision.
 MAX_COORDINATE = 1e12
+#: Edges whose crossings are listed at once when looking for the first: at most this many times
+#: MAX_VERTICES pairs in memory.
+QUERY_EDGES = 32
 
 
 def validate_polygon(vertices, source: str, line_numbers=None) -> np.ndarray:
@@ -102,17 +105,25 @@ def _first_self_contact(array: np.ndarray) -> tuple[int, int, tuple[float, float
     ends = np.stack([array, np.roll(array, -1, axis=0)], axis=1)
     edges = shapely.linestrings(ends)
     tree = shapely.STRtree(edges)
-    a, b = tree.query(edges, predicate="intersects")
-    for i, j in sorted(zip(a.tolist(), b.tolist())):
-        if j <= i:
-            continue
-        meeting = shapely.intersection(edges[i], edges[j])
-        if (j - i) % n in (1, n - 1):  # neighbours share a corner; only an overlap counts
-            if meeting.geom_type == "Point":
-                continue
-        point = meeting.representative_point()
-        proper = bool(shapely.crosses(edges[i], edges[j]))
-        return i, j, (point.x, point.y), proper
+    # Edges are asked about a few at a time: a star of 10,000 points has 50 million crossing pairs,
+    # which asked all at once took minutes and gigabytes to list. The first few alone, then up to
+    # QUERY_EDGES at a time.
+    start, count = 0, 1
+    while start < n:
+        a, b = tree.query(edges[start:start + count], predicate="intersects")
+        a = a + start
+        later = b > a
+        a, b = a[later], b[later]
+        for k in np.lexsort((b, a)).tolist():
+            i, j = int(a[k]), int(b[k])
+            meeting = shapely.intersection(edges[i], edges[j])
+            if (j - i) % n in (1, n - 1):  # neighbours share a corner; only an overlap counts
+                if meeting.geom_type == "Point":
+                    continue
+            point = meeting.representative_point()
+            proper = bool(shapely.crosses(edges[i], edges[j]))
+            return i, j, (point.x, point.y), proper
+        start, count = start + count, min(count * 2, QUERY_EDGES)
     return None
 
 

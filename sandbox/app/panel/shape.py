@@ -5,7 +5,9 @@ the running simulation alone."""
 
 from __future__ import annotations
 
-import tempfile
+import logging
+import re
+import threading
 from pathlib import Path
 from typing import Any, Callable
 
@@ -17,23 +19,31 @@ from sandbox.app.snapshot import Snapshot
 from sandbox.shapes import (
     ShapeError,
     builtin_shape_names,
-    load_polygon,
     polygon_to_text,
     shape_vertices,
 )
 from sandbox.shapes.formats import EXTENSIONS
+from sandbox.shapes.isolated import read_polygon_isolated
 
 CUSTOM_SHAPE = "(drawn or uploaded)"
 #: The title of a refused upload: viser's own notice beside it says the file arrived, which it did.
 UPLOAD_REFUSED = "File received, shape not used"
+#: Longest file name shown and kept for an uploaded shape (its extension is kept whole).
+NAME_LIMIT = 80
+#: What a file name may not hold: control characters (a NUL among them) and halves of surrogate pairs.
+_UNPRINTABLE = re.compile(r"[\x00-\x1f\x7f-\x9f\ud800-\udfff]")
+
+log = logging.getLogger("sandbox.app.panel.shape")
 
 
 class ShapeFolder:
     def __init__(self, gui: Any, runner: Any, scene: Any, on_change: Callable[..., None] = lambda what, *a: None,
-                 reset: Callable[..., None] | None = None):
+                 reset: Callable[..., None] | None = None, post: Callable[..., None] | None = None):
         """``reset(client, on_done=..., on_error=...)``: a new world with the same seed (the Run folder's,
-        which resets a compared world too); a goal used starts afresh with it."""
+        which resets a compared world too); a goal used starts afresh with it. ``post(fn, *args)``: run on
+        the app's event thread (an upload is read aside, and its result comes back there)."""
         self.gui, self.runner = gui, runner
+        self._post = post
         self._on_change = on_change
         self._reset = reset
         #: Puts the outline and strategies back to their defaults, shown and applied (the Strategies
@@ -82,7 +92,7 @@ class ShapeFolder:
         @self.upload.on_upload
         def _(event: viser.GuiEvent) -> None:
             uploaded = self.upload.value
-            self.use_shape_file(uploaded.name or "upload.txt", uploaded.content, event.client)
+            self.take_upload(uploaded.name or "upload.txt", uploaded.content, event.client)
 
         @self.download_shape.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -107,21 +117,43 @@ class ShapeFolder:
             self._shown = shown
             self.shape.value = shown
 
-    def use_shape_file(self, filename: str, content: bytes, client: Any) -> bool:
-        """Validate an uploaded polygon file with the model's loader; use it or say why not."""
-        safe = Path(filename).name or "upload.txt"
+    def take_upload(self, filename: Any, content: bytes, client: Any) -> None:
+        """An uploaded polygon file: read aside (in a thread that waits for the reader's process, up to its
+        time limit), then used or refused on the event thread; nothing waits for it meanwhile."""
+        if self._post is None:
+            self.use_shape_file(filename, content, client)
+            return
+        name = upload_name(filename)
+
+        def read() -> None:
+            self._post(self._take_read, name, self._read(name, content), client)
+
+        threading.Thread(target=read, name="upload-reader", daemon=True).start()
+
+    def use_shape_file(self, filename: Any, content: bytes, client: Any) -> bool:
+        """Validate an uploaded polygon file with the model's loader, in a process of its own (a slow
+        file must not stall anyone's scene); use it or say why not. Every refusal is told to the page.
+        Waits for the reader: call it off the event thread (:meth:`take_upload` does)."""
+        name = upload_name(filename)
+        return self._take_read(name, self._read(name, content), client)
+
+    @staticmethod
+    def _read(name: str, content: bytes) -> tuple[Any, str]:
+        """(vertices, '') or (None, why not)."""
         try:
-            with tempfile.TemporaryDirectory() as tmp:
-                path = Path(tmp) / safe
-                path.write_bytes(content)
-                vertices = load_polygon(path)
+            return read_polygon_isolated(bytes(content), name), ""
         except ShapeError as exc:
-            notify_error(client, UPLOAD_REFUSED, str(exc))
+            return None, str(exc)
+        except Exception as exc:  # noqa: BLE001 - whatever happened, the page hears of it and the run goes on
+            log.exception("upload %r could not be read", name)
+            return None, f"{name}: could not be read ({type(exc).__name__})"
+
+    def _take_read(self, name: str, read: tuple[Any, str], client: Any) -> bool:
+        vertices, problem = read
+        if problem:
+            notify_error(client, UPLOAD_REFUSED, problem)
             return False
-        except OSError as exc:
-            notify_error(client, UPLOAD_REFUSED, f"{safe}: cannot read the upload ({exc})")
-            return False
-        self.use(vertices, safe, client)
+        self.use(vertices, name, client)
         return True
 
     def use(self, vertices, name: str, client: Any, announce: bool = True, quiet: bool = False) -> None:
@@ -170,3 +202,14 @@ class ShapeFolder:
     draw_points = property(lambda self: self.draw.points)
     drawing = property(lambda self: self.draw.drawing)
     draw_close = property(lambda self: self.draw.close)
+
+
+def upload_name(filename: Any) -> str:
+    """A page's name for its file, fit to show and to name the shape: the last part of a path only,
+    no control characters, at most NAME_LIMIT characters with the extension (which gives the format)
+    kept; "upload.txt" when nothing is left."""
+    name = _UNPRINTABLE.sub("?", str(filename or "")).replace("\\", "/").rsplit("/", 1)[-1].strip()
+    if len(name) > NAME_LIMIT:
+        suffix = Path(name).suffix[:12]
+        name = name[:NAME_LIMIT - len(suffix) - 3] + "..." + suffix
+    return name if name not in ("", ".", "..") else "upload.txt"
