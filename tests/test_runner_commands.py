@@ -20,7 +20,7 @@ import pytest
 from sandbox.app import commands
 from sandbox.app.commands import Command, Control, RunnerStopped, Setting
 from sandbox.app.process import ProcessRunner, SimulationCrashed
-from sandbox.app.runner import Runner
+from sandbox.app.runner import HANDLERS, Runner
 from sandbox.model.config import Config
 from tests.waiting import wait_until
 
@@ -42,8 +42,7 @@ def blocks_until(sim, path: str) -> None:
 
 @pytest.mark.parametrize("kind", COMMANDS, ids=lambda kind: kind.__name__)
 def test_every_command_has_a_handler(kind):
-    dispatch = Runner.__dict__["handle"].dispatcher.dispatch
-    assert dispatch(kind) is not dispatch(Command), f"Runner.handle does not carry out {kind.__name__}"
+    assert any(base in HANDLERS for base in kind.__mro__), f"Runner.handle does not carry out {kind.__name__}"
 
 
 def test_a_stopped_runner_fails_every_command_it_had_not_carried_out():

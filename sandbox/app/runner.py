@@ -12,7 +12,6 @@ a slow browser never slows physics.
 
 from __future__ import annotations
 
-import functools
 import logging
 import queue
 import threading
@@ -76,6 +75,20 @@ def wait_for(post: Callable, command: Any, timeout: float) -> Any:
     if "e" in box:
         raise box["e"]
     return box.get("r")
+
+
+#: Which Runner method carries out each kind of command (filled by :func:`handles`).
+HANDLERS: dict[type, Callable[["Runner", Any], Any]] = {}
+
+
+def handles(kind: type) -> Callable:
+    """Register the decorated Runner method as what carries out commands of ``kind``."""
+
+    def register(method: Callable) -> Callable:
+        HANDLERS[kind] = method
+        return method
+
+    return register
 
 
 class BuildCancelled(Exception):
@@ -268,40 +281,43 @@ class Runner(SimulationRunner):
             if not future.done():
                 future.set_exception(RunnerStopped("the simulation stopped while carrying this out"))
 
-    @functools.singledispatchmethod
     def handle(self, command: Command) -> Any:
         """Carry out one command (the one place each command's meaning lives; :meth:`submit` decides
-        on which thread and when). Dispatched on the command's type."""
-        raise TypeError(f"the simulation does not know the command {command!r}")
+        on which thread and when): the handler of its type, or of the nearest base that has one."""
+        kind = type(command)
+        handler = HANDLERS.get(kind) or next((HANDLERS[k] for k in kind.__mro__ if k in HANDLERS), None)
+        if handler is None:
+            raise TypeError(f"the simulation does not know the command {command!r}")
+        return handler(self, command)
 
-    @handle.register
+    @handles(Setting)
     def _setting(self, command: Setting) -> None:
         command.settle(self.controls)
         if command.wakes:
             self._wake.set()
 
-    @handle.register
+    @handles(Start)
     def _start(self, command: Start) -> None:
         self.start()
 
-    @handle.register
+    @handles(CancelBuild)
     def _cancel_build(self, command: CancelBuild) -> None:
         self._cancel.set()
 
-    @handle.register
+    @handles(Apply)
     def _apply(self, command: Apply) -> Any:
         return command.function(self.sim)
 
-    @handle.register
+    @handles(StepOnce)
     def _step_once(self, command: StepOnce) -> None:
         self._step(command.n)
 
-    @handle.register
+    @handles(RunTo)
     def _run_to(self, command: RunTo) -> None:
         if self.sim.steps_done < command.step:
             self._step(command.step - self.sim.steps_done)
 
-    @handle.register
+    @handles(UpdateConfig)
     def _update_config(self, command: UpdateConfig) -> tuple[list[str], Config]:
         changes = command.changes
         deferred = self.sim.update_config(**changes)
@@ -310,7 +326,7 @@ class Runner(SimulationRunner):
         self.pending = {k: getattr(settings, k) for k in {*self.pending, *deferred}}
         return sorted(self.pending), settings
 
-    @handle.register
+    @handles(Reset)
     def _reset(self, command: Reset) -> None:
         self._cancel.clear()
         try:
@@ -325,20 +341,20 @@ class Runner(SimulationRunner):
             self._series = []
         self._record_series(force=True)
 
-    @handle.register
+    @handles(SetShape)
     def _set_shape(self, command: SetShape) -> list[str]:
         notes = self.sim.set_shape(command.vertices, name=command.name)
         self.shape_name = command.name
         self._goal_key += 1
         return notes
 
-    @handle.register
+    @handles(SetOutline)
     def _set_outline(self, command: SetOutline) -> list[str]:
         notes = self.sim.set_outline(command.outline)
         self._goal_key += 1  # an offset goal may have moved
         return notes
 
-    @handle.register
+    @handles(SetProgram)
     def _set_program(self, command: SetProgram) -> str:
         from sandbox.model.programs import load_program
 
@@ -347,7 +363,7 @@ class Runner(SimulationRunner):
         self.program_name = spec or PAPER_PROGRAM
         return self.program_name
 
-    @handle.register
+    @handles(SetLamp)
     def _set_lamp(self, command: SetLamp) -> str:
         from sandbox.model.lamp import Lamp
 
@@ -365,7 +381,7 @@ class Runner(SimulationRunner):
         lamp.aim(*command.centre, command.radius, command.mode)
         return self.program_name
 
-    @handle.register
+    @handles(WorldSpec)
     def _world_spec(self, command: WorldSpec) -> tuple:
         sim = self.sim
         shape = None if sim.shape_vertices is None else sim.shape_vertices.copy()
