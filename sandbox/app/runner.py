@@ -65,16 +65,10 @@ def next_frame_due(due: float, now: float, interval: float, most_behind: float) 
 
 
 def wait_for(post: Callable, command: Any, timeout: float) -> Any:
-    """``post`` the command, wait for its result and return it (or raise its exception)."""
-    done = threading.Event()
-    box: dict[str, Any] = {}
-    post(command, on_done=lambda r: (box.__setitem__("r", r), done.set()),
-         on_error=lambda e: (box.__setitem__("e", e), done.set()))
-    if not done.wait(timeout):
-        raise TimeoutError("the simulation did not answer in time")
-    if "e" in box:
-        raise box["e"]
-    return box.get("r")
+    """``post(command)`` (a runner method, which returns the command's future), and its answer within
+    ``timeout`` seconds (raises its exception). The future itself, not a callback: a callback may be
+    delivered on the very thread that waits here."""
+    return answer(post(command), timeout)
 
 
 #: Which Runner method carries out each kind of command (filled by :func:`handles`).
