@@ -7,6 +7,7 @@ whole file runs in well under a minute on two cores.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import csv
 import json
 import math
@@ -20,7 +21,7 @@ from sandbox.experiments.executors import run_trials
 from sandbox.experiments.plan import grid_cases, paper_cases
 from sandbox.experiments.stats import PAPER_PAIRS, default_pairs, describe
 from sandbox.experiments.storage import ResultStore
-from sandbox.experiments.trials import Trial
+from sandbox.experiments.trials import SweepError, Trial
 from sandbox.model.config import Config
 from tests.waiting import wait_until
 
@@ -185,6 +186,53 @@ def test_failed_trial_is_retried_once_and_does_not_stop_the_sweep(tmp_path):
     assert sum("retrying" in m for m in messages) == 1 and sum("giving up" in m for m in messages) == 1
     assert (tmp_path / "trials" / "ok" / "seed-0.json").is_file()
     assert not (tmp_path / "trials" / "bad").exists()
+
+
+def _dies_then_fails(config, seed, steps, shape, controller=None, program_time_limit=None):
+    """A trial (in place of run_sweep_trial): its first attempt kills its worker process, its retry
+    fails as a light program does, which stops the sweep."""
+    import os
+
+    from sandbox.model.programs import ProgramError
+
+    marker = Path(config["marker"])
+    if not marker.exists():
+        marker.touch()
+        os._exit(1)
+    raise ProgramError("Broken.update raised ValueError")
+
+
+class _Scripted:
+    """A pool that runs _dies_then_fails for each trial it is given."""
+
+    def __init__(self, pool):
+        self.pool = pool
+
+    def submit(self, fn, *args):
+        return self.pool.submit(_dies_then_fails, *args)
+
+
+@pytest.mark.slow
+def test_a_sweep_stopped_after_a_pool_restart_leaves_no_worker_process(tmp_path):
+    import multiprocessing
+
+    from sandbox.experiments.executors import local_executor
+
+    before = set(multiprocessing.active_children())
+    pools = []
+
+    @contextlib.contextmanager
+    def scripted_pool():
+        with local_executor(1) as pool:
+            pools.append(pool)
+            yield _Scripted(pool)
+
+    trial = Trial("dies", 0, {"marker": str(tmp_path / "died"), "steps": 10}, None)
+    with pytest.raises(SweepError, match="Broken.update raised ValueError; the sweep stops"):
+        run_trials([trial], ResultStore(tmp_path / "out"), scripted_pool, progress=False, log=lambda m: None)
+    assert len(pools) == 2  # the second after the first one's worker died
+    wait_until(lambda: not set(multiprocessing.active_children()) - before, timeout=30,
+               what="both pools' worker processes to end")
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -252,3 +252,36 @@ def test_the_app_survives_a_raising_callback_a_kill_while_building_and_gives_up_
 
 def _steps_done(sim):
     return sim.steps_done
+
+
+@pytest.mark.slow
+def test_after_a_restart_the_next_program_failure_is_announced_again(programs):
+    """The Light program folder tells every page when a program fails. A restarted simulation process
+    counts failures from nothing: its first one is news too (the folder used to wait for a second)."""
+    from types import SimpleNamespace
+
+    from sandbox.app.panel.program import ProgramFolder
+    from sandbox.app.process import ProcessRunner
+
+    told: list[str] = []
+    page = SimpleNamespace(add_notification=lambda title, body, **kw: told.append(f"{title}: {body}"))
+    server = SimpleNamespace(get_clients=lambda: {1: page})
+    runner = ProcessRunner(SMALL, shape=None, fps=30, steps_per_frame=2)
+    runner.restart_pause = 0.05
+    folder = ProgramFolder(None, runner, server, allowed=True, on_change=lambda what: None)
+    folder.status = SimpleNamespace(content="")
+    runner.subscribe(folder.update)
+    runner.start()
+    try:
+        def fails_and_is_told(times: int) -> None:
+            runner.set_program(f"{programs}:Exits")
+            wait_until(lambda: sum("Light program stopped" in t for t in told) == times,
+                       what=f"failure {times} on the page")
+
+        fails_and_is_told(1)
+        os.kill(runner.process.pid, signal.SIGKILL)
+        wait_until(lambda: runner.restarts == 1 and runner.latest.program == PAPER, what="the new process")
+        fails_and_is_told(2)
+        assert "Exits.update" in told[-1]
+    finally:
+        runner.stop()

@@ -1,4 +1,4 @@
-"""Both runners follow one contract (sandbox.app.contract), and a chart never joins two worlds."""
+"""Both runners follow one contract, written once (sandbox.app.contract), and a chart never joins two worlds."""
 
 from __future__ import annotations
 
@@ -14,6 +14,8 @@ from sandbox.model.config import Config
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 MEMBERS = [name for name, value in vars(SimulationRunner).items()
            if not name.startswith("_") and (callable(value) or isinstance(value, property))]
+#: What each runner does its own way; everything else the contract writes once, over submit().
+OWN = {"submit", "start", "stop", "latest", "series", "on_progress", "call"}
 
 
 @pytest.mark.parametrize("kind", [Runner, ProcessRunner])
@@ -27,6 +29,14 @@ def test_each_runner_has_the_contracts_methods_with_its_signatures(kind, name):
     want = [(p.name, p.kind, p.default) for p in inspect.signature(promised).parameters.values()]
     got = [(p.name, p.kind, p.default) for p in inspect.signature(offered).parameters.values()]
     assert got == want, f"{kind.__name__}.{name}{inspect.signature(offered)} differs from the contract"
+
+
+@pytest.mark.parametrize("kind", [Runner, ProcessRunner])
+def test_the_commands_are_written_once_for_both_runners(kind):
+    """A new command is a dataclass, a handler and one method in the contract: no runner repeats it."""
+    again = sorted(name for name in MEMBERS if name not in OWN and name in vars(kind))
+    assert not again, f"{kind.__name__} writes {again} again"
+    assert OWN - {"call"} <= set(vars(kind))  # what it must do itself (call: the Runner runs inline unstarted)
 
 
 def test_both_runners_publish_through_the_same_publisher():

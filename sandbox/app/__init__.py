@@ -2,6 +2,8 @@
 
 Modules, one idea each:
 
+- :mod:`.commands` what the app can ask of a simulation: one dataclass per command
+- :mod:`.contract` the runner interface, written once over ``submit(command) -> Future``
 - :mod:`.runner`   the simulation loop (a thread), its command queue and snapshots
 - :mod:`.process`  the same loop in a process of its own, for the live app
 - :mod:`.scene`    the top-down scene drawn from snapshots

@@ -1,21 +1,26 @@
-"""The simulation in its own process, behind the :class:`~sandbox.app.runner.Runner` API.
+"""The simulation in its own process, behind the same interface as :class:`~sandbox.app.runner.Runner`.
 
 In one process the web server (viser's event loop, scene and panel updates)
 and the simulation share the GIL, and the live app stepped at less than half
 of the headless speed. :class:`ProcessRunner` runs an ordinary
 :class:`Runner` in a child process instead, so the two use two cores:
 
-- commands (picklable callables ``f(sim)``, and the runner's own controls)
-  go to the child through a queue; their results or exceptions come back
-  and reach the ``on_done`` / ``on_error`` callbacks in this process;
+- commands (:mod:`sandbox.app.commands`) go to the child as they are,
+  through a queue, with an id; the child's Runner handles them and sends
+  back the answer (or the exception) for that id, which settles the
+  command's future here. Controls go without an id: they act here at once
+  (this side keeps a copy of the controls) and there when they arrive;
 - every snapshot the child publishes (the newest one only, at the frame
   rate) comes back through a pipe with the metric samples recorded since
   the last one, and reaches this side's listeners;
-- if the child dies, listeners of :meth:`on_crash` hear why, and a new child
-  starts from the last known settings, shape and seed.
+- if the child dies, what it owed fails (SimulationCrashed), listeners of
+  :meth:`ProcessRunner.on_crash` hear why, and a new child starts from the
+  last known settings, shape and seed. A command submitted meanwhile goes
+  to the new child once it is spawned, or fails at once: none is lost.
 
-A :class:`Runner` in a thread of this process (what tests and headless
-recording use) has the same API; the app takes either.
+One lock guards the child (the process, its channels, the answers it owes
+and the runner's state): a restart and :meth:`ProcessRunner.stop` each
+take it, so a child spawned while stopping is stopped too.
 """
 
 from __future__ import annotations
@@ -23,18 +28,21 @@ from __future__ import annotations
 import itertools
 import logging
 import os
+import pickle
 import queue
 import signal
 import threading
 import time
 import traceback
 from collections import deque
-from typing import Any, Callable, Iterable
+from concurrent.futures import Future
+from typing import Any, Callable
 
 import numpy as np
 
-from sandbox.app.contract import FramePublisher
-from sandbox.app.runner import Command, Runner, wait_for
+from sandbox.app.commands import Command, Controls, RunnerStopped, Setting, SetShape, Start
+from sandbox.app.contract import Deliver, SimulationRunner
+from sandbox.app.runner import Runner
 from sandbox.app.snapshot import Snapshot
 from sandbox.model import watchdog
 from sandbox.model.config import Config
@@ -51,6 +59,10 @@ CRASHES_BEFORE_GIVING_UP = 5
 #: A child's exit code when a light program would not stop (it said why just before).
 STUCK_EXIT = 75
 
+#: The runner's states: a child spawned (its first frame not yet here), running, none (crashed, being
+#: replaced, or given up), stopped. Commands reach a child only while it is starting or running.
+STARTING, RUNNING, DOWN, STOPPED = "starting", "running", "down", "stopped"
+
 log = logging.getLogger("sandbox.app.process")
 
 
@@ -58,21 +70,60 @@ class SimulationCrashed(RuntimeError):
     """The simulation process ended without being asked to."""
 
 
-class ProcessRunner(FramePublisher):
-    """A :class:`Runner` in a child process (see the module docstring); a :class:`SimulationRunner`."""
+class Child:
+    """One simulation process and its two channels: the queue it takes commands from, the pipe it
+    answers on."""
+
+    def __init__(self, context: Any, settings: dict):
+        self.commands = context.Queue()
+        self.receive, send = context.Pipe(duplex=False)
+        self.process = context.Process(target=_child_main, args=(settings, self.commands, send),
+                                       name="phototaxis-simulation", daemon=True)
+        self.process.start()
+        send.close()  # the child holds the sending end
+
+    def send(self, message: Any) -> bool:
+        """Queue a message; False when the queue is closed (the child ended)."""
+        try:
+            self.commands.put(message)
+            return True
+        except (OSError, ValueError, AssertionError):
+            return False
+
+    def read(self, timeout: float) -> Any:
+        """The next message within ``timeout`` seconds, or None (none came, or the pipe is closed)."""
+        try:
+            if self.receive.poll(timeout):
+                return self.receive.recv()
+        except (EOFError, OSError):
+            pass
+        return None
+
+    def end(self, kill: bool = False, timeout: float = 5.0) -> None:
+        """Reap the process (killing it first if asked) and close its pipe and queue."""
+        if kill and self.process.is_alive():
+            self.process.kill()
+        self.process.join(timeout)
+        for close in (self.receive.close, self.commands.close, self.commands.cancel_join_thread):
+            try:
+                close()
+            except (OSError, ValueError):
+                pass
+
+
+class ProcessRunner(SimulationRunner):
+    """A :class:`Runner` in a child process (see the module docstring); a generic proxy: every
+    command is sent as it is and its future settled by the child's answer."""
 
     def __init__(self, config: Config, *, shape: Any = "from-config", seed: int | None = None,
                  fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, chart_every: int = 100,
-                 program_time_limit: float = watchdog.DEFAULT_LIMIT, wait: bool = True):
+                 program_time_limit: float = watchdog.DEFAULT_LIMIT, wait: bool = True,
+                 deliver: Deliver | None = None):
+        SimulationRunner.__init__(self, Controls(playing=bool(playing), steps_per_frame=max(1, int(steps_per_frame))),
+                                  deliver)
         self.fps = float(fps)
-        self.steps_per_frame = int(steps_per_frame)
-        self.playing = bool(playing)
         self.chart_every = int(chart_every)
         self.program_time_limit = float(program_time_limit)
-        FramePublisher.__init__(self)
-        self.followed: tuple[int, ...] = ()
-        self.hold_at: int | None = None
-        self._want_field = False
         self.restarts = 0
         #: Why the simulation cannot run any more (too many crashes in a row), or None.
         self.failed: str | None = None
@@ -83,8 +134,6 @@ class ProcessRunner(FramePublisher):
         self._last_words: str | None = None  # what a dying child said last (a program that would not stop)
         self._crash_listeners: list[Callable[[str], None]] = []
         self._progress_listeners: list[Callable[[float | None], None]] = []
-        self._callbacks: dict[int, tuple[Callable | None, Callable | None]] = {}
-        self._callbacks_lock = threading.Lock()  # written by viser's threads, read by the receiver
         self._ids = itertools.count()
         self._series: list[Sample] = []
         self._series_world: int | None = None  # the world key of the samples in _series
@@ -93,12 +142,18 @@ class ProcessRunner(FramePublisher):
         self._latest_ready = threading.Condition()
         self._stop = threading.Event()
         self._ready_lock = threading.Lock()
-        self._started = False
+        self._thread: threading.Thread | None = None
         self._context = simulation_context()  # a fork of a warmed-up server, else a fresh interpreter
         #: The goal as last given (a name, or vertices as drawn): a restarted child gets it back unchanged,
         #: since the program's largest outline depends on the size a shape was drawn at.
         self._shape = shape
-        self._spawn(config, shape, seed)
+        # One owner of the child: the lock guards it, the state, the futures it owes and _started.
+        self._child_lock = threading.Lock()
+        self._owed: dict[int, Future] = {}
+        self._started = False
+        self._state = DOWN
+        with self._child_lock:
+            self._spawn(config, shape, seed)
         if wait:
             self.ready()
 
@@ -107,67 +162,45 @@ class ProcessRunner(FramePublisher):
         returns at once, so that the caller can build other things while the child starts (it loads
         numba's compiled kernels and builds the world: about a second); call this before using it."""
         with self._ready_lock:
-            if self._awaiting_first_frame:
+            if self._latest is None:
                 self._await_first_frame()
 
-    # ------------------------------------------------------------ process
-    def _launch(self, config: Config, shape: Any, seed: int | None) -> None:
-        """Start a child with these settings and wait for its first frame. A child never gets a
-        light program back: whatever ran before a crash may have caused it."""
-        self._spawn(config, shape, seed)
-        self._await_first_frame()
+    @property
+    def process(self) -> Any:
+        """The simulation process (the newest: a crashed one is replaced)."""
+        return self._child.process
 
+    # ------------------------------------------------------------ process
     def _spawn(self, config: Config, shape: Any, seed: int | None) -> None:
-        self._commands = self._context.Queue()
-        receive, send = self._context.Pipe(duplex=False)
-        settings = dict(config=config, shape=shape, seed=seed, fps=self.fps, steps_per_frame=self.steps_per_frame,
-                        playing=self.playing, chart_every=self.chart_every,
-                        program_time_limit=self.program_time_limit)
-        self.process = self._context.Process(target=_child_main, args=(settings, self._commands, send),
-                                             name="phototaxis-simulation", daemon=True)
-        self.process.start()
-        send.close()  # the child holds the sending end
-        self._receive = receive
+        """Start a child with these settings and this side's controls (the caller holds the child
+        lock: a control submitted meanwhile reaches the child, a stop stops it). A child never gets a
+        light program back: whatever ran before a crash may have caused it."""
+        settings = dict(config=config, shape=shape, seed=seed, fps=self.fps,
+                        steps_per_frame=self.controls.steps_per_frame, playing=self.controls.playing,
+                        chart_every=self.chart_every, program_time_limit=self.program_time_limit)
+        self._child = Child(self._context, settings)
+        for setting in self.controls.settings():  # the robots followed, the heat map, the hold
+            self._child.send((None, setting))
+        if self._started:
+            self._child.send((None, Start()))
         with self._series_lock:
             self._series, self._series_world = [], None
-        self._awaiting_first_frame = True
+        self._state = STARTING
 
     def _await_first_frame(self) -> None:
-        self._awaiting_first_frame = False
-        message = self._read(timeout=START_TIMEOUT)
+        """Read the new child's messages until its first frame; if none comes, end it and raise."""
+        child = self._child
+        message = child.read(timeout=START_TIMEOUT)
         while message is not None and message[0] != "frame":  # its last words, say
             self._take_guarded(message)
-            message = self._read(timeout=START_TIMEOUT)
+            message = child.read(timeout=START_TIMEOUT)
         if message is None:
-            self._end_child(kill=True)
+            child.end(kill=True)
             raise SimulationCrashed(self._last_words or "the simulation process did not start")
         self._take(message)
-        for name, value in (("followed", self.followed), ("want_field", self._want_field)):
-            if value:  # what differs from a fresh runner's
-                self._control(name, value)
-        if self.hold_at is not None:
-            self._control("hold", self.hold_at)
-        if self._started:
-            self._control("start")
-
-    def _end_child(self, kill: bool = False, timeout: float = 5.0) -> None:
-        """Reap the child (killing it first if asked) and close its pipe and queue."""
-        if kill and self.process.is_alive():
-            self.process.kill()
-        self.process.join(timeout)
-        for close in (self._receive.close, self._commands.close, self._commands.cancel_join_thread):
-            try:
-                close()
-            except (OSError, ValueError):
-                pass
-
-    def _read(self, timeout: float) -> Any:
-        try:
-            if self._receive.poll(timeout):
-                return self._receive.recv()
-        except (EOFError, OSError):
-            pass
-        return None
+        with self._child_lock:
+            if self._state == STARTING and self._child is child:
+                self._state = RUNNING
 
     def _take(self, message: tuple) -> None:
         kind = message[0]
@@ -183,19 +216,17 @@ class ProcessRunner(FramePublisher):
             self._publish(snap)
         elif kind == "done":
             _, ident, result = message
-            on_done, _ = self._pop_callbacks(ident)
-            if on_done:
-                self._deliver(on_done, result)
+            future = self._take_owed(ident)
+            if future is not None:
+                future.set_result(result)
+        elif kind == "error":
+            _, ident, exc = message
+            future = self._take_owed(ident)
+            if future is not None:
+                future.set_exception(exc)
         elif kind == "progress":
             for listener in list(self._progress_listeners):
                 self._deliver(listener, message[1])
-        elif kind == "error":
-            _, ident, exc = message
-            _, on_error = self._pop_callbacks(ident)
-            if on_error:
-                self._deliver(on_error, exc)
-            else:
-                self.errors.append(exc)
         elif kind == "last words":
             self._last_words = message[1]
 
@@ -206,39 +237,48 @@ class ProcessRunner(FramePublisher):
             self.errors.append(exc)
             log.exception("a message from the simulation process could not be handled")
 
-    def _pop_callbacks(self, ident: int) -> tuple[Callable | None, Callable | None]:
-        with self._callbacks_lock:
-            return self._callbacks.pop(ident, (None, None))
+    def _take_owed(self, ident: int) -> Future | None:
+        with self._child_lock:
+            return self._owed.pop(ident, None)
+
+    def _fail_owed(self, why: BaseException) -> None:
+        """Fail every future the child owes (it died, or the runner stopped)."""
+        with self._child_lock:
+            owed, self._owed = list(self._owed.values()), {}
+        for future in owed:
+            future.set_exception(why)
 
     def _receive_loop(self) -> None:
         while not self._stop.is_set():
-            message = self._read(timeout=0.5)
+            child = self._child
+            message = child.read(timeout=0.5)
             if message is not None:
                 self._take_guarded(message)
-            elif not self.process.is_alive() and not self._stop.is_set() and self.failed is None:
+            elif self.failed is not None:
+                self._stop.wait(0.5)  # given up: nothing to read, nothing to restart
+            elif not child.process.is_alive() and not self._stop.is_set():
                 try:
-                    self._recover()
+                    self._recover(child)
                 except Exception as exc:  # noqa: BLE001 - never let this thread die
                     self.errors.append(exc)
                     log.exception("recovering the simulation process failed")
 
-    def _recover(self) -> None:
-        """The child died: fail what it was doing, end any progress shown, reap it, tell the
-        listeners, and start a new one with the paper's controller after a growing pause; after
-        too many crashes in a minute, give up and say so."""
-        code = self.process.exitcode
-        while (message := self._read(timeout=0)) is not None:  # what it managed to say before dying
+    def _recover(self, child: Child) -> None:
+        """The child died: fail what it owed, end any progress shown, reap it, tell the listeners,
+        and start a new one with the paper's controller after a growing pause; after too many crashes
+        in a minute, give up and say so."""
+        with self._child_lock:
+            if self._state == STOPPED or self._child is not child:
+                return
+            self._state = DOWN  # from here on, commands fail at once until a new child is spawned
+        while (message := child.read(timeout=0)) is not None:  # what it managed to say before dying
             self._take_guarded(message)
-        cause = self._last_words or f"the simulation process stopped (exit code {code})"
+        cause = self._last_words or f"the simulation process stopped (exit code {child.process.exitcode})"
         self._last_words = None
-        with self._callbacks_lock:
-            pending, self._callbacks = list(self._callbacks.values()), {}
-        for _, on_error in pending:
-            if on_error:
-                self._deliver(on_error, SimulationCrashed(cause))
+        self._fail_owed(SimulationCrashed(cause))
         for listener in list(self._progress_listeners):
             self._deliver(listener, None)
-        self._end_child()
+        child.end()
         now = time.monotonic()
         self._crash_times.append(now)
         recent = [t for t in self._crash_times if now - t <= CRASH_WINDOW]
@@ -252,12 +292,17 @@ class ProcessRunner(FramePublisher):
         if self._stop.wait(pause):
             return
         snap = self.latest
-        self.restarts += 1
+        with self._child_lock:
+            if self._state == STOPPED:  # stopped during the pause: no new child
+                return
+            self.restarts += 1
+            self._spawn(snap.config, self._shape, snap.seed)
         try:
-            self._launch(snap.config, self._shape, snap.seed)
+            self._await_first_frame()
         except Exception as exc:  # could not start again: keep the last picture; the loop tries again
-            self.errors.append(exc)
-            log.warning("the simulation process did not restart: %s", exc)
+            if not self._stop.is_set():
+                self.errors.append(exc)
+                log.warning("the simulation process did not restart: %s", exc)
 
     def _tell_crash(self, why: str) -> None:
         for listener in list(self._crash_listeners):
@@ -268,134 +313,72 @@ class ProcessRunner(FramePublisher):
         self.ready()
         self._thread = threading.Thread(target=self._receive_loop, name="phototaxis-receiver", daemon=True)
         self._thread.start()
-        self._started = True
-        self._control("start")
+        with self._child_lock:
+            self._started = True  # a child spawned from now on is told to start
+        self.submit(Start())
         return self
 
     def stop(self, timeout: float = 5.0) -> None:
+        """End the child (killed if it does not end in ``timeout`` seconds) and the receiver; every
+        command not answered yet fails with RunnerStopped."""
         self._stop.set()
-        try:
-            self._commands.put(("stop",))
-        except (OSError, ValueError):
-            pass
-        self.process.join(timeout)
-        self._end_child(kill=True, timeout=timeout)
-        if getattr(self, "_thread", None):
+        with self._child_lock:  # after this no child is spawned, and the one there is is ours to end
+            self._state = STOPPED
+            child = self._child
+            child.send(None)  # the child's loop ends
+        self._fail_owed(RunnerStopped("the simulation was stopped"))
+        child.process.join(timeout)
+        child.end(kill=True, timeout=timeout)
+        if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout)
 
     def on_crash(self, listener: Callable[[str], None]) -> None:
         self._crash_listeners.append(listener)
 
-    def _control(self, *message: Any) -> None:
-        self._send(("control", *message))
-
-    def _send(self, message: tuple) -> bool:
-        """Queue a message for the child; False when there is none to take it (between a crash and
-        the restart, or after giving up)."""
-        try:
-            self._commands.put(message)
-            return True
-        except (OSError, ValueError, AssertionError):
-            return False
-
-    def post(self, command: Command, *, on_done: Callable[[Any], None] | None = None,
-             on_error: Callable[[BaseException], None] | None = None) -> None:
-        """Run ``command(sim)`` in the simulation process; ``command`` must be
-        picklable (a module-level function or a ``functools.partial`` of one).
-        The callbacks run here, on the receiving thread; keep them short."""
-        self._queue_call(("command", command), on_done, on_error)
-
-    def update_config(self, changes: dict[str, Any], *, on_done: Callable[[Any], None] | None = None,
-                      on_error: Callable[[BaseException], None] | None = None) -> None:
-        """As :meth:`Runner.update_config`, run by the child's runner (which keeps the waiting changes)."""
-        self._runner_call("update_config", on_done, on_error, dict(changes))
-
-    def call(self, command: Command, timeout: float = 10.0) -> Any:
-        return wait_for(self.post, command, timeout)
-
-    def set_playing(self, playing: bool) -> None:
-        self.playing = bool(playing)
-        self._control("playing", self.playing)
-
-    def set_speed(self, steps_per_frame: int) -> None:
-        self.steps_per_frame = max(1, int(steps_per_frame))
-        self._control("speed", self.steps_per_frame)
-
-    def follow(self, indices: Iterable[int]) -> None:
-        self.followed = tuple(sorted({int(i) for i in indices}))
-        self._control("followed", self.followed)
-
-    @property
-    def want_field(self) -> bool:
-        return self._want_field
-
-    @want_field.setter
-    def want_field(self, value: bool) -> None:
-        self._want_field = bool(value)
-        self._control("want_field", self._want_field)
-
-    def step_once(self, n: int = 1) -> None:
-        self._control("step", int(n))
-
-    def hold(self, step: int | None) -> None:
-        self.hold_at = None if step is None else int(step)
-        self._control("hold", self.hold_at)
-
-    def run_to(self, step: int) -> None:
-        self._control("run_to", int(step))
-
-    def reset(self, seed: int | None = None, *, on_done: Callable[[Any], None] | None = None,
-              on_error: Callable[[BaseException], None] | None = None) -> None:
-        self._runner_call("reset", on_done, on_error, seed)
-
-    def cancel_build(self) -> None:
-        self._control("cancel")
-
     def on_progress(self, listener: Callable[[float | None], None]) -> None:
         self._progress_listeners.append(listener)
 
-    def set_shape(self, vertices: np.ndarray | None, name: str, *, on_done: Callable[[Any], None] | None = None,
-                  on_error: Callable[[BaseException], None] | None = None) -> None:
-        shape = None if vertices is None else np.asarray(vertices, dtype=float)
+    def submit(self, command: Command) -> Future:
+        """Send ``command`` to the child. A control acts on this side's copy of the controls at once
+        and its future is done when it is sent (or, with no child, kept for the next one); any other
+        command's future is settled by the child's answer, or fails at once when no child can take
+        it (between a crash and the restart, after giving up, or stopped)."""
+        future: Future = Future()
+        if not command.at_once:
+            unsendable = _unpicklable(command)
+            if unsendable is not None:
+                future.set_exception(unsendable)
+                return future
+        with self._child_lock:
+            if isinstance(command, Setting):
+                command.settle(self.controls)  # what a new child gets, if this one does not take it
+            sent = False
+            if self._state in (STARTING, RUNNING):
+                ident = None if command.at_once else next(self._ids)
+                if ident is not None:
+                    self._owed[ident] = future
+                sent = self._child.send((ident, command))
+                if not sent and ident is not None:
+                    self._owed.pop(ident, None)
+            refusal = None if sent or command.at_once else self._refusal()
+        if refusal is not None:
+            future.set_exception(refusal)
+        elif command.at_once:
+            future.set_result(None)
+        elif isinstance(command, SetShape):
+            future.add_done_callback(lambda done: self._remember_shape(command, done))
+        return future
 
-        def used(notes: Any) -> None:
-            self._shape = shape  # what a restarted child gets back
-            if on_done:
-                on_done(notes)
+    def _refusal(self) -> BaseException:
+        """Why no child can take a command now (the caller holds the child lock)."""
+        if self._state == STOPPED:
+            return RunnerStopped("the simulation was stopped")
+        return SimulationCrashed(self.failed or "the simulation is restarting; try again")
 
-        self._runner_call("set_shape", used, on_error, shape, name)
-
-    def set_program(self, spec: str | None, *, on_done: Callable[[Any], None] | None = None,
-                    on_error: Callable[[BaseException], None] | None = None) -> None:
-        self._runner_call("set_program", on_done, on_error, spec)
-
-    def set_lamp(self, centre: tuple[float, float] | None, radius: float | None = None, mode: str = "lamp", *,
-                 on_done: Callable[[Any], None] | None = None,
-                 on_error: Callable[[BaseException], None] | None = None) -> None:
-        self._runner_call("set_lamp", on_done, on_error, centre, radius, mode)
-
-    def world_spec(self, *, on_done: Callable[[Any], None] | None = None,
-                   on_error: Callable[[BaseException], None] | None = None) -> None:
-        self._runner_call("world_spec", on_done, on_error)
-
-    def set_outline(self, outline: str, *, on_done: Callable[[Any], None] | None = None,
-                    on_error: Callable[[BaseException], None] | None = None) -> None:
-        self._runner_call("set_outline", on_done, on_error, outline)
-
-    def _runner_call(self, method: str, on_done: Callable | None, on_error: Callable | None, *args: Any) -> None:
-        """Call one of the child's Runner methods that report back (reset, set_shape, update_config)."""
-        self._queue_call(("runner_call", method, args), on_done, on_error)
-
-    def _queue_call(self, message: tuple, on_done: Callable | None, on_error: Callable | None) -> None:
-        """Send a call that reports back; if no child can take it, its on_error hears why at once."""
-        ident = next(self._ids)
-        with self._callbacks_lock:
-            self._callbacks[ident] = (on_done, on_error)
-        if self.failed is None and self._send((message[0], ident, *message[1:])):
-            return
-        self._pop_callbacks(ident)
-        if on_error:
-            self._deliver(on_error, SimulationCrashed(self.failed or "the simulation is restarting; try again"))
+    def _remember_shape(self, command: SetShape, future: Future) -> None:
+        """A goal the child took is what a restarted child gets back."""
+        if not future.cancelled() and future.exception() is None:
+            self._shape = None if command.vertices is None else np.asarray(command.vertices, dtype=float)
 
     # -------------------------------------------------------------- state
     @property
@@ -415,14 +398,20 @@ class ProcessRunner(FramePublisher):
         with self._series_lock:
             return list(self._series)
 
-    def steps_per_second(self) -> float:
-        return self.latest.steps_per_second
 
+def _unpicklable(command: Command) -> BaseException | None:
+    """Why ``command`` cannot be sent to the child, or None. Checked here: the queue pickles on a thread
+    of its own, where a failure would only be printed, and the command's future would wait forever."""
+    try:
+        pickle.dumps(command)
+    except Exception as exc:  # noqa: BLE001 - any reason pickle gives
+        return TypeError(f"{command!r} cannot be sent to the simulation process: {exc}")
+    return None
 
 
 # ------------------------------------------------------------------ child
 def _child_main(settings: dict, commands: Any, send: Any) -> None:
-    """The simulation process: an ordinary Runner, driven by the queue."""
+    """The simulation process: an ordinary Runner, driven by the queue (``(id, command)``; None ends it)."""
     # Ctrl-C in a terminal reaches every process of the group: it is for the app, which stops this
     # one (before, each Ctrl-C printed this process's KeyboardInterrupt traceback under "stopped").
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -443,9 +432,12 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
         sent.update(world=world, count=len(series))
         send_message(("frame", snap, series[start:], world))
 
-    def reply(ident: int):
-        return (lambda result: send_message(("done", ident, _picklable(result))),
-                lambda exc: send_message(("error", ident, _picklable_error(exc))))
+    def answer(ident: int, future: Future) -> None:
+        exc = future.exception()
+        if exc is None:
+            send_message(("done", ident, _picklable(future.result())))
+        else:
+            send_message(("error", ident, _picklable_error(exc)))
 
     def stuck(why: str) -> None:  # a light program would not stop: say so, then end (no thread can unwind it)
         send_message(("last words", f"{why}; the app restarts the simulation with the paper's controller"))
@@ -463,48 +455,17 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
             if os.getppid() != parent or runner.stopped:  # orphaned, or the parent stopped listening
                 break
             continue
-        kind = message[0]
-        if kind == "stop":
+        if message is None:
             break
-        if kind == "command":
-            _, ident, command = message
-            on_done, on_error = reply(ident)
-            runner.post(command, on_done=on_done, on_error=on_error)
-        elif kind == "runner_call":
-            _, ident, method, args = message
-            on_done, on_error = reply(ident)
-            getattr(runner, method)(*args, on_done=on_done, on_error=on_error)
-        elif kind == "control":
-            _apply_control(runner, message[1], *message[2:])
+        ident, command = message
+        future = runner.submit(command)
+        if ident is not None:
+            future.add_done_callback(lambda done, ident=ident: answer(ident, done))
     runner.stop()
     send.close()
 
 
-def _apply_control(runner: Runner, name: str, *args: Any) -> None:
-    if name == "start":
-        runner.start()
-    elif name == "playing":
-        runner.set_playing(args[0])
-    elif name == "speed":
-        runner.set_speed(args[0])
-    elif name == "followed":
-        runner.follow(args[0])
-    elif name == "want_field":
-        runner.want_field = args[0]
-        runner.wake()
-    elif name == "step":
-        runner.step_once(args[0])
-    elif name == "hold":
-        runner.hold(args[0])
-    elif name == "run_to":
-        runner.run_to(args[0])
-    elif name == "cancel":
-        runner.cancel_build()
-
-
 def _picklable(value: Any) -> Any:
-    import pickle
-
     try:
         pickle.dumps(value)
         return value
@@ -513,8 +474,6 @@ def _picklable(value: Any) -> Any:
 
 
 def _picklable_error(exc: BaseException) -> BaseException:
-    import pickle
-
     try:
         pickle.loads(pickle.dumps(exc))
         return exc

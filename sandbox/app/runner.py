@@ -2,11 +2,12 @@
 
 pymunk and the simulation are not thread-safe, and viser runs GUI and pointer
 callbacks on its own threads. So callbacks never touch the simulation: they
-:meth:`Runner.post` a command (a function of the simulation) that the
-simulation loop runs between steps. After every frame's worth of steps the
-loop copies what a viewer needs into an immutable :class:`Snapshot`; a second
-thread hands the newest snapshot to the listeners (the scene, the panel) at
-the frame rate, dropping stale ones, so a slow browser never slows physics.
+submit a command (:mod:`sandbox.app.commands`) that the simulation loop
+carries out between steps, in :meth:`Runner.handle`. After every frame's
+worth of steps the loop copies what a viewer needs into an immutable
+:class:`Snapshot`; a second thread hands the newest snapshot to the
+listeners (the scene, the panel) at the frame rate, dropping stale ones, so
+a slow browser never slows physics.
 """
 
 from __future__ import annotations
@@ -16,11 +17,15 @@ import queue
 import threading
 import time
 from collections import deque
-from typing import TYPE_CHECKING, Any, Callable, Iterable
+from concurrent.futures import Future
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
-from sandbox.app.contract import FramePublisher
+from sandbox.app.commands import (Apply, CancelBuild, Command, Controls, Reset, RunnerStopped, RunTo, SetLamp,
+                                  SetOutline, SetProgram, SetShape, Setting, Start, StepOnce, UpdateConfig,
+                                  WorldSpec)
+from sandbox.app.contract import Deliver, SimulationRunner, answer
 from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM, RobotView, Snapshot
 from sandbox.model import watchdog
 from sandbox.model.config import Config
@@ -28,8 +33,6 @@ from sandbox.model.metrics import Sample
 
 if TYPE_CHECKING:  # imported where a Runner is built: the web server itself never steps a world
     from sandbox.model.simulation import Simulation
-
-Command = Callable[["Simulation"], Any]
 
 #: The top of the speed slider means "as fast as the machine can": the loop
 #: steps in chunks of FASTEST_CHUNK until the next frame is due.
@@ -61,58 +64,61 @@ def next_frame_due(due: float, now: float, interval: float, most_behind: float) 
     return now if following < now - most_behind else following
 
 
-def wait_for(post: Callable, command: Command, timeout: float) -> Any:
-    """``post`` the command, wait for its result and return it (or raise its exception)."""
-    done = threading.Event()
-    box: dict[str, Any] = {}
-    post(command, on_done=lambda r: (box.__setitem__("r", r), done.set()),
-         on_error=lambda e: (box.__setitem__("e", e), done.set()))
-    if not done.wait(timeout):
-        raise TimeoutError("the simulation did not answer in time")
-    if "e" in box:
-        raise box["e"]
-    return box.get("r")
+def wait_for(post: Callable, command: Any, timeout: float) -> Any:
+    """``post(command)`` (a runner method, which returns the command's future), and its answer within
+    ``timeout`` seconds (raises its exception). The future itself, not a callback: a callback may be
+    delivered on the very thread that waits here."""
+    return answer(post(command), timeout)
+
+
+#: Which Runner method carries out each kind of command (filled by :func:`handles`).
+HANDLERS: dict[type, Callable[["Runner", Any], Any]] = {}
+
+
+def handles(kind: type) -> Callable:
+    """Register the decorated Runner method as what carries out commands of ``kind``."""
+
+    def register(method: Callable) -> Callable:
+        HANDLERS[kind] = method
+        return method
+
+    return register
 
 
 class BuildCancelled(Exception):
     """Building a new world was stopped by the user."""
 
 
-class Runner(FramePublisher):
+class Runner(SimulationRunner):
     """Owns the simulation and runs it in its own thread (a :class:`SimulationRunner`).
 
     ``fps`` is the frame rate the loop paces itself to; ``steps_per_frame`` the
-    speed. Listeners receive snapshots on the publisher thread.
+    speed. Listeners receive snapshots on the publisher thread; ``deliver``: see
+    :class:`~sandbox.app.contract.FramePublisher`.
     """
 
     def __init__(self, config: Config, *, shape: Any = "from-config", seed: int | None = None,
                  fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, chart_every: int = 100,
-                 program_time_limit: float = watchdog.DEFAULT_LIMIT):
+                 program_time_limit: float = watchdog.DEFAULT_LIMIT, deliver: Deliver | None = None):
         #: Seconds a light program's import, reset or update may take (then the paper's controller takes over).
         self.program_time_limit = float(program_time_limit)
         from sandbox.model.simulation import Simulation  # with numba's compiled kernels: see the top
 
         # A live run has no last step.
         self.sim = Simulation(config, seed=seed, shape=shape, open_ended=True, program_time_limit=program_time_limit)
+        SimulationRunner.__init__(self, Controls(playing=bool(playing), steps_per_frame=max(1, int(steps_per_frame))),
+                                  deliver)
         self.fps = float(fps)
-        self.steps_per_frame = int(steps_per_frame)
-        self.playing = bool(playing)
         self.chart_every = int(chart_every)
-        #: The robots the viewers follow (each viewer its own), whose photocells the snapshots carry.
-        self.followed: tuple[int, ...] = ()
-        #: Whether snapshots should carry the luminosity field (costly: only for the heat map).
-        self.want_field = False
-        #: Playing, the world steps no further than this step (None: no limit): compare mode holds two
-        #: worlds in lockstep (sandbox.app.compare).
-        self.hold_at: int | None = None
         self.program_name = PAPER_PROGRAM
         self.program_error: tuple[int, str] | None = None
         self.shape_name = config.shape
         #: Changes that need a new world, kept until the next reset (the simulation holds only the
         #: configuration its world was built with).
         self.pending: dict[str, Any] = {}
-        FramePublisher.__init__(self)
-        self._commands: queue.SimpleQueue = queue.SimpleQueue()
+        self._commands: queue.SimpleQueue = queue.SimpleQueue()  # (command, future), for the loop
+        self._closing = threading.Lock()  # a command is queued before the runner closes, or refused
+        self._closed = False
         self._stop = threading.Event()
         self._wake = threading.Event()
         self._new_frame = threading.Condition()
@@ -121,7 +127,7 @@ class Runner(FramePublisher):
         self._frame = 0
         self._goal_key = 0
         self._world_key = 0
-        self._step_times: deque = deque(maxlen=120)  # (wall time, steps_done)
+        self._step_times: deque = deque(maxlen=120)  # (wall time, steps_done), of the simulation thread only
         self._series_lock = threading.Lock()
         self._series: list[Sample] = []
         self._threads: list[threading.Thread] = []
@@ -132,6 +138,8 @@ class Runner(FramePublisher):
 
     # ------------------------------------------------------------ control
     def start(self) -> "Runner":
+        if self._threads:
+            return self
         for target, name in ((self._loop, "simulation"), (self._publish_loop, "publisher")):
             t = threading.Thread(target=target, name=f"phototaxis-{name}", daemon=True)
             t.start()
@@ -139,20 +147,45 @@ class Runner(FramePublisher):
         return self
 
     def stop(self, timeout: float = 5.0) -> None:
+        """End the loops; every command not yet carried out fails with RunnerStopped."""
         self._stop.set()
         self._wake.set()
         with self._new_frame:
             self._new_frame.notify_all()
         for t in self._threads:
-            t.join(timeout)
+            if t is not threading.current_thread():  # a callback on the loop's own thread may stop it
+                t.join(timeout)
         self._threads = []
+        self._close(RunnerStopped("the simulation was stopped"))
 
-    def post(self, command: Command, *, on_done: Callable[[Any], None] | None = None,
-             on_error: Callable[[BaseException], None] | None = None) -> None:
-        """Run ``command(sim)`` in the simulation thread before the next step.
-        Callbacks run in the simulation thread too; keep them short."""
-        self._commands.put((command, on_done, on_error))
-        self._wake.set()
+    def submit(self, command: Command) -> Future:
+        """Carry out ``command``: a control now, on this thread; any other in the simulation thread
+        before the next step (or at the next :meth:`advance` of a runner that was not started)."""
+        future: Future = Future()
+        if command.at_once:
+            self._carry_out(command, future)
+            return future
+        with self._closing:
+            refused = self._closed
+            if not refused:
+                self._commands.put((command, future))
+        if refused:
+            future.set_exception(RunnerStopped("the simulation was stopped"))
+        else:
+            self._wake.set()
+        return future
+
+    def _close(self, why: RunnerStopped) -> None:
+        """Refuse new commands and fail the waiting ones: whoever waits on one hears ``why``."""
+        with self._closing:
+            self._closed = True
+        while True:
+            try:
+                _, future = self._commands.get_nowait()
+            except queue.Empty:
+                return
+            if future.set_running_or_notify_cancel():
+                future.set_exception(why)
 
     def call(self, command: Command, timeout: float = 10.0) -> Any:
         """Post a command and wait for its result (raises its exception)."""
@@ -161,7 +194,7 @@ class Runner(FramePublisher):
             result = command(self.sim)
             self._snapshot()
             return result
-        return wait_for(self.post, command, timeout)
+        return answer(self.submit(Apply(command)), timeout)
 
     def advance(self, n: int) -> Snapshot:
         """Headless use (no threads): step ``n`` steps and take a snapshot."""
@@ -172,77 +205,10 @@ class Runner(FramePublisher):
         self._snapshot()
         return self.latest
 
-    def set_playing(self, playing: bool) -> None:
-        self.playing = bool(playing)
-        self._wake.set()
-
-    def set_speed(self, steps_per_frame: int) -> None:
-        self.steps_per_frame = max(1, int(steps_per_frame))
-
-    def follow(self, indices: Iterable[int]) -> None:
-        """Carry these robots' photocells, commands and charge in the snapshots (the inspectors' robots)."""
-        self.followed = tuple(sorted({int(i) for i in indices}))
-        self._wake.set()
-
-    def step_once(self, n: int = 1) -> None:
-        """Advance ``n`` steps now (used while paused)."""
-        self.post(lambda sim: self._step(n))
-
-    def hold(self, step: int | None) -> None:
-        """Playing, step no further than ``step`` (None: no limit). Taken at the next frame: waking the loop
-        would run a frame early, and compare mode moves the limit at every frame."""
-        self.hold_at = None if step is None else int(step)
-
-    def run_to(self, step: int) -> None:
-        """Step until the world's step count is ``step`` (nothing if it is there or past): two paused
-        worlds in compare mode end on the same step."""
-        self.post(lambda sim: self._step(int(step) - sim.steps_done) if sim.steps_done < int(step) else None)
-
-    def update_config(self, changes: dict[str, Any], *, on_done: Callable[[Any], None] | None = None,
-                      on_error: Callable[[BaseException], None] | None = None) -> None:
-        """Change parameters: the live ones at once, the others at the next
-        :meth:`reset`. ``on_done`` receives (names waiting for a reset, the
-        settings with them)."""
-
-        def do(sim: Simulation) -> tuple[list[str], Config]:
-            deferred = sim.update_config(**changes)
-            # Checked together with what is already waiting (a profile change resets the values it bundles).
-            settings = sim.config.replace(**{**self.pending, **{k: changes[k] for k in deferred}})
-            self.pending = {k: getattr(settings, k) for k in {*self.pending, *deferred}}
-            return sorted(self.pending), settings
-
-        self.post(do, on_done=on_done, on_error=on_error)
-
     @property
     def settings(self) -> Config:
         """The running configuration with the changes waiting for a reset."""
         return self.sim.config.replace(**self.pending)
-
-    def reset(self, seed: int | None = None, *, on_done: Callable[[Any], None] | None = None,
-              on_error: Callable[[BaseException], None] | None = None) -> None:
-        """Rebuild the world with the waiting changes; ``seed`` None keeps the
-        current seed. Building reports to the :meth:`on_progress` listeners and
-        stops at :meth:`cancel_build` (BuildCancelled; the old world goes on)."""
-
-        def do(sim: Simulation) -> None:
-            self._cancel.clear()
-            try:
-                sim.reset(seed, config=self.settings, progress=self._building)
-            finally:
-                self._report_progress(None)
-            self.pending = {}
-            self._goal_key += 1
-            self._step_times.clear()  # speeds are measured within one world
-            with self._series_lock:  # a new world and its new series, together (see series_of_world)
-                self._world_key += 1
-                self._series = []
-            self._record_series(force=True)
-
-        self.post(do, on_done=on_done, on_error=on_error)
-
-    def cancel_build(self) -> None:
-        """Stop a world being built by :meth:`reset` (safe from any thread)."""
-        self._cancel.set()
 
     def on_progress(self, listener: Callable[[float | None], None]) -> None:
         """``listener(fraction)`` hears how far building a world has got; None when it is over."""
@@ -255,33 +221,7 @@ class Runner(FramePublisher):
 
     def _report_progress(self, fraction: float | None) -> None:
         for listener in list(self._progress_listeners):
-            try:
-                listener(fraction)
-            except Exception as exc:  # a broken listener must not stop the build
-                self.errors.append(exc)
-
-    def set_shape(self, vertices: np.ndarray | None, name: str, *, on_done: Callable[[Any], None] | None = None,
-                  on_error: Callable[[BaseException], None] | None = None) -> None:
-        """Change the goal; ``on_done`` gets the notes about its fit, ``on_error`` a refusal."""
-
-        def do(sim: Simulation) -> list[str]:
-            notes = sim.set_shape(vertices, name=name)
-            self.shape_name = name
-            self._goal_key += 1
-            return notes
-
-        self.post(do, on_done=on_done, on_error=on_error)
-
-    def set_outline(self, outline: str, *, on_done: Callable[[Any], None] | None = None,
-                    on_error: Callable[[BaseException], None] | None = None) -> None:
-        """Choose the outline family; ``on_done`` gets the notes about the goal, ``on_error`` a refusal."""
-
-        def do(sim: Simulation) -> list[str]:
-            notes = sim.set_outline(outline)
-            self._goal_key += 1  # an offset goal may have moved
-            return notes
-
-        self.post(do, on_done=on_done, on_error=on_error)
+            self._deliver(listener, fraction)  # a broken listener must not stop the build
 
     @property
     def latest(self) -> Snapshot:
@@ -305,83 +245,143 @@ class Runner(FramePublisher):
         """Run the loop now (a paused runner otherwise waits a frame's time)."""
         self._wake.set()
 
-    def steps_per_second(self) -> float:
+    def _measured_speed(self) -> float:
+        """Steps per second over the last frames (the simulation thread's own record)."""
         if len(self._step_times) < 2:
             return 0.0
         (t0, s0), (t1, s1) = self._step_times[0], self._step_times[-1]
         return (s1 - s0) / (t1 - t0) if t1 > t0 else 0.0
 
-    # -------------------------------------------------------------- loops
+    # ------------------------------------------------------------ commands
     def _run_commands(self) -> None:
         while True:
             try:
-                command, on_done, on_error = self._commands.get_nowait()
+                command, future = self._commands.get_nowait()
             except queue.Empty:
                 return
-            try:
-                result = command(self.sim)
-            except BaseException as exc:  # reported to whoever posted it; nothing a command raises stops the loop
-                if on_error:
-                    self._deliver(on_error, exc)
-                else:
-                    self.errors.append(exc)
-                continue
-            if on_done:
-                self._deliver(on_done, result)
+            if future.set_running_or_notify_cancel():  # not cancelled by whoever submitted it
+                self._carry_out(command, future)
 
-    # ------------------------------------------------------- light programs
-    def set_program(self, spec: str | None, *, on_done: Callable[[Any], None] | None = None,
-                    on_error: Callable[[BaseException], None] | None = None) -> None:
-        """Light the floor with a program loaded from ``path.py:Class`` (None: the
-        paper's controller again), keeping the world. A program that cannot be
-        loaded or started is refused and the running one stays."""
+    def _carry_out(self, command: Command, future: Future) -> None:
+        """Handle one command; its future gets the answer. Nothing a command raises stops the loop, but
+        SystemExit and KeyboardInterrupt go on up (the caller hears that the loop ended)."""
+        try:
+            result = self.handle(command)
+        except Exception as exc:  # noqa: BLE001 - reported to whoever submitted it
+            future.set_exception(exc)
+        else:
+            future.set_result(result)
+        finally:
+            if not future.done():
+                future.set_exception(RunnerStopped("the simulation stopped while carrying this out"))
 
-        def do(sim: Simulation) -> str:
-            from sandbox.model.programs import load_program
+    def handle(self, command: Command) -> Any:
+        """Carry out one command (the one place each command's meaning lives; :meth:`submit` decides
+        on which thread and when): the handler of its type, or of the nearest base that has one."""
+        kind = type(command)
+        handler = HANDLERS.get(kind) or next((HANDLERS[k] for k in kind.__mro__ if k in HANDLERS), None)
+        if handler is None:
+            raise TypeError(f"the simulation does not know the command {command!r}")
+        return handler(self, command)
 
-            sim.use_program(load_program(spec, time_limit=self.program_time_limit) if spec else None)
-            self.program_name = spec or PAPER_PROGRAM
+    @handles(Setting)
+    def _setting(self, command: Setting) -> None:
+        command.settle(self.controls)
+        if command.wakes:
+            self._wake.set()
+
+    @handles(Start)
+    def _start(self, command: Start) -> None:
+        self.start()
+
+    @handles(CancelBuild)
+    def _cancel_build(self, command: CancelBuild) -> None:
+        self._cancel.set()
+
+    @handles(Apply)
+    def _apply(self, command: Apply) -> Any:
+        return command.function(self.sim)
+
+    @handles(StepOnce)
+    def _step_once(self, command: StepOnce) -> None:
+        self._step(command.n)
+
+    @handles(RunTo)
+    def _run_to(self, command: RunTo) -> None:
+        if self.sim.steps_done < command.step:
+            self._step(command.step - self.sim.steps_done)
+
+    @handles(UpdateConfig)
+    def _update_config(self, command: UpdateConfig) -> tuple[list[str], Config]:
+        changes = command.changes
+        deferred = self.sim.update_config(**changes)
+        # Checked together with what is already waiting (a profile change resets the values it bundles).
+        settings = self.sim.config.replace(**{**self.pending, **{k: changes[k] for k in deferred}})
+        self.pending = {k: getattr(settings, k) for k in {*self.pending, *deferred}}
+        return sorted(self.pending), settings
+
+    @handles(Reset)
+    def _reset(self, command: Reset) -> None:
+        self._cancel.clear()
+        try:
+            self.sim.reset(command.seed, config=self.settings, progress=self._building)
+        finally:
+            self._report_progress(None)
+        self.pending = {}
+        self._goal_key += 1
+        self._step_times.clear()  # speeds are measured within one world
+        with self._series_lock:  # a new world and its new series, together (see series_of_world)
+            self._world_key += 1
+            self._series = []
+        self._record_series(force=True)
+
+    @handles(SetShape)
+    def _set_shape(self, command: SetShape) -> list[str]:
+        notes = self.sim.set_shape(command.vertices, name=command.name)
+        self.shape_name = command.name
+        self._goal_key += 1
+        return notes
+
+    @handles(SetOutline)
+    def _set_outline(self, command: SetOutline) -> list[str]:
+        notes = self.sim.set_outline(command.outline)
+        self._goal_key += 1  # an offset goal may have moved
+        return notes
+
+    @handles(SetProgram)
+    def _set_program(self, command: SetProgram) -> str:
+        from sandbox.model.programs import load_program
+
+        spec = command.spec
+        self.sim.use_program(load_program(spec, time_limit=self.program_time_limit) if spec else None)
+        self.program_name = spec or PAPER_PROGRAM
+        return self.program_name
+
+    @handles(SetLamp)
+    def _set_lamp(self, command: SetLamp) -> str:
+        from sandbox.model.lamp import Lamp
+
+        sim = self.sim
+        lamp = sim.user_program if isinstance(sim.user_program, Lamp) else None
+        if command.centre is None:
+            if lamp is not None:
+                sim.use_program(None)
+                self.program_name = PAPER_PROGRAM
             return self.program_name
+        if lamp is None:
+            lamp = Lamp()
+            sim.use_program(lamp)
+            self.program_name = LAMP_PROGRAM
+        lamp.aim(*command.centre, command.radius, command.mode)
+        return self.program_name
 
-        self.post(do, on_done=on_done, on_error=on_error)
+    @handles(WorldSpec)
+    def _world_spec(self, command: WorldSpec) -> tuple:
+        sim = self.sim
+        shape = None if sim.shape_vertices is None else sim.shape_vertices.copy()
+        return sim.config, sim.seed, shape
 
-    def set_lamp(self, centre: tuple[float, float] | None, radius: float | None = None, mode: str = "lamp", *,
-                 on_done: Callable[[Any], None] | None = None,
-                 on_error: Callable[[BaseException], None] | None = None) -> None:
-        """Be the light: a click at ``centre`` moves the lamp there (the lights within ``radius`` metres
-        on, the others off), or paints or erases the lights there (``mode``: see
-        :mod:`sandbox.model.lamp`), keeping the world; None gives the lights back to the paper's
-        controller."""
-
-        def do(sim: Simulation) -> str:
-            from sandbox.model.lamp import Lamp
-
-            lamp = sim.user_program if isinstance(sim.user_program, Lamp) else None
-            if centre is None:
-                if lamp is not None:
-                    sim.use_program(None)
-                    self.program_name = PAPER_PROGRAM
-                return self.program_name
-            if lamp is None:
-                lamp = Lamp()
-                sim.use_program(lamp)
-                self.program_name = LAMP_PROGRAM
-            lamp.aim(*centre, radius, mode)
-            return self.program_name
-
-        self.post(do, on_done=on_done, on_error=on_error)
-
-    def world_spec(self, *, on_done: Callable[[Any], None] | None = None,
-                   on_error: Callable[[BaseException], None] | None = None) -> None:
-        """(config, seed, goal vertices as given or None) of the running world: what builds it again
-        elsewhere (a challenge's reference run)."""
-
-        def do(sim: Simulation) -> tuple:
-            shape = None if sim.shape_vertices is None else sim.shape_vertices.copy()
-            return sim.config, sim.seed, shape
-
-        self.post(do, on_done=on_done, on_error=on_error)
-
+    # -------------------------------------------------------------- loops
     def _step(self, n: int | None = None, deadline: float | None = None) -> None:
         """Step; a light program that fails while running hands the lights back to the paper's controller."""
         from sandbox.model.programs import ProgramError
@@ -398,17 +398,23 @@ class Runner(FramePublisher):
             self.program_error = (count, str(exc))
 
     def _loop(self) -> None:
+        try:
+            self._run_frames()
+        finally:  # stopped, or SystemExit / KeyboardInterrupt on their way up: nobody waits on a command
+            self._close(RunnerStopped("the simulation loop ended"))
+
+    def _run_frames(self) -> None:
         interval = 1.0 / self.fps
         due = time.perf_counter()  # when the next frame's steps are due
         while not self._stop.is_set():
-            fastest = self.steps_per_frame >= FASTEST
+            fastest = self.controls.steps_per_frame >= FASTEST
             frames = 1 if fastest else frames_owed(due, time.perf_counter(), interval, CATCH_UP)
             try:
                 self._frame_of_steps(due + interval, frames)
             except Exception as exc:  # noqa: BLE001 - a bug: pause and say so rather than freeze the page
                 self.errors.append(exc)
                 log.exception("the simulation loop failed; paused")
-                self.playing = False
+                self.controls.playing = False
             now = time.perf_counter()
             due = next_frame_due(due + (frames - 1) * interval, now, interval,
                                  most_behind=interval if fastest else CATCH_UP)
@@ -421,9 +427,10 @@ class Runner(FramePublisher):
         """One frame: the waiting commands, ``frames`` frames' steps (if playing), the series and a
         snapshot. ``deadline``: when the fastest setting stops stepping."""
         self._run_commands()
-        allowed = self._steps_allowed(self.steps_per_frame * frames)
-        if self.playing and allowed > 0:
-            if self.steps_per_frame >= FASTEST:
+        controls = self.controls
+        allowed = self._steps_allowed(controls.steps_per_frame * frames)
+        if controls.playing and allowed > 0:
+            if controls.steps_per_frame >= FASTEST:
                 self._step(deadline=deadline)  # as many steps as fit in one frame
             else:
                 self._step(allowed)
@@ -440,7 +447,7 @@ class Runner(FramePublisher):
 
     def _steps_allowed(self, n: int) -> int:
         """``n``, or fewer if the world is held (:meth:`hold`)."""
-        hold = self.hold_at
+        hold = self.controls.hold_at
         return n if hold is None else max(0, min(n, hold - self.sim.steps_done))
 
     def _publish_loop(self) -> None:
@@ -476,7 +483,7 @@ class Runner(FramePublisher):
             command=sim.robot_commands[i].copy(),
             applied=sim.robot_velocities[i].copy(),
             charge=float(sim.robot_charges[i]),
-        ) for i in self.followed if 0 <= i < sim.world.n_robots)
+        ) for i in self.controls.followed if 0 <= i < sim.world.n_robots)
         in_goal = sim.box_in_goal
         # The light field counts its pattern changes: a new count means new lights.
         lights_key = (self._world_key, id(sim.lights), sim.lights.rebuilds)
@@ -484,7 +491,7 @@ class Runner(FramePublisher):
         same_lights = prev is not None and prev.lights_key == lights_key
         intensities = prev.intensities if same_lights else sim.light_intensities.copy()
         field = None
-        if self.want_field:
+        if self.controls.want_field:
             if same_lights and prev.field is not None:
                 field = prev.field
             else:
@@ -519,9 +526,9 @@ class Runner(FramePublisher):
             goal_vertices=goal_vertices,
             sample=self._series[-1] if self._series else sim.measure(),
             strategies=dict(sim.controller.strategies),
-            playing=self.playing,
-            steps_per_frame=self.steps_per_frame,
-            steps_per_second=self.steps_per_second(),
+            playing=self.controls.playing,
+            steps_per_frame=self.controls.steps_per_frame,
+            steps_per_second=self._measured_speed(),
             followed=followed,
             program=self.program_name,
             program_error=self.program_error,

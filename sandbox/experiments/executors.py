@@ -34,15 +34,22 @@ def local_executor(workers: int) -> Iterator[cf.Executor]:
     try:
         yield ex
     except BaseException:
-        # Interrupted (or a bug): stop the trials in flight now, not after they finish.
-        if hasattr(ex, "terminate_workers"):  # Python 3.14+
-            ex.terminate_workers()
-        else:
-            for process in list(getattr(ex, "_processes", {}).values()):
-                process.terminate()
+        # Interrupted (or a bug, or a SweepError): stop the trials in flight now, not after they finish.
+        terminate_workers(ex)
         raise
     finally:
         ex.shutdown(wait=False, cancel_futures=True)
+
+
+def terminate_workers(ex: cf.ProcessPoolExecutor) -> None:
+    """End the pool's worker processes now, in the middle of their trials. Python 3.14 has a public
+    way; before it, none: ``shutdown`` lets a running trial finish (minutes), so this reads the pool's
+    private ``_processes`` (pid to Process), here only."""
+    if hasattr(ex, "terminate_workers"):  # Python 3.14+
+        ex.terminate_workers()
+        return
+    for process in list((getattr(ex, "_processes", None) or {}).values()):
+        process.terminate()
 
 
 @contextlib.contextmanager
@@ -90,8 +97,10 @@ def run_trials(trials: list[Trial], store: ResultStore, executor: Callable[[], c
     start = time.perf_counter()
     attempts: dict[Trial, int] = {}
     try:
-        with executor() as ex_holder:
-            pool = [ex_holder]
+        # Every pool it starts (another after a worker process died) is closed, its workers ended, however
+        # the loop ends: a SweepError too.
+        with contextlib.ExitStack() as pools:
+            pool = [pools.enter_context(executor())]
             running: dict[cf.Future, Trial] = {}
 
             def submit(t: Trial) -> None:
@@ -101,7 +110,6 @@ def run_trials(trials: list[Trial], store: ResultStore, executor: Callable[[], c
 
             for t in todo:
                 submit(t)
-            extra = contextlib.ExitStack()  # pools started after a worker process died
             while running:
                 finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
                 again: list[Trial] = []
@@ -143,10 +151,9 @@ def run_trials(trials: list[Trial], store: ResultStore, executor: Callable[[], c
                                                          traceback=""))
                             bar.update(1)
                     running.clear()
-                    pool[0] = extra.enter_context(executor())
+                    pool[0] = pools.enter_context(executor())
                 for t in again:
                     submit(t)
-            extra.close()
     finally:
         bar.close()
         outcome.seconds = time.perf_counter() - start

@@ -37,8 +37,13 @@ class ProgramFolder:
         self.allowed, self._on_change = allowed, on_change
         #: may_load(client): whether that page may load a program (the server's gate decides, per page).
         self._may_load = may_load or (lambda client: allowed)
+        #: How many failures of light programs the running simulation has counted, as announced. A
+        #: restarted simulation process counts from nothing again: its first failure must be told too.
         self._errors_seen = 0
         self._shown: str | None = None
+        on_crash = getattr(runner, "on_crash", None)  # a runner in a process of its own
+        if on_crash is not None:
+            on_crash(lambda why: self._count_afresh())
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -87,11 +92,17 @@ class ProgramFolder:
         if text != self._shown:
             self.status.content = self._shown = text
         error = snap.program_error
+        if (error[0] if error else 0) < self._errors_seen:  # fewer than seen: a new process counts afresh
+            self._count_afresh()
         if error and error[0] > self._errors_seen:
             self._errors_seen = error[0]
             for client in self.server.get_clients().values():
                 notify_error(client, "Light program stopped",
                              f"{error[1]}; the paper's controller lights the floor again.")
+
+    def _count_afresh(self) -> None:
+        """The simulation process was restarted: the next failure it counts is news."""
+        self._errors_seen = 0
 
     @staticmethod
     def _status(snap: Snapshot) -> str:

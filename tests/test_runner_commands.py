@@ -1,0 +1,180 @@
+"""Typed commands (sandbox.app.commands): each carried out in one place, every future settled.
+
+Whoever submits a command gets a future that resolves or fails: a stopped runner fails what it had not
+carried out, a crashed child fails what it owed, and a command sent while the child is swapped reaches
+the new child or fails at once. Stopping a process runner in the middle of a restart leaves no process.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import os
+import signal
+import threading
+import time
+from concurrent.futures import wait
+
+import pytest
+
+from sandbox.app import commands
+from sandbox.app.commands import Command, Control, RunnerStopped, Setting
+from sandbox.app.process import ProcessRunner, SimulationCrashed
+from sandbox.app.runner import HANDLERS, Runner
+from sandbox.model.config import Config
+from tests.waiting import wait_until
+
+SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
+COMMANDS = [kind for _, kind in inspect.getmembers(commands, inspect.isclass)
+            if issubclass(kind, Command) and kind not in (Command, Control, Setting)]
+
+
+def where_am_i(sim) -> int:
+    """A command: the id of the process it runs in."""
+    return os.getpid()
+
+
+def blocks_until(sim, path: str) -> None:
+    """A command that keeps the simulation busy until ``path`` exists (a long command)."""
+    while not os.path.exists(path):
+        time.sleep(0.01)
+
+
+@pytest.mark.parametrize("kind", COMMANDS, ids=lambda kind: kind.__name__)
+def test_every_command_has_a_handler(kind):
+    assert any(base in HANDLERS for base in kind.__mro__), f"Runner.handle does not carry out {kind.__name__}"
+
+
+def test_a_stopped_runner_fails_every_command_it_had_not_carried_out():
+    runner = Runner(SMALL, shape=None)  # not started: the commands wait for the loop
+    heard: list[BaseException] = []
+    futures = [runner.reset(3, on_error=heard.append), runner.set_outline("offset", on_error=heard.append),
+               runner.post(where_am_i, on_error=heard.append), runner.step_once(2)]
+    runner.stop()
+    assert all(isinstance(f.exception(timeout=0), RunnerStopped) for f in futures)
+    assert len(heard) == 3 and all(isinstance(e, RunnerStopped) for e in heard)
+    late = runner.reset(4, on_error=heard.append)
+    assert isinstance(late.exception(timeout=0), RunnerStopped) and len(heard) == 4
+    assert not runner.errors  # stopping is no error of the commands'
+
+
+def test_callbacks_go_through_deliver_when_given():
+    handed: list = []
+    runner = Runner(SMALL, shape=None, deliver=handed.append)
+    built, progress = [], []
+    runner.on_progress(progress.append)
+    future = runner.reset(5, on_done=built.append)
+    runner.advance(1)
+    assert future.done() and not built and not progress  # handed over, not called on the runner's thread
+    for thunk in handed:
+        thunk()
+    assert built == [None] and progress and progress[-1] is None
+
+
+def test_a_command_that_raises_fails_its_future_and_the_loop_goes_on():
+    runner = Runner(SMALL, shape=None, fps=60, steps_per_frame=2).start()
+    try:
+        refused = runner.update_config({"robots": -1})
+        assert "robots" in str(refused.exception(timeout=10))
+        step = runner.latest.step
+        wait_until(lambda: runner.latest.step > step, what="steps after the refusal")
+    finally:
+        runner.stop()
+
+
+# ------------------------------------------------------------------ process runner
+@pytest.fixture
+def process_runner():
+    runner = ProcessRunner(SMALL, shape=None, fps=60, steps_per_frame=2)
+    runner.start()
+    yield runner
+    runner.stop()
+
+
+def test_stopping_fails_every_call_the_process_owes(process_runner, tmp_path):
+    runner = process_runner
+    heard: list[BaseException] = []
+    busy = runner.post(functools.partial(blocks_until, path=str(tmp_path / "never")))
+    owed = [runner.reset(1, on_error=heard.append), runner.post(where_am_i, on_error=heard.append), busy]
+    runner.stop(timeout=1)
+    done, pending = wait(owed, timeout=10)
+    assert not pending and all(isinstance(f.exception(), RunnerStopped) for f in owed)
+    wait_until(lambda: len(heard) == 2, timeout=10, what="both callers to hear")
+    assert not runner.process.is_alive()
+
+
+@pytest.mark.slow
+def test_a_call_made_while_the_child_is_swapped_is_answered_or_refused(process_runner):
+    runner = process_runner
+    runner.restart_pause = 0.05
+    old = runner.call(where_am_i)
+    futures, stop = [], threading.Event()
+
+    def keep_calling() -> None:
+        while not stop.is_set():
+            futures.append(runner.post(where_am_i))
+            time.sleep(0.002)  # a steady stream of calls across the crash and the restart
+
+    caller = threading.Thread(target=keep_calling)
+    caller.start()
+    try:
+        os.kill(old, signal.SIGKILL)
+        wait_until(lambda: runner.restarts == 1 and any(f.done() and not f.exception() and f.result() != old
+                                                        for f in list(futures)),
+                   what="a call answered by the new process")
+    finally:
+        stop.set()
+        caller.join()
+    done, pending = wait(futures, timeout=30)
+    assert not pending, f"{len(pending)} of {len(futures)} calls never settled"
+    outcomes = {f.result() if f.exception() is None else type(f.exception()) for f in futures}
+    assert outcomes <= {old, runner.process.pid, SimulationCrashed}
+
+
+@pytest.mark.slow
+def test_stopping_during_the_pause_before_a_restart_starts_no_process(process_runner):
+    runner = process_runner
+    runner.restart_pause = 60.0
+    crashes: list[str] = []
+    runner.on_crash(crashes.append)
+    os.kill(runner.process.pid, signal.SIGKILL)
+    wait_until(lambda: crashes, what="the crash to be reported")
+    refused = runner.reset()  # no process to take it: refused at once, not kept for ever
+    assert "restarting" in str(refused.exception(timeout=0))
+    started = time.monotonic()
+    runner.stop()
+    assert time.monotonic() - started < 10  # the pause does not hold the stop
+    assert runner.restarts == 0 and not runner.process.is_alive()  # the dead one, not replaced
+
+
+class StopsWhileSpawning:
+    """The runner's process context, except that spawning a process first starts stopping the runner
+    (on another thread) and waits until the stop has begun: a stop that races a restart."""
+
+    def __init__(self, runner: ProcessRunner):
+        self.runner, self.real, self.stopper = runner, runner._context, None
+        self.spawned: list = []
+
+    def __getattr__(self, name: str):
+        return getattr(self.real, name)
+
+    def Process(self, *args, **kwargs):  # noqa: N802 - multiprocessing's name
+        self.stopper = threading.Thread(target=self.runner.stop)
+        self.stopper.start()
+        wait_until(self.runner._stop.is_set, what="the stop to begin")
+        process = self.real.Process(*args, **kwargs)
+        self.spawned.append(process)
+        return process
+
+
+@pytest.mark.slow
+def test_a_process_spawned_while_the_runner_stops_is_stopped_too(process_runner):
+    runner = process_runner
+    runner.restart_pause = 0.0
+    spawning = runner._context = StopsWhileSpawning(runner)
+    old = runner.process.pid
+    os.kill(old, signal.SIGKILL)
+    wait_until(lambda: spawning.stopper is not None, what="the restart to spawn")
+    spawning.stopper.join(30)
+    assert not spawning.stopper.is_alive()
+    assert spawning.spawned and all(p.pid is None or not p.is_alive() for p in spawning.spawned)
