@@ -284,19 +284,13 @@ class Comparison:
                              caption_over_construction=self.caption_over_construction)
         self.view, self.label, self._drawn = view, label, partner.latest.frame
         if hasattr(partner, "on_crash"):  # a process of its own
-            partner.on_crash(lambda why, partner=partner: self._post(self._crashed, partner, why))
+            partner.on_crash(lambda why, partner=partner: self._crashed(partner, why))  # on the event queue
         self.lockstep.pair(partner)
         # Both from step 0 (held there while they are built), then playing if the running world was;
         # also if a world could not be rebuilt (its process died, say).
         self.lockstep.reset(None, on_done=lambda _: self.lockstep.set_playing(playing),
                             on_error=lambda _: self.lockstep.set_playing(playing))
         self._on_layout(self.beside)
-
-    def _post(self, fn: Callable, *args: Any) -> None:
-        if self._events is None:
-            fn(*args)
-        else:
-            self._events.post(fn, *args)
 
     def end(self) -> None:
         """The running world goes on alone."""

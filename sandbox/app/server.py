@@ -71,13 +71,15 @@ class App:
         self.events = EventQueue()
         kind = ProcessRunner if process else Runner
         # The simulation process starts (about a second) while the server and the panel are built.
+        # Its answers (on_done, on_error), its build progress and its crash notices come on the event queue.
         self.runner = kind(config, shape=shape, fps=fps, steps_per_frame=steps_per_frame, playing=playing,
-                           program_time_limit=program_time_limit, **({"wait": False} if process else {}))
+                           program_time_limit=program_time_limit, deliver=self.events.post,
+                           **({"wait": False} if process else {}))
         self._compare_with = compare
 
         def make_runner(partner_config: Config, **kwargs: Any) -> Any:  # compare mode's second world
             return kind(partner_config, fps=fps, steps_per_frame=self.runner.steps_per_frame,
-                        program_time_limit=program_time_limit, **kwargs)
+                        program_time_limit=program_time_limit, deliver=self.events.post, **kwargs)
 
         self.lockstep = Lockstep(self.runner)
         try:
@@ -108,7 +110,7 @@ class App:
         self.frames_drawn = 0
         self.runner.subscribe(lambda snap: self.events.post_latest("frame", self._on_frame, snap))
         if process:
-            self.runner.on_crash(lambda why: self.events.post(self._on_crash, why))
+            self.runner.on_crash(self._on_crash)  # delivered on the event queue
         # With no viewer for a while, stop stepping (a forgotten demo should not heat the room).
         self.keep_running, self.idle_pause_seconds = keep_running, idle_pause_seconds
         self.auto_paused = False  # owned by the event thread, as everything below
