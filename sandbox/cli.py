@@ -140,7 +140,8 @@ def design_from_args(args: argparse.Namespace) -> Any:
         return None
     typed = typed_settings(args)
     if typed:
-        raise UserError(f"--design replays the file's own goal, settings, seed and lights: leave out {', '.join(typed)}")
+        raise UserError(f"--design brings the file's own goal, settings and seed: "
+                        f"leave out {', '.join(typed)}")
     try:
         return load(path)
     except DesignError as exc:
