@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import io
 import json
+import math
 import os
 import zipfile
 import zlib
@@ -90,6 +91,11 @@ def light_field(config: Config) -> dict:
             "on_intensity": config.light_intensity, "step_seconds": config.dt}
 
 
+def _number(value: float) -> float | None:
+    """A result for JSON: None where it is not a number (the stray distance with no box outside)."""
+    return None if math.isnan(value) else float(value)
+
+
 def _listed(vertices: np.ndarray | None) -> list | None:
     return None if vertices is None else np.asarray(vertices, dtype=float).tolist()
 
@@ -151,8 +157,8 @@ class PatternRecorder:
                       steps_run=sim.steps_done, steps=steps, patterns=patterns, controller=controller,
                       goal={"vertices": _listed(goal.vertices), "centre": np.asarray(goal.centre, float).tolist(),
                             "radius": goal.radius},
-                      result={"fraction_in_goal": sample.fraction_in_goal,
-                              "mean_outside_distance": sample.mean_outside_distance,
+                      result={"fraction_in_goal": _number(sample.fraction_in_goal),
+                              "mean_outside_distance": _number(sample.mean_outside_distance),
                               "state_digest": sim.state_digest()})
 
 
@@ -192,7 +198,7 @@ def save(design: Design, path: str | os.PathLike) -> None:
     """Write the design to ``path`` (a NumPy .npz archive, compressed), whole or not at all."""
     path = Path(path)
     buffer = io.BytesIO()
-    np.savez_compressed(buffer, header=np.array(json.dumps(design.header())),
+    np.savez_compressed(buffer, header=np.array(json.dumps(design.header(), allow_nan=False)),
                         steps=np.asarray(design.steps, dtype=np.int64), patterns=design.patterns)
     part = path.with_name(path.name + ".part")
     try:
