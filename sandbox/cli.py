@@ -133,11 +133,11 @@ def typed_settings(args: argparse.Namespace) -> list[str]:
 def design_from_args(args: argparse.Namespace) -> Any:
     """The --design file, loaded and checked (a :class:`sandbox.model.design.Design`); None without the flag.
     The file carries the goal, the settings and the seed: a flag that would choose them too is refused."""
-    from sandbox.model.design import DesignError, load
-
     path = getattr(args, "design", None)
     if not path:
         return None
+    from sandbox.model.design import DesignError, load
+
     typed = typed_settings(args)
     if typed:
         raise UserError(f"--design brings the file's own goal, settings and seed: "
