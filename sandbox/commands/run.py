@@ -1,5 +1,6 @@
-"""``phototaxis run``: one headless trial, with a progress bar, a JSON summary
-and an optional CSV trace of both success metrics."""
+"""``phototaxis run``: one headless trial, with a progress bar, a JSON summary,
+an optional CSV trace of both success metrics and an optional design file (the
+run's goal, settings, seed and light program); or the replay of a design file."""
 
 from __future__ import annotations
 
