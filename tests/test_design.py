@@ -90,7 +90,7 @@ def test_a_reset_starts_the_recorded_program_afresh_and_a_late_start_is_refused(
 def test_a_replay_rebuilds_the_run_bit_for_bit(case, chase):
     from sandbox.model.config import CASES
 
-    sim, recorder = recorded(QUICK.replace(**CASES[case], chase=chase, seed=3), 500)
+    sim, recorder = recorded(QUICK.replace(**CASES[case], chase=chase, seed=3), 300)
     design = recorder.design(sim)
     assert replayed(design).state_digest() == sim.state_digest()
 
