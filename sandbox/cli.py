@@ -117,3 +117,32 @@ def controller_from_args(args: argparse.Namespace) -> tuple[str | None, Any]:
         return spec, load_program(spec, time_limit=program_time_limit(args))
     except ProgramError as exc:
         raise UserError(str(exc)) from None
+
+
+def add_design_argument(p: argparse.ArgumentParser, help: str) -> None:
+    p.add_argument("--design", metavar="FILE.npz", default=None, help=help)
+
+
+def typed_settings(args: argparse.Namespace) -> list[str]:
+    """The flags the user typed that choose a world's goal, settings, seed or light program."""
+    chosen = [flag for flag, name in (("--config", "config"), ("--case", "case"), ("--controller", "controller"),
+                                      ("--compare", "compare")) if getattr(args, name, None)]
+    return chosen + [flag_name(p.name) for p in params() if getattr(args, p.name, None) is not None]
+
+
+def design_from_args(args: argparse.Namespace) -> Any:
+    """The --design file, loaded and checked (a :class:`sandbox.model.design.Design`); None without the flag.
+    The file carries the goal, the settings and the seed: a flag that would choose them too is refused."""
+    path = getattr(args, "design", None)
+    if not path:
+        return None
+    from sandbox.model.design import DesignError, load
+
+    typed = typed_settings(args)
+    if typed:
+        raise UserError(f"--design brings the file's own goal, settings and seed: "
+                        f"leave out {', '.join(typed)}")
+    try:
+        return load(path)
+    except DesignError as exc:
+        raise UserError(str(exc)) from None

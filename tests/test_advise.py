@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 
-from sandbox.experiments.advise import Candidate, Ranked, candidates, rank, table
+from sandbox.experiments.advise import Candidate, Ranked, candidates, rank, table, time_left
 from sandbox.model.config import Config
 from sandbox.shapes import shape_vertices
 from tests.waiting import wait_until
@@ -36,6 +36,28 @@ def test_the_ranking_puts_most_in_the_goal_first_then_the_closest_rest():
     assert rank([a, b, c]) == [c, b, a]
     text = table(rank([a, b, c]), 30_000)
     assert text.splitlines()[2] == "| 1 | offset | 0.800 | 0.50 |" and "1 seed(s) x 30,000 steps" in text
+    assert text.splitlines()[0] == ("| rank | outline and strategies | boxes in the goal "
+                                    "| stray boxes' mean distance to the goal (m) |")
+
+
+def test_the_time_left_goes_by_the_pace_of_the_trials_done():
+    assert time_left(30.0, 3, 12) == "about 1 min 30 s left"
+    assert time_left(10.0, 1, 3) == "about 20 s left"
+    assert time_left(600.0, 1, 3) == "about 20 min left"
+    assert time_left(0.0, 0, 12) == "time left: known once the first trial is done"
+
+
+def test_the_pages_advice_says_the_time_left_while_it_runs():
+    import time
+
+    from sandbox.app.panel.advice import AdviceFolder
+
+    runner = _Handle(latest=_Handle(steps_per_second=100.0))
+    folder = AdviceFolder(_Gui(), runner, use=lambda *args: None)
+    folder.build(runner.latest)
+    folder._busy, folder._started = True, time.monotonic() - 30.0  # as begin() leaves it, 30 s ago
+    folder._heard(3, 12)
+    assert folder._text() == "Running: 3 of 12 trials done, about 1 min 30 s left."
 
 
 def test_advise_from_the_command_line_prints_a_ranked_table_and_json(capsys):

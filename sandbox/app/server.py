@@ -33,8 +33,8 @@ from sandbox.app.scene import SceneView, configure_scene
 from sandbox.app.snapshot import Snapshot
 from sandbox.app.viser_seam import ViserMismatch
 from sandbox.app.viser_seam import check as check_viser
-from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, config_from_args,
-                         controller_from_args, program_time_limit)
+from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, add_design_argument,
+                         config_from_args, controller_from_args, design_from_args, program_time_limit)
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.watchdog import DEFAULT_LIMIT
 from sandbox.shapes import shape_vertices
@@ -288,6 +288,7 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                         "(e.g. star star-switch) or a TOML or JSON file of values over the other flags; play, "
                         "pause, step and reset act on both")
     add_controller_argument(p)
+    add_design_argument(p, "open a design file's goal, settings and seed (docs/design-files.md)")
     p.add_argument("--allow-programs", action="store_true",
                    help="let any controlling page load light programs (Python files on this machine), not only "
                         "a page opened on this machine itself")
@@ -323,7 +324,8 @@ def serve_command(args: argparse.Namespace) -> int:
         check_viser()  # before anything starts: one line naming what this viser lacks
     except ViserMismatch as exc:
         raise UserError(str(exc)) from None
-    config = config_from_args(args)
+    design = design_from_args(args)  # its goal, settings and seed, lit by the paper's controller
+    config = design.config if design else config_from_args(args)
     compare = None
     if args.compare:
         if args.case:
@@ -353,7 +355,8 @@ def serve_command(args: argparse.Namespace) -> int:
         app = App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
                   playing=not (args.paused or args.classroom), whole_arena=not args.classroom,
                   keep_running=args.keep_running, controller=controller_from_args(args)[0], access=access,
-                  program_time_limit=program_time_limit(args), compare=compare)
+                  program_time_limit=program_time_limit(args), compare=compare,
+                  shape=design.shape if design else "from-config")
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
 

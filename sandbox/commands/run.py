@@ -1,10 +1,12 @@
-"""``phototaxis run``: one headless trial, with a progress bar, a JSON summary
-and an optional CSV trace of both success metrics."""
+"""``phototaxis run``: one headless trial, with a progress bar, a JSON summary,
+an optional CSV trace of both success metrics and an optional design file (the
+run's goal, settings, seed and light program); or the replay of a design file."""
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -12,9 +14,10 @@ from typing import IO, Any
 
 from tqdm import tqdm
 
-from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, config_from_args,
-                         controller_from_args, program_time_limit)
+from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, add_design_argument,
+                         config_from_args, controller_from_args, design_from_args, program_time_limit)
 from sandbox.model.config import CASES, STRATEGY_NAMES, Config
+from sandbox.model import design as designs
 from sandbox.model import watchdog
 from sandbox.model.metrics import Sample, SampleWriter
 from sandbox.model.programs import ProgramError, paper_controller_name
@@ -29,6 +32,11 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--trace", metavar="FILE.csv", help="write both metrics every metrics_every steps to this CSV file")
     p.add_argument("--json", action="store_true", help="print one JSON object with the results on stdout")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    p.add_argument("--save-design", metavar="FILE.npz", default=None,
+                   help="save the goal, the settings, the seed and the light program that ran in one file "
+                        "(docs/design-files.md)")
+    add_design_argument(p, "replay a design file: its goal, settings and seed under its recorded light program, "
+                           "without the controller that first lit it (same result, bit for bit)")
     add_controller_argument(p)
     add_config_arguments(p)
     p.set_defaults(func=run_command)
@@ -58,11 +66,30 @@ def open_trace(path: str | None) -> tuple[IO[str] | None, Any]:
     return handle, SampleWriter(handle)
 
 
+def check_design_target(path: str | None) -> None:
+    """Refuse, before the run, a --save-design file that could not be written after it."""
+    if not path:
+        return
+    target = Path(path)
+    if target.is_dir():
+        raise UserError(f"--save-design {path}: that is a directory")
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UserError(f"--save-design {path}: cannot make its folder: {exc.strerror or exc}") from None
+    if not os.access(target.parent, os.W_OK) or (target.exists() and not os.access(target, os.W_OK)):
+        raise UserError(f"--save-design {path}: not writable")
+
+
 def run_trial(config: Config, *, progress: bool = False, on_sample=None, program: Any = None,
-              program_time_limit: float = watchdog.DEFAULT_LIMIT) -> tuple[Simulation, Sample, float]:
+              program_time_limit: float = watchdog.DEFAULT_LIMIT, shape: Any = "from-config",
+              recorder: designs.PatternRecorder | None = None) -> tuple[Simulation, Sample, float]:
     """Run ``config.steps`` steps in chunks of ``metrics_every``; returns the
-    simulation, its final sample and the wall time in seconds."""
-    sim = Simulation(config, program=program, program_time_limit=program_time_limit)
+    simulation, its final sample and the wall time in seconds. ``shape``: the goal's
+    vertices instead of ``config.shape``'s; ``recorder`` keeps the light program that runs."""
+    sim = Simulation(config, program=program, program_time_limit=program_time_limit, shape=shape)
+    if recorder is not None:
+        recorder.attach(sim)
     if on_sample:
         on_sample(sim.history[0])
     chunk = config.metrics_every
@@ -92,8 +119,16 @@ def run_trial(config: Config, *, progress: bool = False, on_sample=None, program
 def run_command(args: argparse.Namespace) -> int:
 
     watchdog.on_stuck = watchdog.exit_on_stuck("phototaxis run")
-    config = config_from_args(args)
-    spec, program = controller_from_args(args)
+    design = design_from_args(args)
+    if design is not None:  # its own goal, settings and seed, lit by its recorded patterns
+        config = design.config.replace(steps=design.steps_run)  # as long as it ran (a page's run is open-ended)
+        shape, spec, program = design.shape, f"design {args.design}", designs.Replay(design)
+        time_limit = 0.0  # the replay is ours, and asked every step: no watchdog around it
+    else:
+        config, shape = config_from_args(args), "from-config"
+        (spec, program), time_limit = controller_from_args(args), program_time_limit(args)
+    check_design_target(args.save_design)
+    recorder = designs.PatternRecorder() if args.save_design else None
     handle, writer = open_trace(args.trace)
     try:
         def write(sample: Sample) -> None:
@@ -102,8 +137,10 @@ def run_command(args: argparse.Namespace) -> int:
                 handle.flush()
 
         sim, final, wall = run_trial(config, progress=not args.no_progress, on_sample=write, program=program,
-                                     program_time_limit=program_time_limit(args))
-    except ProgramError as exc:
+                                     program_time_limit=time_limit, shape=shape, recorder=recorder)
+        if recorder is not None:
+            designs.save(recorder.design(sim, spec or paper_controller_name(config)), args.save_design)
+    except (ProgramError, designs.DesignError) as exc:
         raise UserError(str(exc)) from None
     finally:
         if handle:
@@ -127,6 +164,10 @@ def run_command(args: argparse.Namespace) -> int:
         "steps_per_second": round(sim.steps_done / wall, 1) if wall > 0 else None,
         "config": config.to_dict(),
     }
+    if design is not None:
+        result["replayed_exactly"] = sim.state_digest() == design.result.get("state_digest")
+    if args.save_design:
+        result["design"] = args.save_design
     if args.json:
         json.dump(result, sys.stdout)
         sys.stdout.write("\n")
@@ -137,4 +178,9 @@ def run_command(args: argparse.Namespace) -> int:
         print(f"  mean distance of the rest: {final.mean_outside_distance:.3f} m")
         print(f"  boxes escaped:             {final.boxes_escaped}")
         print(f"  outline:                   {sim.goal.family} ({sim.goal.family_reason})")
+        if design is not None:
+            said = "yes" if result["replayed_exactly"] else "NO: the final state differs from the recorded one"
+            print(f"  replayed exactly:          {said}")
+        if args.save_design:
+            print(f"  design saved to:           {args.save_design}")
     return 0

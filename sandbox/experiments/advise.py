@@ -8,7 +8,8 @@ on each: on a scaled outline none, flare, switch, no corners, switch with no
 corners, and chase; on an offset outline none and chase (flare, switch and
 no corners do nothing there). Each runs a few seeds of a short trial in
 worker processes, as a sweep's trials do; the table ranks them by the
-fraction of boxes in the goal, then by how far the rest lie.
+fraction of boxes in the goal, then by the stray boxes' mean distance to
+the goal.
 """
 
 from __future__ import annotations
@@ -169,12 +170,25 @@ def _as_completed(futures: dict, cancel: threading.Event | None) -> Iterator[cf.
 
 def table(results: list[Ranked], steps: int) -> str:
     """The ranked candidates as a Markdown table."""
-    rows = ["| rank | outline and strategies | boxes in the goal | rest lie (m) |", "| --- | --- | --- | --- |"]
+    rows = ["| rank | outline and strategies | boxes in the goal | stray boxes' mean distance to the goal (m) |",
+            "| --- | --- | --- | --- |"]
     for i, r in enumerate(results, 1):
         se = f" ± {r.fraction_se:.3f}" if not math.isnan(r.fraction_se) else ""
         rows.append(f"| {i} | {r.candidate.label} | {r.fraction:.3f}{se} | {r.distance:.2f} |")
     seeds = max((len(r.fractions) for r in results), default=0)
     return "\n".join(rows) + f"\n\n{seeds} seed(s) x {steps:,} steps each; mean ± standard error."
+
+
+def time_left(elapsed: float, done: int, total: int) -> str:
+    """What is left of the trials, in words, at the pace of those done so far (``elapsed`` seconds for
+    ``done`` of ``total``): 'about 2 min 10 s left'; before the first is done, no pace to go by."""
+    if done <= 0:
+        return "time left: known once the first trial is done"
+    seconds = round(elapsed / done * max(total - done, 0))
+    if seconds >= 60:
+        minutes, seconds = divmod(seconds, 60)
+        return f"about {minutes} min {seconds} s left" if minutes < 10 else f"about {minutes} min left"
+    return f"about {max(seconds, 1)} s left" if done < total else "finishing"
 
 
 # ------------------------------------------------------------------- CLI
@@ -200,6 +214,7 @@ def add_parser(sub) -> "argparse.ArgumentParser":
 def advise_command(args) -> int:
     import json
     import sys
+    import time
 
     from sandbox.cli import UserError, config_from_args
     from sandbox.shapes import shape_vertices
@@ -214,9 +229,13 @@ def advise_command(args) -> int:
     vertices = shape_vertices(config.shape)
     workers = args.workers or os.cpu_count() or 1
 
+    started = time.monotonic()
+
     def said(done: int, total: int) -> None:
         if not args.no_progress:
-            print(f"\radvise: {done}/{total} trials", end="" if done < total else "\n", file=sys.stderr, flush=True)
+            left = f", {time_left(time.monotonic() - started, done, total)}" if done < total else " "
+            print(f"\radvise: {done}/{total} trials{left}    ", end="" if done < total else "\n", file=sys.stderr,
+                  flush=True)
 
     try:
         results = advise(config, vertices, seeds=args.trials, steps=steps, workers=workers, progress=said)

@@ -79,6 +79,9 @@ class Simulation:
             shape = shape_vertices(self.config.shape if shape == "from-config" else shape)
         self.shape_vertices = None if shape is None else np.asarray(shape, dtype=float)
         self.history: list[metrics.Sample] = []
+        #: Told the start pattern at each reset (``start``) and every change of the lit pattern (``change``),
+        #: each with its step: a :class:`sandbox.model.design.PatternRecorder`, or None.
+        self.pattern_recorder: Any = None
         kernels.warm_up()
         self.reset(self.config.seed if seed is None else seed)
 
@@ -100,6 +103,8 @@ class Simulation:
         self.lights = LightField(cfg)
         self._centres = _read_only(light_centres(cfg))  # the pitch and arena only change with a new world
         self._start_program()
+        if self.pattern_recorder is not None:  # a new world: its light program starts afresh
+            self.pattern_recorder.start(0, self.lights.intensities)
         self._layout = kernels.sample_layout(self.lights)
         self._robot_params = kernels.robot_params(cfg)
         n = cfg.robots
@@ -243,9 +248,11 @@ class Simulation:
         if self.program is not self.controller:
             who = f"{type(self.program).__name__}.update"
             pattern = check_pattern(pattern, self.controller.intensities.shape, who)
-        self.lights.set_intensities(pattern)
+        changed = self.lights.set_intensities(pattern)
         self._pattern_sum = float(np.sum(pattern))
         self._pattern_seen = _read_only(self.lights.intensities)  # what observations show, until the next
+        if changed and self.pattern_recorder is not None:
+            self.pattern_recorder.change(self.steps_done, self.lights.intensities)
 
     def _observation(self) -> Observation:
         # Asked every step by the paper's controller: the pattern's view is made when it changes.

@@ -10,6 +10,7 @@ it falls below :data:`SLOWED` of it, the folder says so.
 from __future__ import annotations
 
 import threading
+import time
 from typing import Any, Callable
 
 import viser
@@ -34,6 +35,7 @@ class AdviceFolder:
         self._busy = False
         self._speed_before = 0.0
         self._progress = (0, 0)
+        self._started = 0.0  # when the running trials began (time.monotonic), for the time left
         self._shown = ""
 
     def build(self, snap: Snapshot) -> None:
@@ -75,7 +77,7 @@ class AdviceFolder:
         config, vertices = snap.world_config.replace(shape=snap.shape_name), snap.goal_vertices
         self._cancel.clear()
         self._speed_before = snap.steps_per_second
-        self._progress = (0, 0)
+        self._progress, self._started = (0, 0), time.monotonic()
         self.results, self.use_best.disabled = [], True
         self.start.disabled, self.cancel.visible, self.bar.visible, self.bar.value = True, True, True, 0.0
         self._busy = True
@@ -123,7 +125,8 @@ class AdviceFolder:
     def _text(self, snap: Snapshot | None = None) -> str:
         if self.running:
             done, total = self._progress
-            line = f"Running: {done} of {total or '...'} trials done."
+            left = advice.time_left(time.monotonic() - self._started, done, total)
+            line = f"Running: {done} of {total or '...'} trials done, {left}."
             speed = (snap or self.runner.latest).steps_per_second
             if self._speed_before > 0 and speed < SLOWED * self._speed_before:
                 line += (f" **The trials slow the live simulation to {100 * speed / self._speed_before:.0f} % of "
