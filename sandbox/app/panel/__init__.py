@@ -60,7 +60,7 @@ class Panel:
         self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark,
                                            reset=self.run.reset)
         self.shape.back_to_defaults = self.strategies.back_to_defaults
-        self.advice = AdviceFolder(gui, runner, use=self.strategies.use)
+        self.advice = AdviceFolder(gui, runner, use=self.strategies.use, post=post)
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
         self.lamp = LampFolder(gui, runner, on_change=self.metrics.mark)

@@ -25,8 +25,11 @@ SLOWED = 0.8
 
 class AdviceFolder:
     def __init__(self, gui: Any, runner: Any, use: Callable[[str, dict, Any], None], *, seeds: int = advice.SEEDS,
-                 steps: int = advice.STEPS):
+                 steps: int = advice.STEPS, post: Callable[..., None] = lambda fn, *args: fn(*args)):
+        """``post(fn, *args)``: run on the app's event thread (the trials run in a thread of their own and
+        report there)."""
         self.gui, self.runner = gui, runner
+        self._post = post
         self._use = use
         self.seeds, self.steps = seeds, steps
         self.results: list[advice.Ranked] = []
@@ -86,20 +89,30 @@ class AdviceFolder:
         self._thread.start()
 
     def _run(self, config: Any, vertices: Any, client: Any) -> None:
+        """The trials, in a thread of their own; what they change, they change on the event thread."""
         try:
-            self.results = advice.advise(config, vertices, seeds=self.seeds, steps=self.steps, workers=1,
-                                         progress=self._heard, cancel=self._cancel)
-            best = self.results[0].candidate.label if self.results else "nothing"
-            notify(client, "Advice ready", f"Best for this goal: {best}.", "green")
+            results = advice.advise(config, vertices, seeds=self.seeds, steps=self.steps, workers=1,
+                                    progress=lambda done, total: self._post(self._heard, done, total),
+                                    cancel=self._cancel)
         except advice.Cancelled:
-            notify(client, "Advice cancelled", "The trials were stopped.")
+            self._post(self._ended, [], client, ("Advice cancelled", "The trials were stopped.", "blue"))
         except Exception as exc:  # noqa: BLE001 - a goal the advice refuses, a worker that died: say so
-            notify_error(client, "Advice failed", str(exc))
-        finally:
-            self._busy = False
-            self.start.disabled, self.cancel.visible, self.bar.visible = False, False, False
-            self.use_best.disabled = not self.results
-            self._show(self._text())
+            self._post(self._ended, [], client, ("Advice failed", str(exc), "red"))
+        else:
+            best = results[0].candidate.label if results else "nothing"
+            self._post(self._ended, results, client, ("Advice ready", f"Best for this goal: {best}.", "green"))
+
+    def _ended(self, results: list, client: Any, notice: tuple[str, str, str]) -> None:
+        self.results = results
+        title, body, colour = notice
+        if colour == "red":
+            notify_error(client, title, body)
+        else:
+            notify(client, title, body, colour)
+        self._busy = False
+        self.start.disabled, self.cancel.visible, self.bar.visible = False, False, False
+        self.use_best.disabled = not self.results
+        self._show(self._text())
 
     def _heard(self, done: int, total: int) -> None:
         self._progress = (done, total)
