@@ -574,3 +574,28 @@ def test_explain_the_result_says_where_the_strays_lie_and_rings_them(app):
     wait_until(lambda: app.runner.latest.world_key != world, what="a new world")
     wait_until(lambda: not folder.highlight.value and not folder.rings.visible, what="the rings off")
     assert "press *Explain the result* again" in folder.text.content
+
+
+def test_run_to_the_end_skips_without_frames_then_explains(app):
+    """Issue 40, item 4: Run to the end steps to the step asked without frames (progress on the status
+    line, which every page shares), then the Result folder explains the final state."""
+    folder, result = app.panel.run, app.panel.result
+    client = FakeClient()
+    app.events.call(app.lockstep.set_playing, False)
+    start = paused_step(app.runner)
+    frames = app.runner.frames_published
+    app.events.call(folder.skip_ahead, start + 3000, client)
+    wait_until(lambda: app.runner.latest.step == start + 3000, what="the end step")
+    assert app.runner.frames_published - frames < 20, "no frame for each chunk of steps"
+    wait_until(lambda: result.highlight.value and f"at step {start + 3000:,}" in result.text.content,
+               what="the explanation")
+    wait_until(lambda: any(note[0] == "Run to the end" for note in client.notes), what="the notice")
+    assert not folder.cancel.visible and not folder.run_to_end.disabled
+    # Cancelled: the world stays where it got to.
+    app.events.call(folder.skip_ahead, 10**7, client)
+    wait_until(lambda: folder._skipping is not None and "without drawing" in folder.status.content,
+               what="the progress line")
+    app.runner.cancel_build()
+    wait_until(lambda: folder._skipping is None, what="the stop")
+    assert start + 3000 < app.runner.latest.step < 10**7
+    assert any(note[0] == "Stopped" for note in client.notes)

@@ -150,6 +150,15 @@ class RunTo(Command):
     step: int
 
 
+@dataclass(frozen=True)
+class SkipAhead(Command):
+    """Run to ``step`` without frames, as fast as the world steps headless (*Run to the end*), telling
+    the progress listeners how far it got; a :class:`CancelBuild` stops it where it is. Answers
+    (the step reached, whether it was cancelled)."""
+
+    step: int
+
+
 # ------------------------------------------------------------------ controls
 @dataclass(frozen=True)
 class Start(Control):
@@ -158,7 +167,8 @@ class Start(Control):
 
 @dataclass(frozen=True)
 class CancelBuild(Control):
-    """Stop a world being built by a reset (the old world goes on)."""
+    """Stop a world being built by a reset (the old world goes on), or a skip ahead (the world stays
+    where it got to)."""
 
 
 @dataclass(frozen=True)

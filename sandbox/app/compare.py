@@ -146,6 +146,39 @@ class Lockstep:
         for side in self.sides:
             side.set_speed(steps_per_frame)
 
+    def skip_ahead(self, step: int, *, on_done: Callable[[Any], None] | None = None,
+                   on_error: Callable[[BaseException], None] | None = None) -> None:
+        """Both worlds to ``step`` without frames (*Run to the end*); ``on_done`` hears the running world's
+        (step reached, cancelled) once both are there. A cancel stops both, maybe a few steps apart:
+        both then go on to the farther one's step."""
+        with self._lock:
+            partner = self.partner
+            if partner is None:
+                self.main.skip_ahead(step, on_done=on_done, on_error=on_error)
+                return
+            self._target = int(step)
+            for side in self.sides:
+                side.hold(self._target)
+        answers: dict[int, Any] = {}
+
+        def arrived(side: Any, result: Any) -> None:
+            answers[id(side)] = result
+            if len(answers) < 2:
+                return
+            reached = max(r[0] for r in answers.values())  # a cancel may stop them apart: on to the farther
+            with self._lock:
+                self._target = reached
+                for s in self.sides:
+                    s.hold(reached)
+                    if not self.main.playing:
+                        s.run_to(reached)
+            self._advance()
+            if on_done:
+                on_done(answers[id(self.main)])
+
+        for side in (self.main, partner):
+            side.skip_ahead(step, on_done=lambda result, side=side: arrived(side, result), on_error=on_error)
+
     def reset(self, seed: int | None = None, *, on_done: Callable[[Any], None] | None = None,
               on_error: Callable[[BaseException], None] | None = None) -> None:
         """Both worlds again (``seed`` None: each its own seed, the same one): the running world first,

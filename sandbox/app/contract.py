@@ -25,7 +25,7 @@ from typing import Any, Callable, Iterable
 
 from sandbox.app.commands import (Apply, CancelBuild, Command, Controls, Follow, Hold, Reset, RunnerStopped,
                                   RunTo, SetLamp, SetOutline, SetPlaying, SetProgram, SetShape, SetSpeed,
-                                  StepOnce, UpdateConfig, WantField, WorldSpec)
+                                  SkipAhead, StepOnce, UpdateConfig, WantField, WorldSpec)
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.metrics import Sample
 
@@ -232,8 +232,14 @@ class SimulationRunner(FramePublisher):
         """Playing, step no further than ``step`` (None: no limit)."""
         return self.submit(Hold(None if step is None else int(step)))
 
+    def skip_ahead(self, step: int, *, on_done: Callable[[Any], None] | None = None,
+                   on_error: Callable[[BaseException], None] | None = None) -> Future:
+        """Run to ``step`` without frames, as fast as headless (*Run to the end*); the progress listeners
+        hear the fraction done, :meth:`cancel_build` stops it. ``on_done`` gets (step reached, cancelled)."""
+        return self.ask(SkipAhead(int(step)), on_done, on_error)
+
     def cancel_build(self) -> Future:
-        """Stop a world being built by :meth:`reset` (safe from any thread)."""
+        """Stop a world being built by :meth:`reset`, or a :meth:`skip_ahead` (safe from any thread)."""
         return self.submit(CancelBuild())
 
     # ------------------------------------------------------------ read-outs

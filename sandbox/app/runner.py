@@ -23,8 +23,8 @@ from typing import TYPE_CHECKING, Any, Callable
 import numpy as np
 
 from sandbox.app.commands import (Apply, CancelBuild, Command, Controls, Reset, RunnerStopped, RunTo, SetLamp,
-                                  SetOutline, SetProgram, SetShape, Setting, Start, StepOnce, UpdateConfig,
-                                  WorldSpec)
+                                  SetOutline, SetProgram, SetShape, Setting, SkipAhead, Start, StepOnce,
+                                  UpdateConfig, WorldSpec)
 from sandbox.app.contract import Deliver, SimulationRunner, answer
 from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM, RobotView, Snapshot
 from sandbox.model import watchdog
@@ -83,6 +83,10 @@ def handles(kind: type) -> Callable:
         return method
 
     return register
+
+
+#: Steps between two progress reports of a skip ahead: 0.2-0.5 s of stepping; each report costs a message.
+SKIP_CHUNK = 2000
 
 
 class BuildCancelled(Exception):
@@ -310,6 +314,26 @@ class Runner(SimulationRunner):
     def _run_to(self, command: RunTo) -> None:
         if self.sim.steps_done < command.step:
             self._step(command.step - self.sim.steps_done)
+
+    @handles(SkipAhead)
+    def _skip_ahead(self, command: SkipAhead) -> tuple[int, bool]:
+        """Step in chunks of :data:`SKIP_CHUNK` with no snapshot between them (the chart's samples are kept),
+        telling the progress listeners after each; stop early when cancelled."""
+        self._cancel.clear()
+        start, target = self.sim.steps_done, int(command.step)
+        cancelled = False
+        try:
+            while self.sim.steps_done < target:
+                if self._cancel.is_set():
+                    cancelled = True
+                    break
+                self._step(min(SKIP_CHUNK, target - self.sim.steps_done))
+                self._record_series()
+                self._report_progress((self.sim.steps_done - start) / max(target - start, 1))
+        finally:
+            self._report_progress(None)
+        self._record_series(force=True)
+        return self.sim.steps_done, cancelled
 
     @handles(UpdateConfig)
     def _update_config(self, command: UpdateConfig) -> tuple[list[str], Config]:

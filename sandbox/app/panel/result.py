@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import viser
 
+from sandbox.app.panel.common import notify
 from sandbox.app.snapshot import Snapshot, case_name
 from sandbox.model.explain import PERFECT_PACKING, place_strays, strays_in_words
 
@@ -41,6 +42,7 @@ class ResultFolder:
         self.gui, self.runner, self.scene = gui, runner, scene
         self.rings: Any = None
         self._world: int | None = None  # the world explained; a new one turns the rings off
+        self._explain_at: tuple[int, int, Any] | None = None  # (world, step, page): explain the first frame there
 
     def build(self, snap: Snapshot) -> None:
         with self.gui.add_folder("Result", expand_by_default=False):
@@ -62,7 +64,23 @@ class ResultFolder:
         self._show_rings(snap)
         return text
 
+    def explain_at(self, step: int, client: Any = None) -> None:
+        """Explain the running world once a frame at ``step`` or later shows it (a run to the end's answer
+        comes before the frame that shows where it got to), and tell ``client`` the share."""
+        self._explain_at = (self.runner.latest.world_key, int(step), client)
+
     def update(self, snap: Snapshot) -> None:
+        if self._explain_at is not None:
+            world, step, client = self._explain_at
+            if snap.world_key != world:
+                self._explain_at = None
+            elif snap.step >= step:
+                self._explain_at = None
+                self.explain(snap)
+                notify(client, "Run to the end", f"Step {snap.step:,}: {100 * snap.sample.fraction_in_goal:.1f} % of "
+                       "the boxes in the goal. The Result folder says where the others lie (ringed in orange).",
+                       "green")
+                return
         if self.highlight.value and self._world is not None and snap.world_key != self._world:
             self.highlight.value = False  # a new world: the old explanation no longer holds
             self.text.content = "A new world started: press *Explain the result* again."

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from typing import Any, Callable
 
 import numpy as np
@@ -12,14 +13,22 @@ from sandbox.app.panel.framing import VIEWS, Framing
 from sandbox.app.runner import FASTEST
 from sandbox.app.snapshot import Snapshot
 
+#: Where *Run to the end* stops by default: the paper's runs are 100,000 steps.
+DEFAULT_END = 100_000
+MOST_END = 10_000_000
+
 
 class RunFolder:
     def __init__(self, gui: Any, runner: Any, lockstep: Any, show_field: Callable[[bool], None],
-                 after_reset: Callable[[Any], None], framing: Framing):
-        """Play, pause, step, reset and speed act on ``lockstep`` (the running world and, in compare mode,
-        the second one); the rest reads ``runner``."""
+                 after_reset: Callable[[Any], None], framing: Framing,
+                 after_skip: Callable[[int, Any], None] = lambda step, client: None):
+        """Play, pause, step, reset, speed and *Run to the end* act on ``lockstep`` (the running world and,
+        in compare mode, the second one); the rest reads ``runner``. ``after_skip(step, client)``: a run to
+        the end arrived at ``step`` (the panel explains the result once a frame shows it)."""
         self.gui, self.runner, self.lockstep, self.framing = gui, runner, lockstep, framing
-        self._show_field, self._after_reset = show_field, after_reset
+        self._show_field, self._after_reset, self._after_skip = show_field, after_reset, after_skip
+        #: A run to the end under way: (its target step, when it started), else None.
+        self._skipping: tuple[int, float] | None = None
 
     def build(self, snap: Snapshot) -> None:
         gui, runner = self.gui, self.runner
@@ -44,15 +53,22 @@ class RunFolder:
                                              hint="Frame your own view on where the boxes are built, the whole "
                                                   "arena, or for a projector: panel folded, legend on the floor "
                                                   "(key p). Other pages keep theirs")
+            self.end_step = gui.add_number("Run to step", DEFAULT_END, min=1, max=MOST_END, step=1000,
+                                           hint="Where Run to the end stops (100,000: the paper's runs)")
+            self.run_to_end = gui.add_button("Run to the end", icon=viser.Icon.PLAYER_SKIP_FORWARD,
+                                             hint="Run to that step without drawing, as fast as the machine "
+                                                  "steps, then show the result")
             self.status = gui.add_markdown(self._status_text(snap))
-            self.cancel = gui.add_button("Cancel building", icon=viser.Icon.X, visible=False,
-                                         hint="Stop building the new world; the current one goes on")
+            self.cancel = gui.add_button("Cancel", icon=viser.Icon.X, visible=False,
+                                         hint="Stop building the new world (the current one goes on), or stop "
+                                              "running to the end where it got to")
         runner.on_progress(self._building)
 
         @self.cancel.on_click
         def _(event: viser.GuiEvent) -> None:
             runner.cancel_build()
 
+        self.run_to_end.on_click(lambda event: self.skip_ahead(int(self.end_step.value), event.client))
         self.play.on_click(lambda event: self.toggle_play())
         self.step_button.on_click(lambda event: self.step())
         self.reset_same.on_click(lambda event: self._reset(None, event.client))
@@ -92,6 +108,33 @@ class RunFolder:
         self._sync_play_button()
         self.lockstep.step_once(self.runner.latest.world_config.update_every)
 
+    def skip_ahead(self, step: int, client: Any) -> None:
+        """*Run to the end*: the world (both, in compare mode) to ``step`` without frames, then the result."""
+        if self._skipping is not None:
+            notify_error(client, "Already running to the end", "Wait for it, or press Cancel.")
+            return
+        if step <= self.runner.latest.step:
+            notify(client, "Already there", f"The world is at step {self.runner.latest.step:,}, past {step:,}.")
+            return
+        self._skipping = (int(step), time.monotonic())
+        self.run_to_end.disabled = True
+        self._building(0.0)
+
+        def arrived(result: tuple[int, bool]) -> None:
+            self._skipping = None
+            self.run_to_end.disabled = False
+            reached, cancelled = result
+            if cancelled:
+                notify(client, "Stopped", f"Stopped at step {reached:,}, as asked.")
+            self._after_skip(reached, client)
+
+        def failed(exc: BaseException) -> None:
+            self._skipping = None
+            self.run_to_end.disabled = False
+            notify_error(client, "Run to the end stopped", str(exc))
+
+        self.lockstep.skip_ahead(step, on_done=arrived, on_error=failed)
+
     def frame(self, client: Any, view: str) -> None:
         """Lay one page out as ``view`` (the View buttons): its camera, and its panel and legend."""
         self.framing.choose(client, view)
@@ -118,11 +161,19 @@ class RunFolder:
         self.lockstep.reset(seed, on_done=done, on_error=failed)
 
     def _building(self, fraction: float | None) -> None:
-        """Progress of a world being built (None: done)."""
+        """Progress of a world being built, or of a run to the end (None: done). Every page sees it."""
         self._build_fraction = fraction
         self.cancel.visible = fraction is not None
-        if fraction is not None:
+        if fraction is None:
+            return
+        if self._skipping is None:
             self.status.content = f"**Building the world:** {100 * fraction:.0f} % of the bodies placed"
+            return
+        target, since = self._skipping
+        spent = time.monotonic() - since
+        left = f", about {spent * (1 - fraction) / fraction:,.0f} s left" if fraction > 0.02 else ""
+        self.status.content = (f"**Running to step {target:,} without drawing:** {100 * fraction:.0f} %{left}. "
+                               "The floor shows the result when it gets there.")
 
     def update(self, snap: Snapshot) -> None:
         if getattr(self, "_build_fraction", None) is not None:
