@@ -599,3 +599,43 @@ def test_run_to_the_end_skips_without_frames_then_explains(app):
     wait_until(lambda: folder._skipping is None, what="the stop")
     assert start + 3000 < app.runner.latest.step < 10**7
     assert any(note[0] == "Stopped" for note in client.notes)
+
+
+def test_a_live_worlds_design_downloads_and_plays_back_bit_for_bit():
+    """Issue 40, item 6: the page's design of a live world (its light program as it ran) replays it
+    exactly: the same state at the same step (serve --design plays it the same way)."""
+    from sandbox.app.commands import DesignOf, PlayDesign, SetLamp
+    from sandbox.app.runner import DESIGN_PROGRAM
+
+    live = Runner(SMALL.replace(chase=0.5), shape=None, seed=4)
+    live.advance(0)
+    live.submit(SetLamp((31.0, 30.0), 3.0))
+    live.advance(700)  # a live change of program half-way: the lamp, then back to the paper's lights
+    live.submit(SetLamp(None))
+    live.advance(500)
+    asked = live.submit(DesignOf())
+    live.advance(0)
+    design = asked.result(10)
+    assert design.steps_run == 1200 and len(design.steps) > 3
+    replay = Runner(Config(), shape=None, seed=0)
+    played = replay.submit(PlayDesign(design))
+    replay.advance(0)
+    assert played.result(10) == DESIGN_PROGRAM and replay.sim.config == design.config
+    replay.advance(1200)
+    assert replay.sim.state_digest() == live.sim.state_digest() == design.result["state_digest"]
+
+
+def test_download_design_sends_one_file_the_cli_can_load(app, tmp_path):
+    from sandbox.model.design import load
+
+    sent = []
+    client = FakeClient()
+    client.send_file_download = lambda name, data, save_immediately=False: sent.append((name, data))
+    wait_until(lambda: app.runner.latest.step > 100, what="a few steps")
+    app.events.call(app.panel.result.send_design, client)
+    wait_until(lambda: sent, what="the file")
+    name, data = sent[0]
+    assert name.startswith("circle-seed") and name.endswith("-design.npz")
+    (tmp_path / name).write_bytes(data)
+    design = load(tmp_path / name)
+    assert design.steps_run >= 100 and design.patterns.shape[1:] == (64, 64)

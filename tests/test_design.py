@@ -267,6 +267,7 @@ def test_serve_opens_the_designs_goal_settings_and_seed(star_design, monkeypatch
     design = load(star_design)
     assert out.returncode == 2 and opened["config"] == design.config and opened["config"].seed == 3
     assert np.array_equal(opened["shape"], design.shape) and opened["controller"] is None
+    assert opened["design"].steps_run == design.steps_run  # its recorded light program plays in the page
     compared = phototaxis("serve", "--design", str(star_design), "--compare", "star", "circle")
     assert compared.returncode == 2 and "leave out --compare" in compared.stderr
 

@@ -159,6 +159,19 @@ class SkipAhead(Command):
     step: int
 
 
+@dataclass(frozen=True)
+class DesignOf(Command):
+    """Answers the running world's design (sandbox.model.design): its goal, settings, seed and the
+    light program it has run so far, every pattern with the step it started."""
+
+
+@dataclass(frozen=True)
+class PlayDesign(Command):
+    """A new world from the design's settings, goal and seed, lit by its recorded light program."""
+
+    design: Any
+
+
 # ------------------------------------------------------------------ controls
 @dataclass(frozen=True)
 class Start(Control):

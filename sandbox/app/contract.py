@@ -25,7 +25,7 @@ from typing import Any, Callable, Iterable
 
 from sandbox.app.commands import (Apply, CancelBuild, Command, Controls, Follow, Hold, Reset, RunnerStopped,
                                   RunTo, SetLamp, SetOutline, SetPlaying, SetProgram, SetShape, SetSpeed,
-                                  SkipAhead, StepOnce, UpdateConfig, WantField, WorldSpec)
+                                  SkipAhead, StepOnce, UpdateConfig, WantField, WorldSpec, DesignOf, PlayDesign)
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.metrics import Sample
 
@@ -237,6 +237,16 @@ class SimulationRunner(FramePublisher):
         """Run to ``step`` without frames, as fast as headless (*Run to the end*); the progress listeners
         hear the fraction done, :meth:`cancel_build` stops it. ``on_done`` gets (step reached, cancelled)."""
         return self.ask(SkipAhead(int(step)), on_done, on_error)
+
+    def design(self, *, on_done: Callable[[Any], None] | None = None,
+               on_error: Callable[[BaseException], None] | None = None) -> Future:
+        """The running world's design (sandbox.model.design.Design): goal, settings, seed, light program."""
+        return self.ask(DesignOf(), on_done, on_error)
+
+    def play_design(self, design: Any, *, on_done: Callable[[Any], None] | None = None,
+                    on_error: Callable[[BaseException], None] | None = None) -> Future:
+        """A new world from ``design``, lit by its recorded light program (``serve --design``)."""
+        return self.ask(PlayDesign(design), on_done, on_error)
 
     def cancel_build(self) -> Future:
         """Stop a world being built by :meth:`reset`, or a :meth:`skip_ahead` (safe from any thread)."""

@@ -24,9 +24,13 @@ import numpy as np
 
 from sandbox.app.commands import (Apply, CancelBuild, Command, Controls, Reset, RunnerStopped, RunTo, SetLamp,
                                   SetOutline, SetProgram, SetShape, Setting, SkipAhead, Start, StepOnce,
-                                  UpdateConfig, WorldSpec)
+                                  UpdateConfig, WorldSpec, DesignOf, PlayDesign)
 from sandbox.app.contract import Deliver, SimulationRunner, answer
 from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM, RobotView, Snapshot
+from sandbox.model.design import PatternRecorder
+
+#: What lights the floor while a design's recorded light program plays (serve --design).
+DESIGN_PROGRAM = "the design's recorded light program"
 from sandbox.model import watchdog
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
@@ -85,6 +89,8 @@ def handles(kind: type) -> Callable:
     return register
 
 
+#: Patterns a live world's design keeps: about 50 controller cycles at the default settings, 25 MB at most.
+MOST_PATTERNS = 50_000
 #: Steps between two progress reports of a skip ahead: 0.2-0.5 s of stepping; each report costs a message.
 SKIP_CHUNK = 2000
 
@@ -110,6 +116,8 @@ class Runner(SimulationRunner):
 
         # A live run has no last step.
         self.sim = Simulation(config, seed=seed, shape=shape, open_ended=True, program_time_limit=program_time_limit)
+        #: The light program the world runs, kept for *Download design* (every change, up to a cap).
+        self._recorder = PatternRecorder(most=MOST_PATTERNS).attach(self.sim)
         SimulationRunner.__init__(self, Controls(playing=bool(playing), steps_per_frame=max(1, int(steps_per_frame))),
                                   deliver)
         self.fps = float(fps)
@@ -352,6 +360,10 @@ class Runner(SimulationRunner):
         finally:
             self._report_progress(None)
         self.pending = {}
+        self._new_world()
+
+    def _new_world(self) -> None:
+        """The simulation was rebuilt: a new goal, new speeds, a new world and its new series."""
         self._goal_key += 1
         self._step_times.clear()  # speeds are measured within one world
         with self._series_lock:  # a new world and its new series, together (see series_of_world)
@@ -397,6 +409,24 @@ class Runner(SimulationRunner):
             sim.use_program(lamp)
             self.program_name = LAMP_PROGRAM
         lamp.aim(*command.centre, command.radius, command.mode)
+        return self.program_name
+
+    @handles(DesignOf)
+    def _design_of(self, command: DesignOf) -> Any:
+        return self._recorder.design(self.sim, controller=self.program_name)
+
+    @handles(PlayDesign)
+    def _play_design(self, command: PlayDesign) -> str:
+        from sandbox.model.design import Replay
+
+        design = command.design
+        self.sim.set_shape(design.shape, name=design.config.shape)
+        self.sim.use_program(Replay(design))
+        self.pending = {}
+        self.sim.reset(design.seed, config=design.config)
+        self.shape_name = design.config.shape
+        self.program_name = DESIGN_PROGRAM
+        self._new_world()
         return self.program_name
 
     @handles(WorldSpec)

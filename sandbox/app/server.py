@@ -55,9 +55,10 @@ class App:
                  process: bool = True, keep_running: bool = False, idle_pause_seconds: float = IDLE_PAUSE_SECONDS,
                  controller: str | None = None, allow_programs: bool = False, access: Access | None = None,
                  program_time_limit: float = DEFAULT_LIMIT, whole_arena: bool = True,
-                 compare: tuple[Config, str] | None = None):
+                 compare: tuple[Config, str] | None = None, design: Any = None):
         """``compare``: start in compare mode against a world of this configuration (its goal from the
-        configuration), named so in the Compare folder (``serve --compare``)."""
+        configuration), named so in the Compare folder (``serve --compare``); ``design``: start on a design
+        (sandbox.model.design.Design), lit by its recorded light program (``serve --design``)."""
         if isinstance(shape, str) and shape == "from-config":
             shape = shape_vertices(config.shape)  # raises ShapeError before any server starts
         self.config = config
@@ -121,6 +122,7 @@ class App:
         self.server.on_client_connect(self._on_connect)
         self.server.on_client_disconnect(self._on_disconnect)
         self._controller = controller
+        self._design = design
         self.events.open()
 
     # ------------------------------------------------------------ set-up
@@ -238,6 +240,12 @@ class App:
             except Exception as exc:
                 self.stop()
                 raise UserError(str(exc)) from None
+        if self._design is not None:  # its recorded light program, from its seed, before anyone looks
+            try:
+                self.runner.play_design(self._design).result(60.0)
+            except Exception as exc:
+                self.stop()
+                raise UserError(f"the design cannot play: {exc}") from None
         if self._compare_with is not None:
             partner_config, label = self._compare_with
             try:
@@ -324,7 +332,7 @@ def serve_command(args: argparse.Namespace) -> int:
         check_viser()  # before anything starts: one line naming what this viser lacks
     except ViserMismatch as exc:
         raise UserError(str(exc)) from None
-    design = design_from_args(args)  # its goal, settings and seed, lit by the paper's controller
+    design = design_from_args(args)  # its goal, settings and seed, lit by its recorded light program
     config = design.config if design else config_from_args(args)
     compare = None
     if args.compare:
@@ -356,7 +364,7 @@ def serve_command(args: argparse.Namespace) -> int:
                   playing=not (args.paused or args.classroom), whole_arena=not args.classroom,
                   keep_running=args.keep_running, controller=controller_from_args(args)[0], access=access,
                   program_time_limit=program_time_limit(args), compare=compare,
-                  shape=design.shape if design else "from-config")
+                  shape=design.shape if design else "from-config", design=design)
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
 

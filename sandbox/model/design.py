@@ -109,7 +109,11 @@ class PatternRecorder:
     costs a comparison and 512 bytes (a 64 x 64 on / off pattern, packed bits) or a copy (other
     intensities); nothing is done between changes."""
 
-    def __init__(self) -> None:
+    def __init__(self, most: int | None = None) -> None:
+        """``most``: keep at most this many patterns (a live world runs for hours); past it the recorder
+        stops, and :meth:`design` says so."""
+        self.most = most
+        self.full = False
         self._steps: list[int] = []
         self._kept: list[tuple[bool, np.ndarray]] = []  # (on / off only?, packed bits or the intensities)
         self._shape: tuple[int, int] = (0, 0)
@@ -122,10 +126,14 @@ class PatternRecorder:
     def start(self, step: int, pattern: np.ndarray) -> None:
         """A light program starts here (a new world): forget what came before."""
         self._steps, self._kept, self._shape = [], [], tuple(pattern.shape)
+        self.full = False
         self.change(step, pattern)
 
     def change(self, step: int, pattern: np.ndarray) -> None:
         """The lit pattern became ``pattern`` at ``step`` (before that world step is computed)."""
+        if self.most is not None and len(self._steps) >= self.most:
+            self.full = True
+            return
         on_off = bool(((pattern == 0) | (pattern == 1)).all())
         self._steps.append(int(step))
         self._kept.append((on_off, np.packbits(pattern != 0) if on_off else np.array(pattern, dtype=np.float64)))
@@ -146,6 +154,9 @@ class PatternRecorder:
 
     def design(self, sim: Any, controller: str = "") -> Design:
         """The design of ``sim`` as it stands: its goal, settings, seed, steps and this light program."""
+        if self.full:
+            raise DesignError(f"this world's light program has more than {self.most:,} patterns, more than a design "
+                              "keeps from a live world: reset it, and download the design sooner")
         if not self._steps or self._steps[0] != 0:
             start = self._steps[0] if self._steps else "nowhere"
             raise DesignError(f"the light program was recorded from step {start}, not from the world's start: "
@@ -194,15 +205,20 @@ class Replay(LightProgram):
 
 
 # ----------------------------------------------------------------- the file
-def save(design: Design, path: str | os.PathLike) -> None:
-    """Write the design to ``path`` (a NumPy .npz archive, compressed), whole or not at all."""
-    path = Path(path)
+def file_bytes(design: Design) -> bytes:
+    """The design file's bytes (a NumPy .npz archive, compressed): what :func:`save` writes."""
     buffer = io.BytesIO()
     np.savez_compressed(buffer, header=np.array(json.dumps(design.header(), allow_nan=False)),
                         steps=np.asarray(design.steps, dtype=np.int64), patterns=design.patterns)
+    return buffer.getvalue()
+
+
+def save(design: Design, path: str | os.PathLike) -> None:
+    """Write the design to ``path`` (a NumPy .npz archive, compressed), whole or not at all."""
+    path = Path(path)
     part = path.with_name(path.name + ".part")
     try:
-        part.write_bytes(buffer.getvalue())
+        part.write_bytes(file_bytes(design))
         os.replace(part, path)
     except OSError as exc:
         part.unlink(missing_ok=True)

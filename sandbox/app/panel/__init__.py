@@ -68,7 +68,7 @@ class Panel:
         self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark, post=post)
         self.compare = CompareFolder(gui, runner, comparison, on_change=self.metrics.mark, post=post)
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
-        self.result = ResultFolder(gui, runner, server.scene)
+        self.result = ResultFolder(gui, runner, server.scene, post=post)
         self.record = RecordFolder(gui, server, runner)
         self.folders = (self.run, self.compare, self.shape, self.advice, self.strategies, self.program, self.lamp,
                         self.challenge, self.metrics, self.result, self.inspector, self.record, self.parameters)

@@ -9,18 +9,27 @@ the floor, following them, until it is turned off or a new world starts.
 
 from __future__ import annotations
 
-from typing import Any
+import re
+import threading
+from typing import Any, Callable
 
 import numpy as np
 import viser
 
-from sandbox.app.panel.common import notify
+from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.snapshot import Snapshot, case_name
+from sandbox.model.design import file_bytes
 from sandbox.model.explain import PERFECT_PACKING, place_strays, strays_in_words
 
 #: The rings around the boxes outside the goal: orange, under the boxes, wider than them.
 RING_COLOUR = (255, 140, 0)
 Z_RING = 0.015  # between the lit cells (0.01) and the boxes (0.02)
+
+
+def design_file_name(design: Any) -> str:
+    """e.g. ``star-seed3-step100000-design.npz``."""
+    shape = re.sub(r"[^A-Za-z0-9_-]+", "-", str(design.config.shape)).strip("-") or "goal"
+    return f"{shape}-seed{design.seed}-step{design.steps_run}-design.npz"
 
 
 def explanation(snap: Snapshot) -> str:
@@ -38,8 +47,9 @@ def explanation(snap: Snapshot) -> str:
 
 
 class ResultFolder:
-    def __init__(self, gui: Any, runner: Any, scene: Any):
-        self.gui, self.runner, self.scene = gui, runner, scene
+    def __init__(self, gui: Any, runner: Any, scene: Any, post: Callable[..., None] | None = None):
+        """``post(fn, *args)``: run on the app's event thread (a design file is packed aside)."""
+        self.gui, self.runner, self.scene, self._post = gui, runner, scene, post
         self.rings: Any = None
         self._world: int | None = None  # the world explained; a new one turns the rings off
         self._explain_at: tuple[int, int, Any] | None = None  # (world, step, page): explain the first frame there
@@ -52,7 +62,13 @@ class ResultFolder:
                                                            "them on the floor")
             self.highlight = self.gui.add_checkbox("Ring boxes outside the goal", False,
                                                    hint="Orange rings around the boxes outside the goal")
+            self.download_design = self.gui.add_button(
+                "Download design", icon=viser.Icon.DOWNLOAD,
+                hint="One file: the goal, the settings, the seed and the light program that ran, every light "
+                     "pattern with the step it started (phototaxis run --design FILE replays it; "
+                     "docs/design-files.md)")
         self.explain_button.on_click(lambda event: self.explain())
+        self.download_design.on_click(lambda event: self.send_design(event.client))
         self.highlight.on_update(lambda event: self._show_rings(self.runner.latest))
 
     def explain(self, snap: Snapshot | None = None) -> str:
@@ -63,6 +79,21 @@ class ResultFolder:
         self.highlight.value = True
         self._show_rings(snap)
         return text
+
+    def send_design(self, client: Any) -> None:
+        """The running world's design, as a file for ``client`` (packed in a thread of its own: a long
+        light program takes a while to compress)."""
+
+        def pack(design: Any) -> None:
+            def packed() -> None:
+                data = file_bytes(design)
+                deliver = self._post or (lambda fn, *args: fn(*args))
+                deliver(lambda: client.send_file_download(design_file_name(design), data, save_immediately=True))
+
+            threading.Thread(target=packed, name="design-packer", daemon=True).start()
+
+        self.runner.design(on_done=pack, on_error=lambda exc: notify_error(client, "No design to download",
+                                                                           str(exc)))
 
     def explain_at(self, step: int, client: Any = None) -> None:
         """Explain the running world once a frame at ``step`` or later shows it (a run to the end's answer
