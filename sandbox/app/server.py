@@ -23,6 +23,7 @@ from sandbox.app.access import WATCH, Access, is_loopback_host, is_shared
 from sandbox.app.compare import Comparison, Lockstep, side_config
 from sandbox.app.gate import start_server
 from sandbox.app.icons import read_icons_once
+from sandbox.app.memory import return_memory_after_pages_leave
 from sandbox.app.panel import Panel
 from sandbox.app.panel.framing import PRESENTER, WHOLE_ARENA
 from sandbox.app.process import ProcessRunner
@@ -111,6 +112,7 @@ class App:
         self._stopping = threading.Event()
         self.server.on_client_connect(self._on_connect)
         self.server.on_client_disconnect(self._on_disconnect)
+        self.memory = return_memory_after_pages_leave(self.server)  # what pages leave goes back to the system
         self._controller = controller
 
     # ------------------------------------------------------------ set-up
