@@ -53,10 +53,6 @@ def interruptible() -> Iterator[None]:
         _Requests.interruptible = False
 
 
-def stop_asked() -> bool:
-    return _Requests.asked
-
-
 @contextlib.contextmanager
 def _handling() -> Iterator[None]:
     found = {number: signal.signal(number, _ask_to_stop) for number in STOPPING}
