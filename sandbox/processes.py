@@ -12,7 +12,11 @@ every process is a fresh interpreter (spawn), as before.
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
+import os
+import signal
+from multiprocessing import forkserver
 from multiprocessing.context import BaseContext
 
 #: What the fork server imports before it forks anything (see sandbox/warm.py).
@@ -26,3 +30,20 @@ def simulation_context() -> BaseContext:
         context.set_forkserver_preload(PRELOAD)  # read when the fork server starts, with the first child
         return context
     return multiprocessing.get_context("spawn")
+
+
+def stop_fork_server() -> None:
+    """End this program's fork server, if it started one, and reap it: for a program that stops.
+
+    Left alone, it ends once every process holding its "alive" pipe has (this one and the forks it
+    made), but only after it has loaded the model if it was still doing so (seconds on a busy
+    machine): a server stopped during its start-up left it running that long, with the resource
+    tracker waiting for it. A later simulation process would start a new one.
+    """
+    server = forkserver._forkserver  # the stdlib's own, private: the only handle on its process id
+    pid = getattr(server, "_forkserver_pid", None)
+    if pid is None:
+        return
+    with contextlib.suppress(ProcessLookupError):
+        os.kill(pid, signal.SIGTERM)
+    server._stop()  # closes the alive pipe and reaps it

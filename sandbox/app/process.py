@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import itertools
 import logging
+import multiprocessing
 import os
 import pickle
 import queue
@@ -447,12 +448,12 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
     on_frame(runner.latest)
     runner.subscribe(on_frame)
     runner.on_progress(lambda fraction: send_message(("progress", fraction)))
-    parent = os.getppid()
+    app = multiprocessing.parent_process()  # the app's process (the fork server is only this one's parent)
     while True:
         try:
             message = commands.get(timeout=1.0)
         except queue.Empty:
-            if os.getppid() != parent or runner.stopped:  # orphaned, or the parent stopped listening
+            if not app.is_alive() or runner.stopped:  # the app is gone, or stopped listening
                 break
             continue
         if message is None:

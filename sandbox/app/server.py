@@ -13,7 +13,6 @@ import argparse
 import os
 import contextlib
 import io
-import signal
 import socket
 import threading
 import time
@@ -25,18 +24,21 @@ from sandbox.app.compare import Comparison, Lockstep, side_config
 from sandbox.app.events import EventQueue
 from sandbox.app.gate import start_server
 from sandbox.app.icons import read_icons_once
+from sandbox.app.memory import return_memory_after_pages_leave
 from sandbox.app.panel import Panel
 from sandbox.app.panel.framing import PRESENTER, WHOLE_ARENA
 from sandbox.app.process import ProcessRunner
 from sandbox.app.runner import Runner, wait_for
 from sandbox.app.scene import SceneView, configure_scene
 from sandbox.app.snapshot import Snapshot
+from sandbox.app.stopping import interruptible, term_stops
 from sandbox.app.viser_seam import ViserMismatch
 from sandbox.app.viser_seam import check as check_viser
 from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, add_design_argument,
                          config_from_args, controller_from_args, design_from_args, program_time_limit)
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.watchdog import DEFAULT_LIMIT
+from sandbox.processes import stop_fork_server
 from sandbox.shapes import shape_vertices
 
 TITLE = "Phototaxis sandbox"
@@ -121,6 +123,7 @@ class App:
         # viser replays these for pages that came while the app was built: through the queue, once each.
         self.server.on_client_connect(self._on_connect)
         self.server.on_client_disconnect(self._on_disconnect)
+        self.memory = return_memory_after_pages_leave(self.server, self.events.after)  # what pages leave goes back to the system
         self._controller = controller
         self._design = design
         self.events.open()
@@ -327,7 +330,30 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 
 def serve_command(args: argparse.Namespace) -> int:
+    """Serve until stopped. A SIGTERM or Ctrl+C at any moment, start-up included, stops what has
+    started so far (the app, its simulation process, the fork server) and exits with 0
+    (:mod:`sandbox.app.stopping`)."""
+    app = None
+    with term_stops():  # (the dispatcher has done so already: this is for other callers)
+        try:
+            app = _app_from_args(args)  # a stop asked for meanwhile is acted on once it is built
+            with interruptible():
+                app.start()
+                _print_address(app, args.host)
+                while True:
+                    time.sleep(3600)
+        except KeyboardInterrupt:
+            pass
+        finally:
+            if app is not None:
+                app.stop()
+                stop_fork_server()  # now: it may still be loading the model, and would only end after
+                print("stopped", flush=True)
+    return 0
 
+
+def _app_from_args(args: argparse.Namespace) -> App:
+    """The app the flags ask for (built, not started); a UserError for flags that cannot be served."""
     try:
         check_viser()  # before anything starts: one line naming what this viser lacks
     except ViserMismatch as exc:
@@ -360,37 +386,18 @@ def serve_command(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UserError(str(exc)) from None
     try:
-        app = App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
-                  playing=not (args.paused or args.classroom), whole_arena=not args.classroom,
-                  keep_running=args.keep_running, controller=controller_from_args(args)[0], access=access,
-                  program_time_limit=program_time_limit(args), compare=compare,
-                  shape=design.shape if design else "from-config", design=design)
+        return App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
+                   playing=not (args.paused or args.classroom), whole_arena=not args.classroom,
+                   keep_running=args.keep_running, controller=controller_from_args(args)[0], access=access,
+                   program_time_limit=program_time_limit(args), compare=compare,
+                   shape=design.shape if design else "from-config", design=design)
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
 
-    def stop_on_term(signum: int, frame: Any) -> None:
-        # Once: a second SIGTERM while the app stops (a service manager's impatience) is ignored
-        # instead of cutting the clean stop short.
-        signal.signal(signal.SIGTERM, signal.SIG_IGN)
-        raise KeyboardInterrupt
 
-    if threading.current_thread() is threading.main_thread():
-        # Before the app starts, so that a SIGTERM during start-up stops it cleanly too.
-        signal.signal(signal.SIGTERM, stop_on_term)
-    try:
-        app.start()
-        print(f"Phototaxis sandbox running at {app.url}  (Ctrl+C to stop)", flush=True)
-        if access.token and is_shared(args.host):
-            watchers = "may watch" if access.viewers == WATCH else "are refused"
-            print(f"  shared beyond this machine: pages without the token {watchers}; only pages with it control",
-                  flush=True)
-        while True:
-            time.sleep(3600)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        if threading.current_thread() is threading.main_thread():
-            signal.signal(signal.SIGTERM, signal.SIG_IGN)  # the stop below is not cut short either
-        app.stop()
-        print("stopped", flush=True)
-    return 0
+def _print_address(app: App, host: str) -> None:
+    print(f"Phototaxis sandbox running at {app.url}  (Ctrl+C to stop)", flush=True)
+    if app.access.token and is_shared(host):
+        watchers = "may watch" if app.access.viewers == WATCH else "are refused"
+        print(f"  shared beyond this machine: pages without the token {watchers}; only pages with it control",
+              flush=True)

@@ -20,9 +20,10 @@ import importlib
 import sys
 from typing import Sequence
 
-from sandbox.cli import Parser, UserError
-from sandbox.model.config import ConfigError
-from sandbox.shapes import ShapeError
+from sandbox.app.stopping import term_stops
+
+# sandbox.cli and the error classes are imported where used: they load numpy and shapely, a second and
+# more on a busy machine, and ``serve`` should take a SIGTERM as a clean stop before that (main).
 
 #: subcommand name -> module offering add_parser
 SUBCOMMANDS = {
@@ -37,6 +38,8 @@ SUBCOMMANDS = {
 
 
 def build_parser(only: str | None = None) -> Parser:
+    from sandbox.cli import Parser
+
     parser = Parser(
         prog="phototaxis",
         description="A light-powered phototaxic robot swarm that pushes boxes into a goal shape. "
@@ -54,6 +57,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not argv or argv[0].startswith("-") and argv[0] not in ("-h", "--help"):
         argv = ["serve", *argv]
     only = argv[0] if argv and argv[0] in SUBCOMMANDS else None
+    if only != "serve":
+        return _dispatch(argv, only)
+    with term_stops():  # the server stops cleanly at any moment, while its modules load too
+        return _dispatch(argv, only)
+
+
+def _dispatch(argv: list[str], only: str | None) -> int:
+    from sandbox.cli import UserError
+    from sandbox.model.config import ConfigError
+    from sandbox.shapes import ShapeError
+
     parser = build_parser(only)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
