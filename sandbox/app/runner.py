@@ -335,8 +335,10 @@ class Runner(SimulationRunner):
                 if self._cancel.is_set():
                     cancelled = True
                     break
-                self._step(min(SKIP_CHUNK, target - self.sim.steps_done))
-                self._record_series()
+                chunk_end = min(self.sim.steps_done + SKIP_CHUNK, target)
+                while self.sim.steps_done < chunk_end:  # the chart's samples as a live run takes them
+                    self._step(min(self.chart_every, chunk_end - self.sim.steps_done))
+                    self._record_series()
                 self._report_progress((self.sim.steps_done - start) / max(target - start, 1))
         finally:
             self._report_progress(None)

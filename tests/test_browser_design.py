@@ -1,0 +1,130 @@
+"""Issue 40 in the real page (headless Chromium): a goal used starts afresh, Edit this goal, Run to the
+end and its explanation, Download design. Waits are for conditions, never fixed sleeps.
+
+Set PHOTOTAXIS_SHOTS=DIR to keep a screenshot of every step there."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.browsing import BROWSER_MARKS, playwright_api  # noqa: F401 - skips without Playwright
+from tests.test_browser_app import choose
+from tests.waiting import wait_until
+
+pytestmark = BROWSER_MARKS
+
+SHOTS = os.environ.get("PHOTOTAXIS_SHOTS")
+
+
+@pytest.fixture(scope="module")
+def app():
+    from sandbox.app.server import App, free_port
+    from sandbox.model.config import Config
+
+    config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
+    app = App(config, port=free_port(), steps_per_frame=4, fps=15)
+    app.start()
+    yield app
+    app.stop()
+
+
+@pytest.fixture(scope="module")
+def page(app, browser):
+    context = browser.new_context(viewport={"width": 1600, "height": 1000})
+    page = context.new_page()
+    before = set(app.server.get_clients())
+    page.goto(f"http://127.0.0.1:{app.port}/")
+    page.get_by_text("Goal shape", exact=True).wait_for()
+    page.client = wait_until(lambda: next((c for k, c in app.server.get_clients().items() if k not in before),
+                                          None), what="the page to connect")
+    yield page
+    context.close()
+
+
+def shot(page, name: str) -> None:
+    if SHOTS:
+        Path(SHOTS).mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(Path(SHOTS) / f"design-{name}.png"))
+
+
+def open_folder(page, name: str) -> None:
+    folder = page.get_by_text(name, exact=True).first
+    folder.scroll_into_view_if_needed()
+    folder.click()
+
+
+def press(page, name: str) -> None:
+    button = page.get_by_role("button", name=name, exact=True)
+    button.scroll_into_view_if_needed()
+    button.click()
+
+
+def test_a_picked_goal_starts_afresh_even_paused(app, page):
+    """Item 1: the world starts again on the new goal at step 0 with the same seed, the strategies back
+    off, and the page's status line says so at once, paused as it is."""
+    runner = app.runner
+    wait_until(lambda: runner.latest.step > 100, what="the circle to run a while")
+    page.get_by_label("Switch to circle", exact=True).check()
+    wait_until(lambda: runner.latest.strategies["switch"] > 0, what="switch on (at the next controller update)")
+    press(page, "Pause")
+    wait_until(lambda: not runner.latest.playing, what="paused")
+    seed, world = runner.latest.seed, runner.latest.world_key
+    choose(page, "Shape", "square")
+    snap = wait_until(lambda: runner.latest.world_key != world and runner.latest, what="a new world on the square")
+    assert snap.shape_name == "square" and snap.seed == seed and snap.step == 0 and not snap.playing
+    assert snap.strategies["switch"] == 0
+    page.get_by_text("goal square", exact=False).first.wait_for()  # the Run folder's status, at once
+    page.get_by_text("Outline back to auto, strategies off", exact=False).first.wait_for()
+    wait_until(lambda: not page.get_by_label("Switch to circle", exact=True).is_checked(), what="switch unticked")
+    shot(page, "1-square-afresh")
+
+
+def test_edit_this_goal_brings_it_back_as_points(app, page):
+    """Item 2: the running goal comes back as numbered points."""
+    open_folder(page, "Draw")
+    press(page, "Edit this goal")
+    goal = app.runner.latest.goal_vertices
+    draw = app.panel.shape.draw
+    wait_until(lambda: len(draw.points) == len(goal), what="the goal as points")
+    np.testing.assert_allclose(draw.points, goal, atol=1e-3)
+    page.get_by_text(f"{len(goal)} points", exact=False).first.wait_for()
+    shot(page, "2-edit")
+
+
+def test_run_to_the_end_then_the_result_explained(app, page):
+    """Items 4 and 5: Run to the end reaches its step without frames, then the Result folder explains
+    where the boxes outside the goal lie and rings them."""
+    target = app.runner.latest.step + 2_000
+    field = page.get_by_label("Run to step", exact=True)
+    field.scroll_into_view_if_needed()
+    field.fill(str(target))
+    field.press("Tab")
+    wait_until(lambda: app.panel.run.end_step.value == target, what="the target step")
+    start = app.runner.latest.step
+    seen: list[int] = []
+    app.runner.subscribe(lambda snap: seen.append(snap.step))
+    press(page, "Run to the end")
+    wait_until(lambda: app.runner.latest.step >= target, what="the end step")
+    page.get_by_text("of the boxes in the goal", exact=False).first.wait_for()  # the notice
+    open_folder(page, "Result")
+    page.get_by_text("perfect packing", exact=False).first.wait_for()
+    assert app.panel.result.highlight.value and app.panel.result.rings is not None
+    assert not [step for step in seen if start < step < target], "no frame on the way: drawing nothing"
+    shot(page, "3-result")
+
+
+def test_download_design_saves_a_file_that_replays(app, page, tmp_path):
+    """Item 6: Download design gives one file; the command line loads it."""
+    from sandbox.model.design import load
+
+    with page.expect_download() as download:
+        press(page, "Download design")
+    path = tmp_path / download.value.suggested_filename
+    download.value.save_as(path)
+    design = load(path)
+    assert path.name.endswith("-design.npz") and design.config.shape == "square"
+    assert design.steps_run >= 2_000 and design.patterns.shape[1:] == (64, 64)
