@@ -326,8 +326,8 @@ class Runner(SimulationRunner):
     @handles(SkipAhead)
     def _skip_ahead(self, command: SkipAhead) -> tuple[int, bool]:
         """Step in chunks of :data:`SKIP_CHUNK` with no snapshot between them (the chart's samples are kept),
-        telling the progress listeners after each; stop early when cancelled."""
-        self._cancel.clear()
+        telling the progress listeners after each; stop early when cancelled (a cancel that came while
+        it waited its turn counts: the page's Cancel shows from the moment it is asked)."""
         start, target = self.sim.steps_done, int(command.step)
         cancelled = False
         try:
@@ -341,6 +341,7 @@ class Runner(SimulationRunner):
                     self._record_series()
                 self._report_progress((self.sim.steps_done - start) / max(target - start, 1))
         finally:
+            self._cancel.clear()
             self._report_progress(None)
         self._record_series(force=True)
         return self.sim.steps_done, cancelled
