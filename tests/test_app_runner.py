@@ -640,3 +640,22 @@ def test_download_design_sends_one_file_the_cli_can_load(app, tmp_path):
     (tmp_path / name).write_bytes(data)
     design = load(tmp_path / name)
     assert design.steps_run >= 100 and design.patterns.shape[1:] == (64, 64)
+
+
+def test_the_advisors_best_runs_afresh_to_the_end(app):
+    """Issue 40, item 4: Use the best and run to the end: the winner's strategies in a new world with the
+    same seed, run to the Run folder's end step without frames, then explained."""
+    from sandbox.experiments.advise import Candidate, Ranked
+
+    client = FakeClient()
+    advice, run = app.panel.advice, app.panel.run
+    best = Candidate("scaled", (("switch", 0.25),))
+    advice.results = [Ranked(best, [0.5], [0.1])]
+    app.events.call(setattr, run.end_step, "value", 1500)
+    world, seed = app.runner.latest.world_key, app.runner.latest.seed
+    assert app.events.call(advice.apply_best, client)  # as the button does: the best, then to the end
+    app.events.call(advice.run_to_the_end, client)
+    snap = wait_until(lambda: app.runner.latest.world_key != world and app.runner.latest.step >= 1500
+                      and app.runner.latest, what="a new world at the end step")
+    assert snap.seed == seed and snap.strategies["switch"] == 0.25
+    wait_until(lambda: "perfect packing" in app.panel.result.text.content, what="the result explained")

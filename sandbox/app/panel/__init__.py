@@ -62,6 +62,7 @@ class Panel:
                                            reset=self.run.reset)
         self.shape.back_to_defaults = self.strategies.back_to_defaults
         self.advice = AdviceFolder(gui, runner, use=self.strategies.use, post=post)
+        self.advice.run_to_the_end = self._afresh_to_the_end
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
         self.lamp = LampFolder(gui, runner, on_change=self.metrics.mark)
@@ -102,6 +103,10 @@ class Panel:
 
     def on_frame_drawn(self) -> None:
         self.record.on_frame_drawn()
+
+    def _afresh_to_the_end(self, client: Any) -> None:
+        """A new world with the same seed (the settings just given), run to the Run folder's end step."""
+        self.run.reset(client, on_done=lambda _: self.run.skip_ahead(int(self.run.end_step.value), client))
 
     def _after_reset(self, client: Any) -> None:
         self.inspector.stop()

@@ -31,6 +31,8 @@ class AdviceFolder:
         self.gui, self.runner = gui, runner
         self._post = post
         self._use = use
+        #: A new world (same seed) run to the end, the result explained (the panel wires the Run folder's).
+        self.run_to_the_end: Callable[[Any], None] = lambda client: None
         self.seeds, self.steps = seeds, steps
         self.results: list[advice.Ranked] = []
         self._cancel = threading.Event()
@@ -53,6 +55,10 @@ class AdviceFolder:
             self.status = gui.add_markdown("")
             self.use_best = gui.add_button("Use the best", icon=viser.Icon.CHECK, disabled=True,
                                            hint="Give the running goal the first-ranked outline and strategies")
+            self.best_to_the_end = gui.add_button(
+                "Use the best and run to the end", icon=viser.Icon.PLAYER_SKIP_FORWARD, disabled=True,
+                hint="The first-ranked outline and strategies in a new world (the same seed), run to the end "
+                     "without drawing (Run folder), then the result explained")
 
         @self.start.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -65,6 +71,11 @@ class AdviceFolder:
         @self.use_best.on_click
         def _(event: viser.GuiEvent) -> None:
             self.apply_best(event.client)
+
+        @self.best_to_the_end.on_click
+        def _(event: viser.GuiEvent) -> None:
+            if self.apply_best(event.client):
+                self.run_to_the_end(event.client)
 
     # ------------------------------------------------------------- running
     @property
@@ -81,7 +92,7 @@ class AdviceFolder:
         self._cancel.clear()
         self._speed_before = snap.steps_per_second
         self._progress, self._started = (0, 0), time.monotonic()
-        self.results, self.use_best.disabled = [], True
+        self.results, self.use_best.disabled, self.best_to_the_end.disabled = [], True, True
         self.start.disabled, self.cancel.visible, self.bar.visible, self.bar.value = True, True, True, 0.0
         self._busy = True
         self._thread = threading.Thread(target=self._run, args=(config, vertices, client), name="phototaxis-advice",
@@ -111,21 +122,22 @@ class AdviceFolder:
             notify(client, title, body, colour)
         self._busy = False
         self.start.disabled, self.cancel.visible, self.bar.visible = False, False, False
-        self.use_best.disabled = not self.results
+        self.use_best.disabled = self.best_to_the_end.disabled = not self.results
         self._show(self._text())
 
     def _heard(self, done: int, total: int) -> None:
         self._progress = (done, total)
         self.bar.value = 100.0 * done / max(total, 1)
 
-    def apply_best(self, client: Any) -> None:
-        """The first-ranked outline and strategies, on the running goal."""
+    def apply_best(self, client: Any) -> bool:
+        """The first-ranked outline and strategies, on the running goal (False: no advice yet)."""
         if not self.results:
             notify_error(client, "No advice yet", "Press Try them all first.")
-            return
+            return False
         best = self.results[0].candidate
         strategies = {name: 0.0 for name in ("flare", "switch", "no_corners", "chase")} | dict(best.strategies)
         self._use(best.outline, strategies, client)
+        return True
 
     # ------------------------------------------------------------ read-outs
     def update(self, snap: Snapshot) -> None:
