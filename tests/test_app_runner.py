@@ -482,7 +482,7 @@ def test_classroom_waits_at_step_0_and_lays_pages_out_for_a_projector():
     layout (its panel folded, the construction area framed with the legend on its floor); the View
     buttons lay one page out as the construction area, the whole arena or the presenter's."""
     from sandbox.app.panel.framing import CONSTRUCTION, PRESENTER, WHOLE_ARENA
-    from sandbox.app.scene import top_down_camera
+    from sandbox.app.scene import presenter_camera, top_down_camera
     from sandbox.app.server import App, free_port
     from tests.viser_wire import RawClient
 
@@ -504,6 +504,10 @@ def test_classroom_waits_at_step_0_and_lays_pages_out_for_a_projector():
         folded = "GuiSetPanelCollapsedMessage"
         assert folded in first.received_types(20.0, until=frozenset({folded}))  # its panel folds to its bar
         wait_until(lambda: a.client_id in framing._legends, what="the legend on the first page's floor")
+        # The page's camera is framed by the server's fit thread as the page reports its shape: wait
+        # for it to land, or the camera read below may still be the one the page said hello with.
+        _, look_at, _ = presenter_camera(app.runner.latest.world_config, a.camera.aspect, framing._legend_aspect)
+        wait_until(lambda: np.allclose(a.camera.look_at, look_at), what="the presenter's camera")
         left = framing._legends[a.client_id][0].position[0]
         assert left < SMALL.centre - SMALL.construction_size / 2  # beside the construction area
         presenter_x = a.camera.look_at[0]
@@ -522,6 +526,43 @@ def test_classroom_waits_at_step_0_and_lays_pages_out_for_a_projector():
             if page is not None:
                 page.close()
         app.stop()
+
+
+def test_a_page_is_framed_under_the_framings_lock(monkeypatch):
+    """The server's fit thread and a View button both frame a page: each reads the page's view and
+    moves its camera under the framing's lock, so the view chosen last is the one left. Stress run 5
+    of issue 39 saw the fit's presenter camera land after the whole arena chosen meanwhile."""
+    from types import SimpleNamespace
+
+    from sandbox.app.panel import framing as module
+
+    framing = module.Framing(SimpleNamespace(latest=SimpleNamespace(world_config=SMALL)), default=module.PRESENTER)
+
+    def lock_held() -> bool:
+        """Whether this thread holds the framing's lock: another thread cannot take it without waiting."""
+        free = []
+
+        def try_it() -> None:
+            free.append(framing._lock.acquire(blocking=False))
+            if free[0]:
+                framing._lock.release()
+
+        other = threading.Thread(target=try_it)
+        other.start()
+        other.join()
+        return not free[0]
+
+    moves = []
+    monkeypatch.setattr(module, "aim_camera", lambda client, *camera: moves.append(("presenter", lock_held())))
+    monkeypatch.setattr(module, "frame_arena", lambda client, config, whole, beside: moves.append(
+        ("whole arena" if whole else "construction area", lock_held())))
+    monkeypatch.setattr(module, "add_floor_legend", lambda *args, **kwargs: SimpleNamespace(remove=lambda: None))
+    panel = SimpleNamespace(minimize=lambda: None, expand=lambda: None)
+    page = SimpleNamespace(client_id=1, camera=SimpleNamespace(aspect=800 / 600), scene=None,
+                           gui=SimpleNamespace(main_panel=panel))
+    framing.apply(page)  # as the fit thread does
+    framing.choose(page, module.WHOLE_ARENA)  # the View button
+    assert moves == [("presenter", True), ("whole arena", True)]
 
 
 def test_parameter_tooltips_are_short_plain_words():

@@ -1,59 +1,34 @@
-"""The committed evaluation of the paper's seven cases (static/paper, 10 seeds x 100,000 steps with
-the default profile) against the authors' program and the paper's findings: the fidelity claim is
-checked by a test, not only written in a report."""
+"""The model, run, against the authors' program: a change to the model that moves what the robots do
+to the boxes fails here, not only in the golden digests (which fail on any change, meant or not).
+
+The circle case's first contraction (6,000 steps, one seed) is compared with the program's measured
+series: the fraction of boxes in the goal before the band reaches them (the boxes' start, the goal's
+size), halfway through the sweep (how fast the band and the robots on it move the boxes) and once it
+has swept them in. Measured with the default profile, seed 2 is within 0.012 of the program's means;
+the paper's light falloff (0.068), its photocells (0.051), its motor (0.17), no box skin (0.036),
+a slower or faster contraction (0.975 -> 0.98 or 0.97: 0.26, 0.20) or boxes twice as dense (0.047)
+each put it further than the tolerance.
+"""
 
 from __future__ import annotations
-
-import csv
-import statistics
-from pathlib import Path
 
 import pytest
 
 from sandbox.experiments import reference
+from sandbox.model.config import case_config
+from sandbox.model.simulation import Simulation
 
-ROOT = Path(__file__).resolve().parent.parent
-OURS = ROOT / "static" / "paper" / "final.csv"
-THEIRS = ROOT.parent / "shared" / "reference" / "push-cpp" / "final.csv"
-
-
-def case_means(path: Path) -> dict[str, tuple[float, float]]:
-    """case -> (mean final fraction in goal, mean final stray distance) over a final.csv's seeds."""
-    rows: dict[str, list[tuple[float, float]]] = {}
-    with path.open(newline="") as handle:
-        for row in csv.DictReader(handle):
-            rows.setdefault(row["case"], []).append((float(row["fraction_in_goal"]),
-                                                     float(row["mean_outside_distance"])))
-    return {case: (statistics.fmean(f for f, _ in values), statistics.fmean(d for _, d in values))
-            for case, values in rows.items()}
+SEED = 2
 
 
-def test_the_committed_evaluation_is_the_default_model_on_ten_seeds():
-    with OURS.open(newline="") as handle:
-        rows = list(csv.DictReader(handle))
-    assert {r["profile"] for r in rows} == {"authors-code"} and {r["steps"] for r in rows} == {"100000"}
-    assert {r["case"] for r in rows} == set(reference.PROGRAM)
-    assert all(sum(r["case"] == case for r in rows) == 10 for case in reference.PROGRAM)
-
-
-@pytest.mark.parametrize("case", list(reference.PROGRAM))
-def test_each_case_is_within_tolerance_of_the_authors_program(case):
-    fraction, distance = case_means(OURS)[case]
-    (program_fraction, _), (program_distance, _) = reference.PROGRAM[case]
-    assert abs(fraction - program_fraction) <= reference.FRACTION_TOLERANCE, (fraction, program_fraction)
-    assert abs(distance - program_distance) <= reference.DISTANCE_TOLERANCE, (distance, program_distance)
-
-
-@pytest.mark.parametrize("finding", reference.FINDINGS, ids=lambda f: f.text)
-def test_the_papers_findings_hold(finding):
-    value = finding.measure(case_means(OURS))
-    assert finding.holds(value), f"{finding.text}: {finding.shown.format(value)}"
-
-
-@pytest.mark.skipif(not THEIRS.exists(), reason="needs ../shared/reference beside the checkout")
-def test_the_programs_numbers_are_those_measured():
-    """reference.PROGRAM holds the means of the program's own runs (../shared/reference/push-cpp)."""
-    measured = case_means(THEIRS)
-    for case, ((fraction, _), (distance, _)) in reference.PROGRAM.items():
-        assert measured[case][0] == pytest.approx(fraction, abs=5e-4)
-        assert measured[case][1] == pytest.approx(distance, abs=5e-4)
+@pytest.mark.slow
+def test_the_circles_first_contraction_follows_the_authors_program():
+    steps = max(reference.PROGRAM_CIRCLE_FIRST_CONTRACTION)
+    sim = Simulation(case_config("circle"), seed=SEED)
+    sim.step(steps)
+    ours = {sample.step: sample.fraction_in_goal for sample in sim.history}
+    apart = {step: round(ours[step] - program, 4)
+             for step, program in reference.PROGRAM_CIRCLE_FIRST_CONTRACTION.items()}
+    assert all(abs(gap) <= reference.FRACTION_TOLERANCE for gap in apart.values()), (
+        f"the circle's fraction in goal minus the program's, by step: {apart} "
+        f"(at most {reference.FRACTION_TOLERANCE} allowed)")

@@ -110,6 +110,10 @@ def run(config: Config, seconds: float = 20.0, *, steps_per_frame: int = 25, fps
         deadline = time.time() + 30
         while page is not None and not app.server.get_clients() and time.time() < deadline:
             time.sleep(0.1)
+        # Measured once every viewer gets the scene (a loaded machine can take seconds to send the first
+        # bytes: a window that opens before would count nothing), then after the warm-up.
+        while any(v.received == 0 for v in others) and time.time() < deadline:
+            time.sleep(0.05)
         time.sleep(warmup)
         if page is not None:
             page.evaluate("""() => { window.__frames = 0; const tick = () => { window.__frames++;

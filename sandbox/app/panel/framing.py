@@ -63,17 +63,22 @@ class Framing:
             self.choose(client, CONSTRUCTION if self.of(client.client_id) == PRESENTER else PRESENTER)
 
     def apply(self, client: Any) -> None:
-        """Frame this viewer's camera for its view and window; the presenter's legend on its floor."""
+        """Frame this viewer's camera for its view and window; the presenter's legend on its floor.
+
+        All of it under the lock, from reading the view to moving the camera: the server's fit thread
+        applies a page's view as its window reports its shape, and a View button chosen meanwhile
+        must not be framed first and then overwritten by the view the fit read before it (seen on a
+        loaded machine: the whole arena chosen, the presenter's camera left)."""
         config = self.runner.latest.world_config
         aspect = float(getattr(client.camera, "aspect", 0.0) or 1.4)
-        view = self.of(client.client_id)
-        presenter = view == PRESENTER and aspect >= PHONE_ASPECT
         with self._lock:
+            view = self.of(client.client_id)
+            presenter = view == PRESENTER and aspect >= PHONE_ASPECT
             self._show_legend(client, config, presenter)
-        if not presenter:
-            frame_arena(client, config, whole=view == WHOLE_ARENA, beside=self.beside)
-            return
-        aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect, beside=self.beside))
+            if not presenter:
+                frame_arena(client, config, whole=view == WHOLE_ARENA, beside=self.beside)
+                return
+            aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect, beside=self.beside))
 
     def arrive(self, client: Any) -> None:
         """A page that connected: the default view's layout (its camera is framed as it reports its shape)."""
