@@ -56,6 +56,7 @@ from sandbox.app.inbox import Inbox
 from sandbox.app.pacing import PATH as DRAWN_PATH
 from sandbox.app.pacing import Pacer
 from sandbox.app.page_keys import KEYS_JS
+from sandbox.app.page_sends import SENDS_JS
 from sandbox.app.viser_seam import route_callbacks
 
 #: The viser release whose internals this module wraps (pinned in pyproject.toml and by a test).
@@ -196,8 +197,9 @@ class Gate:
 
         connection._handle_incoming_message = guarded
         # The page reports the frames it draws, so it gets no more than it draws (sandbox.app.pacing), and
-        # arrows pressed on a slider do not also turn its camera (sandbox.app.page_keys).
-        for source in (self.pacer.script_for(connection.client_id), KEYS_JS):
+        # arrows pressed on a slider do not also turn its camera (sandbox.app.page_keys), and a busy page's
+        # clicks are not held back and merged (sandbox.app.page_sends).
+        for source in (self.pacer.script_for(connection.client_id), KEYS_JS, SENDS_JS):
             connection.queue_message(RunJavascriptMessage(source=source))
 
     async def _on_disconnect(self, connection: Any) -> None:
