@@ -36,9 +36,9 @@ CLOSING_COLOUR = (150, 0, 150)  # the edge back to the first point: the outline 
 RUBBER_COLOUR, RUBBER_PIXELS = LINE_COLOUR, LINE_PIXELS  # the edge the release will add
 CROSSING_COLOUR, CROSSING_PIXELS = (255, 0, 0), 10.0
 HANDLE_COLOUR, FIRST_HANDLE_COLOUR, CROSSING_HANDLE_COLOUR = LINE_COLOUR, (255, 255, 255), (255, 0, 0)
-#: The selected point (Delete removes it): cyan, which neither the outline, the preview nor the live
-#: scene is, and larger, so it is seen at a glance.
-SELECTED_COLOUR, SELECTED_SCALE = (0, 230, 255), 1.8
+#: The selected point (Delete removes it): yellow, which neither the outline nor the preview is (the lit
+#: lights are, under the veil), and larger, so it is seen at a glance.
+SELECTED_COLOUR, SELECTED_SCALE = (255, 220, 0), 1.8
 #: The preview in the legend's colours for the goal and the lit outline, dashed: "not built yet".
 PREVIEW_GOAL_COLOUR, PREVIEW_BAND_COLOUR, PREVIEW_PIXELS = pal.GOAL_LINE, pal.LIGHT_LINE, 4.0
 DASH, GAP = 0.6, 0.4
