@@ -267,3 +267,29 @@ def test_a_dragged_handle_follows_every_update_without_a_new_preview(draw, monke
     assert previews == []  # no preview while dragging: it is computed again on release
     draw.vertex_drag(1, "end", (19.0, 7.5))
     assert previews == [1] and draw.view.preview_goal.visible and draw.selected == 1
+
+
+def test_clicks_that_come_while_the_event_thread_is_busy_all_land_in_order(app, draw, page, monkeypatch):
+    """Every click on the floor is an event on the app's one queue (sandbox.app.events): clicks that
+    come while it is busy wait their turn; none is merged with another or dropped."""
+    import threading
+
+    draw._set_drawing(True)
+    inbox, heard = app.gate.inbox, []
+    admit = inbox.admit
+    monkeypatch.setattr(inbox, "admit", lambda client_id, grant, message: (
+        heard.append(type(message).__name__ == "ScenePointerMessage") or admit(client_id, grant, message)))
+    busy, release = threading.Event(), threading.Event()
+    app.events.post(lambda: busy.set() or release.wait(20))
+    wait_until(busy.is_set, what="the event thread busy")
+    targets = [(20.0 + k, 40.0 + 2.0 * (k % 2)) for k in range(12)]  # a zigzag, 2.2 m between clicks
+    try:
+        for x, y in targets:  # straight down onto (x, y), as a page's click ray
+            page.send("ScenePointerMessage", event_type="click", ray_origin=(x, y, 10.0),
+                      ray_direction=(0.0, 0.0, -1.0), screen_pos=[[0.5, 0.5]], modifier=None)
+        wait_until(lambda: sum(heard) == len(targets), what="the clicks at the server")
+        assert draw.points == []  # none has run yet: the event thread is busy
+    finally:
+        release.set()
+    wait_until(lambda: len(draw.points) == len(targets), what="every click a point")
+    assert draw.points == targets
