@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.panel.draw import PICK_TEMPLATE, status_text
-from sandbox.app.draw_view import DIM_OPACITY  # noqa: I001 - after the panel, which imports it first
+from sandbox.app.draw_view import DIM_OPACITY, SELECTED_COLOUR  # noqa: I001 - after the panel, which imports it first
 from sandbox.model.geometry import signed_area
 from sandbox.shapes.templates import template_vertices
 from tests.test_security import connected, make_app, own_page, uuid_of, wait_until
@@ -182,3 +182,114 @@ def test_status_text_words():
                        red=["1-2", "3-4"])
     assert text.startswith("**Close and use is off**: the outline crosses") and "edges 1-2 and 3-4;" in text
     assert "edge 4-1;" in status_text(4, False, "touches", None, red=["4-1"])
+
+
+# ------------------------------------------------- insert, select, delete (issue 40, item 3)
+class Camera:
+    """A page's camera straight above (x, y), as the server hears it: enough to know a pixel's size."""
+
+    def __init__(self, x: float, y: float, height: float, metres_per_pixel: float, pixels: int = 1000):
+        self.position = np.array([x, y, height])
+        self.image_height = pixels
+        self.fov = 2.0 * np.arctan(metres_per_pixel * pixels / (2.0 * height))
+
+
+class Page:
+    def __init__(self, camera: Camera):
+        self.camera = camera
+
+
+def test_clicking_an_edge_inserts_a_point_between_its_ends(draw):
+    draw._set_drawing(True)
+    draw._change(SQUARE)
+    assert draw.click((12.1, 10.2))  # on edge 1-2 (within the handle's radius of it, without a page's camera)
+    assert draw.points == [(10.0, 10.0), (12.0, 10.0), (14.0, 10.0), (14.0, 14.0), (10.0, 14.0)]
+    assert draw.selected == 1 and "**Point 2 selected**" in draw.status.content  # the new point, named
+    assert not draw.delete.disabled
+    draw.click((10.2, 12.1))  # on the closing edge 5-1: the point goes last, as if added
+    assert draw.points[-1] == (10.0, 12.0) and len(draw.points) == 6 and draw.selected is None
+    draw.click((12.0, 12.0))  # inside, away from every edge: the next point
+    assert draw.points[-1] == (12.0, 12.0) and len(draw.points) == 7
+
+
+def test_an_edge_is_within_a_few_pixels_of_the_clicking_pages_view(draw):
+    draw._set_drawing(True)
+    draw.snap_on.value = False
+    draw._change(SQUARE)
+    far_out = Page(Camera(12.0, 12.0, 80.0, metres_per_pixel=0.1))  # the whole arena in view: 6 px = 0.6 m
+    assert draw.click((12.0, 10.5), far_out) and len(draw.points) == 5 and draw.points[1] == (12.0, 10.5)
+    zoomed = Page(Camera(12.0, 12.0, 10.0, metres_per_pixel=0.01))  # zoomed in: 6 px = 6 cm
+    assert draw.click((14.05, 12.0), zoomed) and draw.points[3] == (14.05, 12.0)  # 5 px off edge 3-4: on it
+    draw.click((14.3, 13.0), zoomed)  # 30 px off: not on it, a new last point
+    assert draw.points[-1] == (14.3, 13.0) and len(draw.points) == 7
+    draw.click((14.3, 13.05), far_out)  # 0.5 px from that point's handle: selects it, adds nothing
+    assert draw.selected == 6 and len(draw.points) == 7
+
+
+def test_a_click_on_a_handle_selects_its_point_and_delete_removes_it(app, draw, page):
+    draw._change(SQUARE)
+    assert draw.delete.disabled and all(command.disabled for command in draw.delete_keys)
+    assert draw.click((14.1, 13.9))  # point 3's handle, even when not drawing (the inspector does not get it)
+    assert draw.selected == 2 and draw.points == SQUARE  # selected, nothing added
+    handles = draw.view._handles
+    assert tuple(handles.batched_colors[2]) == SELECTED_COLOUR and handles.batched_scales[2] > handles.batched_scales[0]
+    assert not draw.delete.disabled and not any(command.disabled for command in draw.delete_keys)
+    page.click(uuid_of(draw.delete))  # the button, over the wire
+    wait_until(lambda: len(draw.points) == 3 and draw.delete.disabled, what="point 3 deleted")
+    assert draw.points == [SQUARE[0], SQUARE[1], SQUARE[3]] and draw.selected is None
+    # The Delete key (a command of viser's page): refused while nothing is selected, acts once a point is.
+    key = uuid_of(draw.delete_keys[0])
+    page.send("CommandTriggerMessage", uuid=key)
+    page.click(uuid_of(draw.delete))
+    page.received_types(0.3)
+    assert len(draw.points) == 3
+    draw.click(SQUARE[1])
+    page.send("CommandTriggerMessage", uuid=uuid_of(draw.delete_keys[1]))  # Backspace
+    wait_until(lambda: len(draw.points) == 2 and draw.delete.disabled, what="point 2 deleted by its key")
+    assert draw.points == [SQUARE[0], SQUARE[3]]
+
+
+def test_a_dragged_handle_follows_every_update_without_a_new_preview(draw, monkeypatch):
+    from sandbox.app.panel import draw as draw_module
+
+    draw._change(SQUARE)
+    previews = []
+    real = draw_module.preview_goal
+    monkeypatch.setattr(draw_module, "preview_goal", lambda *a: previews.append(1) or real(*a))
+    draw.vertex_drag(1, "start", (14.0, 10.0))
+    assert draw.selected == 1 and not draw.view.preview_goal.visible
+    for k in range(1, 6):
+        draw.vertex_drag(1, "update", (14.0 + k, 10.0 - k / 2))
+        expected = draw.points[1]
+        assert expected == (14.0 + k, round(2 * (10.0 - k / 2)) / 2)  # snapped
+        np.testing.assert_allclose(draw.view._handles.batched_positions[1, :2], expected)  # the handle follows
+        np.testing.assert_allclose(draw.view.line.points[0, 1, :2], expected)  # and the outline with it
+    assert previews == []  # no preview while dragging: it is computed again on release
+    draw.vertex_drag(1, "end", (19.0, 7.5))
+    assert previews == [1] and draw.view.preview_goal.visible and draw.selected == 1
+
+
+def test_clicks_that_come_while_the_event_thread_is_busy_all_land_in_order(app, draw, page, monkeypatch):
+    """Every click on the floor is an event on the app's one queue (sandbox.app.events): clicks that
+    come while it is busy wait their turn; none is merged with another or dropped."""
+    import threading
+
+    draw._set_drawing(True)
+    inbox, heard = app.gate.inbox, []
+    admit = inbox.admit
+    monkeypatch.setattr(inbox, "admit", lambda client_id, grant, message: (
+        heard.append(type(message).__name__ == "ScenePointerMessage") or admit(client_id, grant, message)))
+    busy, release = threading.Event(), threading.Event()
+    app.events.post(lambda: busy.set() or release.wait(20))
+    wait_until(busy.is_set, what="the event thread busy")
+    targets = [(20.0 + k, 40.0 + 2.0 * (k % 2)) for k in range(12)]  # a zigzag, 2.2 m between clicks
+    try:
+        for x, y in targets:  # straight down onto (x, y), as a page's click ray
+            page.send("ScenePointerMessage", event_type="click", ray_origin=(x, y, 10.0),
+                      ray_direction=(0.0, 0.0, -1.0), screen_pos=[[0.5, 0.5]], modifier=None)
+        wait_until(lambda: sum(heard) == len(targets), what="the clicks at the server")
+        assert draw.points == []  # none has run yet: the event thread is busy
+    finally:
+        release.set()
+    wait_until(lambda: len(draw.points) == len(targets), what="every click a point")
+    assert draw.points == targets

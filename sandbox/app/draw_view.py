@@ -36,6 +36,9 @@ CLOSING_COLOUR = (150, 0, 150)  # the edge back to the first point: the outline 
 RUBBER_COLOUR, RUBBER_PIXELS = LINE_COLOUR, LINE_PIXELS  # the edge the release will add
 CROSSING_COLOUR, CROSSING_PIXELS = (255, 0, 0), 10.0
 HANDLE_COLOUR, FIRST_HANDLE_COLOUR, CROSSING_HANDLE_COLOUR = LINE_COLOUR, (255, 255, 255), (255, 0, 0)
+#: The selected point (Delete removes it): yellow, which neither the outline nor the preview is (the lit
+#: lights are, under the veil), and larger, so it is seen at a glance.
+SELECTED_COLOUR, SELECTED_SCALE = (255, 220, 0), 1.8
 #: The preview in the legend's colours for the goal and the lit outline, dashed: "not built yet".
 PREVIEW_GOAL_COLOUR, PREVIEW_BAND_COLOUR, PREVIEW_PIXELS = pal.GOAL_LINE, pal.LIGHT_LINE, 4.0
 DASH, GAP = 0.6, 0.4
@@ -128,9 +131,10 @@ class DrawView:
                 self._handles = None
 
     # ----------------------------------------------------------- outline
-    def show(self, points: list, crossings: list[tuple[int, int]]) -> None:
+    def show(self, points: list, crossings: list[tuple[int, int]], selected: int | None = None) -> None:
         """The outline through ``points`` (closed back to the first in a dimmer line), its
-        numbered handles, and the edges of ``crossings`` (pairs of edge indices) in red."""
+        numbered handles (point ``selected`` larger and in cyan), and the edges of ``crossings``
+        (pairs of edge indices) in red."""
         with self._lock:
             pts = np.asarray(points, dtype=float).reshape(-1, 2)
             n = len(pts)
@@ -139,7 +143,7 @@ class DrawView:
             red = sorted({e for pair in crossings for e in pair})
             self._set(self.crossing, _segments([(pts[e], pts[(e + 1) % n]) for e in red], Z_LINE + 0.01)
                       if red else None)
-            self._show_handles(pts, red)
+            self._show_handles(pts, red, selected)
             self._show_labels(pts)
 
     def show_rubber(self, start, end) -> None:
@@ -167,13 +171,17 @@ class DrawView:
         if not handle.visible:
             handle.visible = True
 
-    def _show_handles(self, pts: np.ndarray, red: list[int]) -> None:
+    def _show_handles(self, pts: np.ndarray, red: list[int], selected: int | None = None) -> None:
         n = len(pts)
         colours = np.tile(np.array(HANDLE_COLOUR, np.uint8), (max(n, 1), 1))
+        scales = np.full(n, self.handle_radius, np.float32)
         if n:
             colours[0] = FIRST_HANDLE_COLOUR
             for e in red:  # both ends of a crossing edge
                 colours[[e, (e + 1) % n]] = CROSSING_HANDLE_COLOUR
+        if selected is not None and 0 <= selected < n:
+            colours[selected] = SELECTED_COLOUR
+            scales[selected] *= SELECTED_SCALE
         positions = np.zeros((n, 3), np.float32)
         positions[:, :2], positions[:, 2] = pts, Z_HANDLE
         if self._handles is not None and len(self._handles.batched_positions) != n:
@@ -184,12 +192,14 @@ class DrawView:
         if self._handles is None:
             self._handles = self.scene.add_batched_meshes_simple(
                 "/draw/handles", self._disc[0], self._disc[1], batched_wxyzs=np.tile([1.0, 0, 0, 0], (n, 1)),
-                batched_positions=positions, batched_scales=np.full(n, self.handle_radius, np.float32),
-                batched_colors=colours, lod="off", side="double", cast_shadow=False, receive_shadow=False)
+                batched_positions=positions, batched_scales=scales, batched_colors=colours, lod="off", side="double", cast_shadow=False, receive_shadow=False)
             self._handles.on_drag(self._vertex_drag)
             return
         self._handles.batched_positions = positions
-        self._handles.batched_colors = colours
+        if not np.array_equal(self._handles.batched_colors, colours):
+            self._handles.batched_colors = colours
+        if not np.array_equal(self._handles.batched_scales, scales):
+            self._handles.batched_scales = scales
 
     def _show_labels(self, pts: np.ndarray) -> None:
         """Vertex numbers beside the handles, up and right, where the line is least likely to run."""

@@ -1,6 +1,7 @@
 """The pure parts of drawing a goal by hand: snapping a point to a grid,
-reading typed or pasted coordinates, and finding the edges of an outline
-that cross or touch each other (to mark them while it is drawn).
+reading typed or pasted coordinates, finding the edges of an outline that
+cross or touch each other (to mark them while it is drawn), and which point
+or edge a click on the floor is on.
 
 Vertices are numbered from 1 and edge ``i`` runs from vertex ``i + 1`` to
 the next, the closing edge from the last vertex back to the first: the
@@ -45,6 +46,35 @@ def without_repeats(points) -> list[Point]:
     while len(kept) > 1 and kept[-1] == kept[0]:
         kept.pop()
     return kept
+
+
+# ---------------------------------------------------------------- picking
+def vertex_at(points, p, reach: float) -> int | None:
+    """The index of the point of ``points`` nearest ``p``, if it is within ``reach`` metres."""
+    v = np.asarray(points, dtype=float).reshape(-1, 2)
+    if not len(v):
+        return None
+    distances = np.hypot(*(v - np.asarray(p, float)).T)
+    k = int(np.argmin(distances))
+    return k if distances[k] <= reach else None
+
+
+def edge_at(points, p, reach: float) -> int | None:
+    """The edge of the outline through ``points`` nearest ``p``, if it passes within ``reach`` metres:
+    edge ``i`` runs from point ``i`` to the next, and from 3 points on the last edge closes back to
+    the first (as the floor shows it). A point inserted on edge ``i`` goes at index ``i + 1``."""
+    v = np.asarray(points, dtype=float).reshape(-1, 2)
+    n = len(v)
+    if n < 2:
+        return None
+    a = v if n >= 3 else v[:1]
+    b = np.roll(v, -1, axis=0) if n >= 3 else v[1:]
+    ab, ap = b - a, np.asarray(p, float) - a
+    lengths2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-18)
+    t = np.clip(np.einsum("ij,ij->i", ap, ab) / lengths2, 0.0, 1.0)
+    distances = np.hypot(*(ap - t[:, None] * ab).T)
+    k = int(np.argmin(distances))
+    return k if distances[k] <= reach else None
 
 
 # ---------------------------------------------------------------- typing

@@ -126,7 +126,8 @@ class Panel:
             return
         if self.comparison.runner is not None and point[0] > self.comparison.beside - 1.0:
             return  # on the compared world: the shape, the lamp and the inspector act on the running one
-        if not self.shape.click(point) and not self.lamp.click(point, event.client):
+        # The drawing picks its points and edges within a few of the clicking page's pixels: it needs the page.
+        if not self.shape.draw.click(point, event.client) and not self.lamp.click(point, event.client):
             self.inspector.click(point, event.client)
 
     def show_me(self, without: str, with_it: str, client: Any) -> None:

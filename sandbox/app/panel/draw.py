@@ -2,18 +2,21 @@
 
 The drawing is a list of points, numbered from 1 on the floor. Ways to change it:
 click the floor (or press, drag and release: a rubber band follows the pointer)
-while drawing; drag a numbered handle; pick a template; type or paste points;
-undo; clear. Points snap to a grid unless that is off. After every change the
+while drawing, or click an edge to insert a point on it; drag a numbered handle;
+click a handle to select its point and delete it (a button, or the Delete or
+Backspace key); pick a template; type or paste points; undo; clear. Points snap
+to a grid unless that is off. After every change the
 floor shows the outline, its crossing edges in red, and (when it is a usable
 polygon) a dashed preview of the goal at the size it will be built with the
 smallest and largest outlines of its light band; a line of text says what
 *Close and use* and the other buttons are waiting for.
 
-Callbacks come from viser's threads and event loop: every change holds the lock.
+Every callback runs on the app's event thread (:mod:`sandbox.app.events`), in order.
 """
 
 from __future__ import annotations
 
+import math
 import threading
 from typing import Any, Callable
 
@@ -28,10 +31,12 @@ from sandbox.shapes import ShapeError, validate_polygon
 from sandbox.shapes.drawing import (
     FORMATS_HINT,
     crossing_edges,
+    edge_at,
     edge_name,
     format_coordinates,
     parse_coordinates,
     snap,
+    vertex_at,
     without_repeats,
 )
 from sandbox.model.geometry import fit_to_area, signed_area
@@ -40,6 +45,11 @@ from sandbox.shapes.templates import placed, template_names, template_vertices
 SOURCE = "drawn shape"
 PICK_TEMPLATE = "(pick one)"
 DEFAULT_GRID = 0.5
+#: How far from a point's handle (on screen) a click still selects it, and from an edge inserts a point
+#: on it: a few pixels, whatever the zoom. Without the page's camera, the handle's own radius.
+PICK_PIXELS, EDGE_PIXELS = 8.0, 6.0
+#: The keys that delete the selected point (viser's names for them).
+DELETE_KEYS = ("delete", "backspace")
 Point = tuple[float, float]
 
 
@@ -48,10 +58,25 @@ def without_source(message: str) -> str:
     return message.split(": ", 1)[1] if message.startswith(SOURCE) else message
 
 
+def metres_per_pixel(client: Any, point: Point) -> float | None:
+    """How many metres of the floor at ``point`` one pixel of ``client``'s view spans (None before
+    the page has said its camera)."""
+    try:
+        camera = client.camera
+        position, fov, height = np.asarray(camera.position, float), float(camera.fov), int(camera.image_height)
+    except Exception:  # noqa: BLE001 - no page, or no camera yet: the caller falls back
+        return None
+    if height <= 0 or not 0 < fov < math.pi:
+        return None
+    distance = float(np.linalg.norm(position - (point[0], point[1], 0.0)))
+    return 2.0 * distance * math.tan(fov / 2.0) / height
+
+
 def status_text(n: int, drawing: bool, problem: str, preview: GoalPreview | None, typed_error: str = "",
-                red: list[str] = ()) -> str:
+                red: list[str] = (), selected: int | None = None) -> str:
     """The line under the buttons: what the disabled ones wait for, or what Close and use will build."""
-    place = f"Click the floor (or press, drag and release) to place point {n + 1}." if drawing else \
+    place = f"Click the floor (or press, drag and release) to place point {n + 1}; click an edge to insert " \
+        "one there." if drawing else \
         "Press **Start drawing** to click points on the floor, pick a **Template**, or type **Points**."
     if n == 0:
         text = f"**No points yet**: Undo, Clear and Close and use need some. {place}"
@@ -70,6 +95,8 @@ def status_text(n: int, drawing: bool, problem: str, preview: GoalPreview | None
                      "the smallest and largest outlines of its light band in orange. ")
             text += "".join(f"Note: {note}. " for note in preview.notes)
         text += "**Close and use** builds it."
+    if selected is not None and 0 <= selected < n:
+        text += f"\n\n**Point {selected + 1} selected**: drag it, or **Delete point** (the Delete key) removes it."
     if typed_error:
         text += f"\n\n**Points not applied**: {typed_error}"
     return text
@@ -88,6 +115,8 @@ class DrawFolder:
     def __init__(self, gui: Any, runner: Any, scene: Any, use: Callable[[Any, str, Any], None]):
         self.gui, self.runner, self._use = gui, runner, use
         self.points: list[Point] = []
+        #: The index of the selected point (its handle clicked or dragged; Delete removes it), or None.
+        self.selected: int | None = None
         self.drawing = False
         self._lock = threading.RLock()
         self._problem = ""
@@ -119,6 +148,9 @@ class DrawFolder:
             self.status = gui.add_markdown("")
             self.toggle = gui.add_button("Start drawing", icon=viser.Icon.PENCIL)
             self.undo = gui.add_button("Undo last point", icon=viser.Icon.ARROW_BACK_UP, disabled=True)
+            self.delete = gui.add_button("Delete point", icon=viser.Icon.BACKSPACE, disabled=True,
+                                         hint="Remove the selected point (click its handle to select it); "
+                                              "keys: Delete, Backspace")
             self.close = gui.add_button("Close and use", icon=viser.Icon.CHECK, disabled=True,
                                         hint="Start a new world on this goal (step 0, the same seed); the points "
                                              "stay here to tweak")
@@ -137,8 +169,15 @@ class DrawFolder:
                                         hint="Replace the drawing with the points typed above")
             self.show_preview = gui.add_checkbox("Preview final size", True,
                                                  hint="Dashed: the goal as it will be built and its light band")
+        # The Delete and Backspace keys (and viser's command palette, Ctrl+K): off while nothing is
+        # selected, so the page does not take those keys then (and the server refuses them).
+        self.delete_keys = [gui.add_command("Delete the selected point", hotkey=key, disabled=True,
+                                            description=f"key: {key} (Goal shape, Draw)") for key in DELETE_KEYS]
         self.toggle.on_click(lambda event: self._set_drawing(not self.drawing))
         self.undo.on_click(lambda event: self._change(self.points[:-1]))
+        self.delete.on_click(lambda event: self.delete_selected())
+        for command in self.delete_keys:
+            command.on_trigger(lambda event: self.delete_selected())
         self.clear.on_click(lambda event: self._change([]))
         self.close.on_click(self._close_and_use)
         self.edit.on_click(lambda event: self.edit_running_goal())
@@ -163,13 +202,32 @@ class DrawFolder:
     def step(self) -> float:
         return float(self.grid.value) if self.snap_on.value else 0.0
 
-    def click(self, point: Point) -> bool:
-        """A click on the floor: the next point while drawing (returns whether it was taken).
-        A click on an existing point only grabs it: it adds nothing."""
-        if not self.drawing:
-            return False
-        self._add(point)
-        return True
+    def click(self, point: Point, client: Any = None) -> bool:
+        """A click on the floor by ``client``'s page (returns whether the drawing took it). On a point's
+        handle: selects that point, drawing or not. While drawing, elsewhere: on an edge, inserts a
+        point there between its two ends; anywhere else, adds the next point."""
+        with self._lock:
+            scale = metres_per_pixel(client, point) if client is not None else None
+            radius = self.view.handle_radius
+            vertex = vertex_at(self.points, point, max(radius, PICK_PIXELS * scale) if scale else radius)
+            if vertex is not None:
+                self._select(vertex)
+                return True
+            if not self.drawing:
+                return False
+            edge = edge_at(self.points, point, EDGE_PIXELS * scale if scale else radius)
+            if edge is not None and edge + 1 < len(self.points):
+                self._insert(edge + 1, point)
+            else:  # on the closing edge, the new point goes last all the same
+                self._add(point)
+            return True
+
+    def delete_selected(self) -> None:
+        """Remove the selected point (the Delete point button, the Delete and Backspace keys)."""
+        with self._lock:
+            if self.selected is None or not 0 <= self.selected < len(self.points):
+                return
+            self._change([p for k, p in enumerate(self.points) if k != self.selected])
 
     def pad_drag(self, phase: str, point: Point | None) -> None:
         """Press, drag and release on the floor while drawing: the next point where released."""
@@ -193,19 +251,34 @@ class DrawFolder:
                 moved = snap(point, self.step)
                 if moved != self.points[index]:
                     self.points[index] = moved
-                    self.view.show(self.points, crossing_edges(self.points))
+                    self.view.show(self.points, crossing_edges(self.points), self.selected)
             if phase == "start":
+                self.selected = index  # the dragged point is the selected one: Delete removes it
                 self.view.show_preview(None)
+                self.view.show(self.points, crossing_edges(self.points), self.selected)
+                self._sync_controls()
             elif phase == "end":
-                self._change(without_repeats(self.points))
+                kept = without_repeats(self.points)
+                self._change(kept, selected=index if len(kept) == len(self.points) else None)
 
     # ---------------------------------------------------------- actions
     def _add(self, point: Point) -> None:
+        self._insert(len(self.points), point, select=False)
+
+    def _insert(self, index: int, point: Point, select: bool = True) -> None:
+        """A new point at ``index`` (snapped), selected unless it is the last one added by a click;
+        nothing where a point already is."""
         with self._lock:
             p = snap(point, self.step)
             if self._on_a_vertex(p) or self._on_a_vertex(point):
                 return
-            self._change([*self.points, p])
+            self._change([*self.points[:index], p, *self.points[index:]], selected=index if select else None)
+
+    def _select(self, index: int) -> None:
+        with self._lock:
+            self.selected = index
+            self.view.show(self.points, crossing_edges(self.points), self.selected)
+            self._sync_controls()
 
     def _on_a_vertex(self, p: Point) -> bool:
         r = self.view.handle_radius
@@ -270,10 +343,12 @@ class DrawFolder:
         fitted = fit_to_area(np.asarray(points, float), area, np.asarray(self._centre, float))
         return [(round(float(x), 3), round(float(y), 3)) for x, y in fitted]
 
-    def _change(self, points: list[Point]) -> None:
-        """The drawing is now ``points``: redraw, re-check, re-preview, and show them as text."""
+    def _change(self, points: list[Point], selected: int | None = None) -> None:
+        """The drawing is now ``points``, with point ``selected`` selected (None: none): redraw,
+        re-check, re-preview, and show them as text."""
         with self._lock:
             self.points = list(points)
+            self.selected = selected if selected is not None and 0 <= selected < len(self.points) else None
             self._typed_error = ""
             self._refresh()
             self.typed.value = format_coordinates(self.points)
@@ -285,7 +360,7 @@ class DrawFolder:
             n = len(self.points)
             self._red = [edge_name(e, n) for e in sorted({e for pair in crossings for e in pair})]
             self._problem, self._preview = self._check()
-            self.view.show(self.points, crossings)
+            self.view.show(self.points, crossings, self.selected)
             if self._preview is not None and self.show_preview.value:
                 self.view.show_preview(self._preview.goal, self._preview.smallest, self._preview.largest)
             else:
@@ -307,7 +382,12 @@ class DrawFolder:
         n = len(self.points)
         self.toggle.label = "Stop drawing" if self.drawing else "Start drawing"
         self.undo.disabled = self.clear.disabled = n == 0
+        nothing_selected = self.selected is None
+        if self.delete.disabled != nothing_selected:
+            self.delete.disabled = nothing_selected
+            for command in self.delete_keys:
+                command.disabled = nothing_selected
         self.close.disabled = n < 3 or bool(self._problem)
         self.grid.disabled = not self.snap_on.value
         self.status.content = status_text(n, self.drawing, self._problem, self._preview, self._typed_error,
-                                          self._red)
+                                          self._red, self.selected)
