@@ -194,10 +194,6 @@ class ShapeFolder:
 
         self.runner.set_shape(vertices, name, on_done=fitted, on_error=refused)
 
-    def click(self, point: tuple[float, float]) -> bool:
-        """A click on the floor: a new point while drawing (returns whether it was taken)."""
-        return self.draw.click(point)
-
     # What tests and the security checks reach for, from before the Draw folder had its own module.
     draw_points = property(lambda self: self.draw.points)
     drawing = property(lambda self: self.draw.drawing)
