@@ -128,3 +128,18 @@ def test_download_design_saves_a_file_that_replays(app, page, tmp_path):
     design = load(path)
     assert path.name.endswith("-design.npz") and design.config.shape == "square"
     assert design.steps_run >= 2_000 and design.patterns.shape[1:] == (64, 64)
+
+
+def test_the_advisor_speaks_plainly_and_says_the_time_left(app, page):
+    """Item 7: while it runs, the time left; then the ranking's plain column names."""
+    advice = app.panel.advice
+    advice.seeds, advice.steps = 1, 600  # short trials: the words, not the ranking, are under test
+    open_folder(page, "Which strategy builds my shape?")
+    press(page, "Try them all")
+    page.get_by_text("trials done", exact=False).first.wait_for()
+    wait_until(lambda: "left" in advice.status.content or not advice.running, what="the time left, once known")
+    wait_until(lambda: not advice.running, 300, what="the trials")
+    page.get_by_text("stray boxes' mean distance to the goal (m)", exact=False).first.wait_for()
+    page.get_by_text("boxes in the goal", exact=False).first.wait_for()
+    assert not page.get_by_role("button", name="Use the best and run to the end", exact=True).is_disabled()
+    shot(page, "4-advice")
