@@ -51,7 +51,6 @@ class Round:
     score: Gain | None = None
     at_step: int | None = None
     paper: Gain | None = None
-    client: Any = None
 
 
 def describe(gain: Gain) -> str:
@@ -100,7 +99,7 @@ class ChallengeFolder:
         player = " ".join(str(name).split())[:NAME_LENGTH] or "player"
         self._cancel_hint()
         with self._lock:
-            r = self.round = Round(player, int(self.round_steps), self.runner.latest.world_key, client=client)
+            r = self.round = Round(player, int(self.round_steps), self.runner.latest.world_key)
         self.status.content = f"**{player}**: building the round's world..."
         self.hint.content = ""
         self.lockstep.set_playing(False)
@@ -197,10 +196,9 @@ class ChallengeFolder:
             if self.round is not r or r.score is not None:
                 return
         self._hint_timer = None
+        # In the folder, under the round's status, not as a notice: a notice covers the floor (on a phone,
+        # the page's shortcut opened the drawer at this folder).
         self.hint.content = HINT
-        if r.client is not None:  # where the player looks: the floor, not the folder (a phone's drawer is shut)
-            r.client.add_notification("Nothing brought in yet", HINT.removeprefix("Hint: ")[:1].upper() + HINT.removeprefix("Hint: ")[1:],
-                                      color="yellow", auto_close_seconds=8.0)
 
     # ------------------------------------------------------------ the score
     def _score_the_paper(self, r: Round, spec: tuple) -> None:
