@@ -163,6 +163,9 @@ def test_the_challenge_is_one_tap_away_and_hints_on_a_phone(app, phone, tmp_path
     page.locator(f"#{SHORTCUTS_ID}").get_by_role("button", name="Challenge", exact=True).tap()
     start = page.get_by_role("button", name="Start a round", exact=True)
     wait_until(lambda: start.is_visible() and start.bounding_box()["y"] < PHONE["height"], what="the folder in view")
+    top = page.evaluate("""() => [...document.querySelectorAll('.mantine-Paper-root')].find(
+        (p) => p.style.position === 'fixed' && p.style.bottom === '0px').getBoundingClientRect().top""")
+    assert top >= PHONE["width"] - 4, top  # the open drawer stops below the arena (framed as wide as the page)
     start.tap()
     wait_until(lambda: folder.round is not None and folder.round.world is not None, what="the round's world")
     r = folder.round

@@ -30,6 +30,8 @@ def test_the_lamp_starts_on_the_densest_group_of_robots_not_their_centroid():
     x, y = lamp_start(robots, radius=2.5)
     assert np.hypot(x - 50, y - 12) < 1.5, (x, y)
     assert any(np.allclose((x, y), r) for r in robots)  # on a robot
+    many = np.vstack([rng.uniform(0, 64, (50_000, 2)), np.array([8.0, 56.0]) + rng.uniform(-1, 1, (5_000, 2))])
+    assert np.hypot(*(np.array(lamp_start(many, 2.5)) - [8, 56])) < 1.5  # a large swarm: sampled, in time
     with pytest.raises(ValueError, match="no robots"):
         lamp_start(np.zeros((0, 2)), 2.5)
 

@@ -13,7 +13,8 @@ top third of the screen until closed.
 
 - **A drawer.** On a narrow page the sheet spans the width and starts
   closed (its own handle, "Phototaxis sandbox", opens and closes it), so
-  the arena is whole; the framing already fits the arena to the width.
+  the arena is whole; the framing already fits the arena to the width,
+  at the page's top, and the open drawer stops below it.
 - **One tap away.** Two buttons over the floor's lower left, under the
   open drawer: *Be the light* presses the panel's own button (its label
   follows the panel's: *Give the light back*), *Challenge* opens the
@@ -70,6 +71,9 @@ LAYOUT_JS = """(() => {
     if (!paper || drawers.has(paper) || !handleOf(paper)) return;
     drawers.add(paper);
     paper.style.width = "100%%";
+    // Open, it ends where the arena begins: a phone frames the arena as wide as the page at its top
+    // (sandbox.app.scene.top_down_camera), so the floor's square is 100vw tall. viser's sheet took 60 %%.
+    paper.style.maxHeight = "max(40vh, calc(100vh - 100vw - 4px))";
     for (const box of paper.querySelectorAll("div[style*='width: 20em']")) box.style.width = "100%%";  // its contents
     if (sheetOpen(paper)) handleOf(paper).click();  // closed: the arena whole until the drawer is opened
   };

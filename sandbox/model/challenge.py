@@ -24,6 +24,8 @@ from sandbox.model.config import Config
 ROUND_STEPS = 20_000
 #: The seed every round starts from (the paper's evaluations' first).
 ROUND_SEED = 0
+#: Robots :func:`lamp_start` compares pairwise, at most (1,000: 8 MB and a few milliseconds).
+MOST_ROBOTS_COMPARED = 1000
 
 
 @dataclass(frozen=True)
@@ -53,7 +55,10 @@ def lamp_start(robot_positions: np.ndarray, radius: float) -> tuple[float, float
     xy = np.asarray(robot_positions, dtype=float).reshape(-1, 2)
     if not len(xy):
         raise ValueError("no robots to light")
-    near = (np.hypot(*(xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1)) <= radius).sum(axis=1)
+    # Every pair is n^2: a large swarm is judged by an even sample of it (the densest group stays densest).
+    xy = xy[np.linspace(0, len(xy) - 1, min(len(xy), MOST_ROBOTS_COMPARED)).astype(int)]
+    d2 = (xy[:, None, 0] - xy[None, :, 0]) ** 2 + (xy[:, None, 1] - xy[None, :, 1]) ** 2
+    near = (d2 <= radius * radius).sum(axis=1)
     crowded = np.flatnonzero(near == near.max())
     middle = xy.mean(axis=0)
     best = crowded[np.argmin(np.hypot(*(xy[crowded] - middle).T))]
