@@ -58,8 +58,8 @@ def test_the_followed_robot_is_drawn_inside_its_ring_in_the_same_message(app):
     ring = np.asarray(viewer.ring.points, float)[:, 0, :2]
     centre = ring.mean(axis=0)
     radius = np.hypot(*(ring - centre).T).min()
-    disc = np.asarray(viewer.disc.points, float)
-    assert np.hypot(*(disc[0, :2] - centre)) < 0.05  # the disc at the ring's centre
-    assert np.hypot(*(disc[1, :2] - disc[0, :2])) + viewer.disc.point_size * 0.3 < radius  # its heading dot too
-    assert viewer.disc.point_size < radius  # and the disc within the ring
+    disc, heading = np.asarray(viewer.disc.points, float)[0], np.asarray(viewer.heading.points, float)[0]
+    assert np.hypot(*(disc[:2] - centre)) < 0.05  # the disc at the ring's centre
+    assert viewer.disc.point_size < radius  # and within it (a point's size is its radius)
+    assert np.hypot(*(heading[:2] - disc[:2])) + viewer.heading.point_size < viewer.disc.point_size  # its heading dot
     page.close()

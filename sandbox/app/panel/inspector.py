@@ -44,6 +44,7 @@ class Viewer:
     follows: Any
     ring: Any
     disc: Any
+    heading: Any
     sensors: Any
     robot: int | None = None
 
@@ -89,16 +90,18 @@ class InspectorFolder:
             empty = np.zeros((1, 2, 3), np.float32)
             ring = client.scene.add_line_segments("/inspect/ring", empty, pal.SELECTED, thickness=0.08, visible=False)
             radius = self.runner.latest.world_config.robot_radius
-            # Its disc and heading dot as the shared scene draws them (sizes are radii), over it.
-            disc = client.scene.add_point_cloud("/inspect/robot", np.zeros((2, 3), np.float32),
-                                                np.array([pal.SELECTED, pal.HEADING_MARK], np.uint8),
+            # Its disc and heading dot as the shared scene draws them (sizes are radii), over them.
+            disc = client.scene.add_point_cloud("/inspect/robot", np.zeros((1, 3), np.float32), pal.SELECTED,
                                                 point_size=radius, point_shape="circle", point_shading="flat",
                                                 visible=False)
+            heading = client.scene.add_point_cloud("/inspect/heading", np.zeros((1, 3), np.float32),
+                                                   pal.HEADING_MARK, point_size=0.3 * radius, point_shape="circle",
+                                                   point_shading="flat", visible=False)
             sensors = client.scene.add_point_cloud("/inspect/sensors", np.zeros((4, 3), np.float32),
                                                    pal.SENSOR_COLOURS, point_size=0.09, point_shape="circle",
                                                    visible=False)
             self.viewers[client.client_id] = Viewer(client, status, text, charge_bar, stop, follows, ring, disc,
-                                                    sensors)
+                                                    heading, sensors)
 
         @stop.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -174,7 +177,7 @@ class InspectorFolder:
             viewer.text.content = ""
             viewer.charge_bar.visible = False
             viewer.stop.disabled = True
-            viewer.ring.visible = viewer.disc.visible = viewer.sensors.visible = False
+            viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = viewer.sensors.visible = False
             if client_id in self.followers:
                 self.followers.discard(client_id)
                 self._reframe(viewer.client)
@@ -213,7 +216,8 @@ class InspectorFolder:
                 robot = snap.robot(viewer.robot)
                 if robot is None:  # following nothing, or a robot this world does not have (yet)
                     if viewer.ring.visible:
-                        viewer.ring.visible = viewer.disc.visible = viewer.sensors.visible = False
+                        viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = False
+                        viewer.sensors.visible = False
                     continue
                 cfg = snap.world_config
                 a = np.linspace(0, 2 * np.pi, 33)
@@ -222,22 +226,23 @@ class InspectorFolder:
                 pts[:, :2], pts[:, 2] = robot.sensor_points, Z_TOP
                 with viewer.client.atomic():
                     viewer.ring.points = pal.closed_segments(ring[:-1], Z_TOP)
-                    viewer.disc.points, viewer.disc.colors = self._disc(robot, cfg)
+                    disc, heading, colour = self._disc(robot, cfg)
+                    viewer.disc.points, viewer.disc.colors, viewer.heading.points = disc, colour, heading
                     viewer.sensors.points = pts
                     if not viewer.ring.visible:
-                        viewer.ring.visible = viewer.disc.visible = viewer.sensors.visible = True
+                        viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = True
+                        viewer.sensors.visible = True
 
     @staticmethod
-    def _disc(robot: RobotView, cfg: Any) -> tuple[np.ndarray, np.ndarray]:
-        """The followed robot's disc (in its charge's colour) and heading dot, as the shared scene draws
-        them, just under the ring: the points and their colours."""
+    def _disc(robot: RobotView, cfg: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The followed robot's disc and heading dot, as the shared scene draws them, just under the
+        ring: the disc's point, the dot's, and the disc's colour (its charge's)."""
         ahead = 0.6 * cfg.robot_radius * np.array([np.cos(robot.heading), np.sin(robot.heading)])
-        pts = np.zeros((2, 3), np.float32)
-        pts[0, :2], pts[1, :2] = robot.position, robot.position + ahead
-        pts[:, 2] = Z_TOP - 0.01, Z_TOP - 0.005
-        colours = np.array([pal.robot_colours(np.array([robot.charge]), cfg.capacity)[0], pal.HEADING_MARK],
-                           np.uint8)
-        return pts, colours
+        disc, heading = np.zeros((1, 3), np.float32), np.zeros((1, 3), np.float32)
+        disc[0, :2], disc[0, 2] = robot.position, Z_TOP - 0.01
+        heading[0, :2], heading[0, 2] = robot.position + ahead, Z_TOP - 0.005
+        colour = pal.robot_colours(np.array([robot.charge]), cfg.capacity).astype(np.uint8)
+        return disc, heading, colour
 
     @staticmethod
     def _move_camera(client: Any, position: np.ndarray) -> None:
