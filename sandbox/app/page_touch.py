@@ -19,7 +19,9 @@ turns a finger into the mouse viser listens to, on the scene's canvas only:
   finger is the lamp's: its events stop before viser's camera hears them,
   and the finger's path becomes clicks, one every :data:`DRAG_PX` pixels
   (viser sends at most one click per 20 ms), so a drag leads the lamp, or
-  paints lights with the brush. Two fingers still move the camera.
+  paints lights with the brush. The view does not move by touch meanwhile
+  (a second finger is left to viser's camera, which never heard the
+  first): *Give the light back* frees it.
 
 The server decides as for a mouse click: what a click does, and whether this
 page may do it (a watching page's clicks are refused).
