@@ -475,14 +475,21 @@ def test_parameters_and_inspector(app, page):
     page.get_by_text("front-left", exact=True).wait_for()
     page.get_by_text("dark grey", exact=True).wait_for()  # which dot on the floor is which
     page.get_by_text("Commanded", exact=True).wait_for()
-    click_button(page, "Camera follows (this viewer)")
     client = next(iter(app.server.get_clients().values()))
 
     def camera_on_robot():
         robot = app.runner.latest.robot(app.panel.inspector.viewers[client.client_id].robot)
         return robot is not None and np.hypot(*(client.camera.look_at[:2] - robot.position)) < 1.5
 
+    # Issue 41, item 4: the followed robot comes into view at once, and Camera follows shows that it does.
+    follows = page.get_by_label("Camera follows", exact=True)
+    assert follows.is_checked()
     wait_until(camera_on_robot, what="the camera to follow the robot")
+    follows.uncheck()
+    wait_until(lambda: np.hypot(*(client.camera.look_at[:2] - 32.0)) < 1.0, what="the whole arena, unticked")
+    assert not follows.is_checked() and app.panel.inspector.viewers[client.client_id].robot is not None
+    follows.check()
+    wait_until(camera_on_robot, what="the camera over the robot again")
     click_button(page, "Stop following")
     wait_until(lambda: app.runner.followed == (), what="stop following")
     wait_until(lambda: np.hypot(*(client.camera.look_at[:2] - 32.0)) < 1.0, what="the whole arena again")
@@ -763,6 +770,8 @@ def test_second_browser_and_disconnect(app, browser, page):
         raise AssertionError(f"{exc} ({cameras()})") from None
     # Following a robot, and with the camera, is one viewer's choice, not everybody's (issue 24, item 8).
     viewers = app.panel.inspector.viewers
+    page.get_by_label("Camera follows", exact=True).uncheck()  # the first page keeps seeing the arena
+    wait_until(lambda: not viewers[first.client_id].follows.value, what="the first page's camera free")
     click_button(page, "Follow a random robot")
     wait_until(lambda: viewers[first.client_id].robot is not None, what="the first viewer's robot")
     mine = viewers[first.client_id].robot
@@ -779,8 +788,7 @@ def test_second_browser_and_disconnect(app, browser, page):
         shown = page.get_by_text(re.compile(rf"Following robot {theirs}(?!\d)"))
         assert shown.count() == 0, (f"the first page shows {shown.all_inner_texts()!r}; it follows {mine}, the "
                                     f"second {theirs}; {cameras()}")
-    click_button(other, "Camera follows (this viewer)")
-    wait_until(lambda: second.camera.position[2] < 20, what="the second viewer's camera to follow")
+    wait_until(lambda: second.camera.position[2] < 20, what="the second viewer's camera to follow (by default)")
     panel_refreshes(app, 3)  # the panel moves the cameras that follow, at each refresh
     assert second.camera.position[2] < 20 and first.camera.position[2] > 40, cameras()  # the first sees the arena
     click_button(other, "Stop following")

@@ -126,7 +126,7 @@ def test_a_round_is_scored_against_the_paper_in_the_same_world_and_steps():
     """A round from the page's folder: the player's share at the round's end, and the paper's
     controller's in the same world after the same steps (computed again here, the same number)."""
     from sandbox.app.server import App, free_port
-    from sandbox.model.challenge import ROUND_SEED, paper_share
+    from sandbox.model.challenge import ROUND_SEED, paper_gain
     from tests.waiting import wait_until
 
     config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
@@ -138,8 +138,8 @@ def test_a_round_is_scored_against_the_paper_in_the_same_world_and_steps():
         wait_until(lambda: "Ada Lovelace" in folder.scores.content, timeout=120, what="the round and its reference")
         r = folder.round
         assert r.player == "Ada Lovelace" and r.at_step >= 600 and r.world is not None
-        assert r.paper == paper_share(app.runner.latest.world_config, ROUND_SEED, r.at_step, None)
-        assert folder.best == {"Ada Lovelace": r.score}
+        assert r.paper == paper_gain(app.runner.latest.world_config, ROUND_SEED, r.at_step, None)
+        assert folder.best == {"Ada Lovelace": r.score.share}
         assert "Ada Lovelace" in folder.scores.content and "paper's controller" in folder.status.content
         assert not app.runner.playing  # the round's end waits
     finally:
@@ -148,6 +148,7 @@ def test_a_round_is_scored_against_the_paper_in_the_same_world_and_steps():
 
 def test_stopping_the_app_ends_a_reference_run_at_once():
     from sandbox.app.panel.challenge import ChallengeFolder, Round
+    from sandbox.model.challenge import Gain
     from tests.waiting import wait_until
 
     class Markdown:
@@ -155,9 +156,9 @@ def test_stopping_the_app_ends_a_reference_run_at_once():
 
     folder = ChallengeFolder(gui=None, runner=None, lockstep=None, lamp=None, on_change=lambda what: None)
     folder.status, folder.scores = Markdown(), Markdown()
-    r = Round("Ada", 10**9, 0, world=1, score=0.4, at_step=10**9)  # a reference that would run for days
+    r = Round("Ada", 10**9, 0, world=1, score=Gain(20, 40, 80), at_step=10**9)  # a reference that would run for days
     folder._score_the_paper(r, (Config(robots=20, boxes=30), 0, None))
     wait_until(lambda: folder._pool is not None, what="the worker")
     folder.stop()
     wait_until(lambda: "no reference" in folder.status.content, timeout=20, what="the run ended")
-    assert folder.best == {"Ada": 0.4} and r.paper is None
+    assert folder.best == {"Ada": 1 / 3} and r.paper is None

@@ -53,7 +53,9 @@ from sandbox.app.inbox import Inbox
 from sandbox.app.pacing import PATH as DRAWN_PATH
 from sandbox.app.pacing import Pacer
 from sandbox.app.page_keys import KEYS_JS
+from sandbox.app.page_layout import LAYOUT_JS
 from sandbox.app.page_sends import SENDS_JS
+from sandbox.app.page_touch import TOUCH_JS
 from sandbox.app.viser_seam import WRITTEN_FOR  # noqa: F401 - where the tests look for it
 
 #: Largest websocket message a client may send: an upload part is 512 KiB (viser's client).
@@ -176,10 +178,11 @@ class Gate:
         # this connection's own handlers (its camera, its own controls)
         viser_seam.guard_connection_messages(connection, lambda client_id, message:
                                              inbox.admit_local(client_id, grant, message))
-        # The page reports the frames it draws, so it gets no more than it draws (sandbox.app.pacing), and
-        # arrows pressed on a slider do not also turn its camera (sandbox.app.page_keys), and a busy page's
-        # clicks are not held back and merged (sandbox.app.page_sends).
-        for source in (self.pacer.script_for(connection.client_id), KEYS_JS, SENDS_JS):
+        # The page reports the frames it draws, so it gets no more than it draws (sandbox.app.pacing),
+        # arrows pressed on a slider do not also turn its camera (sandbox.app.page_keys), a busy page's
+        # clicks are not held back and merged (sandbox.app.page_sends), a finger on the floor clicks as a
+        # mouse does (sandbox.app.page_touch), and a phone's panel is a drawer (sandbox.app.page_layout).
+        for source in (self.pacer.script_for(connection.client_id), KEYS_JS, SENDS_JS, TOUCH_JS, LAYOUT_JS):
             connection.queue_message(viser_seam.messages.RunJavascriptMessage(source=source))
 
     async def _on_disconnect(self, connection: Any) -> None:

@@ -105,7 +105,7 @@ Below, each strategy (right) beside the same moment without it (left).
 INSPECT = """\
 **Inspector.** Click a robot on the floor to follow it (it gets a purple
 ring; its photocells show as dots). Its readings, command and charge update
-live below; *Camera follows* zooms in on it.
+live below; your view zooms in on it (untick *Camera follows* to see the whole arena).
 """
 
 

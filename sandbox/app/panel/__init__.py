@@ -66,7 +66,8 @@ class Panel:
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
         self.lamp = LampFolder(gui, runner, on_change=self.metrics.mark)
-        self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark, post=post)
+        self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark, post=post,
+                                        after=events.after if events is not None else None)
         self.compare = CompareFolder(gui, runner, comparison, on_change=self.metrics.mark, post=post)
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
         self.result = ResultFolder(gui, runner, server.scene, post=post)

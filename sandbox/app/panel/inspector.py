@@ -1,11 +1,17 @@
 """The Inspector folder: each viewer follows a robot of its own (clicked, or
-at random), reads its photocells, command and charge, and may let its camera
-follow it.
+at random), reads its photocells, command and charge, and its camera follows
+it unless the viewer unticks *Camera follows* (issue 41, item 4: the f key
+said "Following robot 169" with the robot off-frame).
 
-The folder and its two buttons are shared; what a viewer follows, its
-read-outs and the ring and photocell dots on its floor are that viewer's own
-(viser's per-client GUI and scene), like its camera: following a robot in
-one tab changes nothing in another."""
+The folder and its button are shared; what a viewer follows, whether its
+camera follows, its read-outs and the ring, the robot's disc and photocell
+dots on its floor are that viewer's own (viser's per-client GUI and scene),
+like its camera: following a robot in one tab changes nothing in another.
+
+The followed robot's disc is drawn again in the viewer's own scene, in the
+same message as its ring: the shared scene reaches a page that draws slowly
+in windows (:mod:`sandbox.app.pacing`), its own messages at once, so the
+shared disc could lag a frame or two behind the ring and sit outside it."""
 
 from __future__ import annotations
 
@@ -21,7 +27,9 @@ from sandbox.app.scene import Z_TOP
 from sandbox.app.snapshot import RobotView, Snapshot
 from sandbox.model.robots import PHOTOCELLS
 
-HELP = "Click a robot on the floor to follow it. Each viewer follows its own."
+HELP = "Click a robot on the floor to follow it (key f: any robot). Each viewer follows its own."
+#: How high above the followed robot a following camera sits (m): the robot and its neighbours in view.
+FOLLOW_HEIGHT = 12.0
 
 
 @dataclass(eq=False, repr=False)  # viser's handles have no repr to lend
@@ -33,7 +41,10 @@ class Viewer:
     text: Any
     charge_bar: Any
     stop: Any
+    follows: Any
     ring: Any
+    disc: Any
+    heading: Any
     sensors: Any
     robot: int | None = None
 
@@ -53,25 +64,11 @@ class InspectorFolder:
         gui = self.gui
         with gui.add_folder("Inspector") as self.folder:
             self.help = gui.add_markdown(HELP)
-            self.camera_follow = gui.add_button("Camera follows (this viewer)", icon=viser.Icon.VIDEO,
-                                                hint="Zoom your own view in on the robot you follow and keep it "
-                                                     "centred; press again to see the whole arena")
             self.follow_random = gui.add_button("Follow a random robot", icon=viser.Icon.TARGET)
 
         self.follow_random.on_click(lambda event: self.follow_any(event.client))
         gui.add_command("Follow a random robot", hotkey="F", description="key: f (this viewer)").on_trigger(
             lambda event: self.follow_any(event.client))
-
-        @self.camera_follow.on_click
-        def _(event: viser.GuiEvent) -> None:
-            if event.client is None:
-                return
-            with self._lock:
-                if event.client_id in self.followers:
-                    self.followers.discard(event.client_id)
-                    self._reframe(event.client)
-                else:
-                    self.followers.add(event.client_id)
 
         for client in list(self.server.get_clients().values()):
             self.attach(client)
@@ -83,20 +80,36 @@ class InspectorFolder:
             if self.folder is None or client.client_id in self.viewers:
                 return
             with self.folder:  # a client's elements inside the server's folder
+                follows = client.gui.add_checkbox("Camera follows", True,
+                                                  hint="Your own view zoomed in on the robot you follow, kept "
+                                                       "centred; untick to see the whole arena")
                 status = client.gui.add_markdown("")
                 text = client.gui.add_markdown("")
                 charge_bar = client.gui.add_progress_bar(0.0, color="green", visible=False)
                 stop = client.gui.add_button("Stop following", icon=viser.Icon.X, disabled=True)
             empty = np.zeros((1, 2, 3), np.float32)
             ring = client.scene.add_line_segments("/inspect/ring", empty, pal.SELECTED, thickness=0.08, visible=False)
+            radius = self.runner.latest.world_config.robot_radius
+            # Its disc and heading dot as the shared scene draws them (sizes are radii), over them.
+            disc = client.scene.add_point_cloud("/inspect/robot", np.zeros((1, 3), np.float32), pal.SELECTED,
+                                                point_size=radius, point_shape="circle", point_shading="flat",
+                                                visible=False)
+            heading = client.scene.add_point_cloud("/inspect/heading", np.zeros((1, 3), np.float32),
+                                                   pal.HEADING_MARK, point_size=0.3 * radius, point_shape="circle",
+                                                   point_shading="flat", visible=False)
             sensors = client.scene.add_point_cloud("/inspect/sensors", np.zeros((4, 3), np.float32),
                                                    pal.SENSOR_COLOURS, point_size=0.09, point_shape="circle",
                                                    visible=False)
-            self.viewers[client.client_id] = Viewer(client, status, text, charge_bar, stop, ring, sensors)
+            self.viewers[client.client_id] = Viewer(client, status, text, charge_bar, stop, follows, ring, disc,
+                                                    heading, sensors)
 
         @stop.on_click
         def _(event: viser.GuiEvent) -> None:
             self.stop_following(client.client_id)
+
+        @follows.on_update
+        def _(event: viser.GuiEvent) -> None:
+            self.camera_follows(client.client_id, bool(follows.value))
 
     def detach(self, client_id: int) -> None:
         """A page left: forget what it followed (viser drops its elements)."""
@@ -118,6 +131,24 @@ class InspectorFolder:
             viewer.status.content = f"Following robot **{index}** (click another, or stop)."
             viewer.stop.disabled = False
             self._tell_runner()
+            if viewer.follows.value:  # into view now, not at the next read-out
+                self.followers.add(client.client_id)
+                positions = self.runner.latest.robot_positions
+                if 0 <= viewer.robot < len(positions):
+                    self._move_camera(client, positions[viewer.robot])
+
+    def camera_follows(self, client_id: int, on: bool) -> None:
+        """This viewer's camera follows its robot (``on``), or sees the arena as its View says."""
+        with self._lock:
+            viewer = self.viewers.get(client_id)
+            if viewer is None:
+                return
+            if not on:
+                if client_id in self.followers:
+                    self.followers.discard(client_id)
+                    self._reframe(viewer.client)
+            elif viewer.robot is not None:
+                self.follow(viewer.client, viewer.robot)
 
     def follow_any(self, client: Any) -> None:
         """This viewer follows a robot drawn at random."""
@@ -146,7 +177,7 @@ class InspectorFolder:
             viewer.text.content = ""
             viewer.charge_bar.visible = False
             viewer.stop.disabled = True
-            viewer.ring.visible = viewer.sensors.visible = False
+            viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = viewer.sensors.visible = False
             if client_id in self.followers:
                 self.followers.discard(client_id)
                 self._reframe(viewer.client)
@@ -176,7 +207,7 @@ class InspectorFolder:
                 viewer.charge_bar.color = ("green", "orange", "red")[int(pal.charge_class([robot.charge], cap)[0])]
                 viewer.charge_bar.visible = True
                 if client_id in self.followers:
-                    self._move_camera(viewer.client, robot)
+                    self._move_camera(viewer.client, robot.position)
 
     def draw(self, snap: Snapshot) -> None:
         """Each viewer's ring and photocell dots on its robot, at every frame (they ride with it)."""
@@ -185,25 +216,40 @@ class InspectorFolder:
                 robot = snap.robot(viewer.robot)
                 if robot is None:  # following nothing, or a robot this world does not have (yet)
                     if viewer.ring.visible:
-                        viewer.ring.visible = viewer.sensors.visible = False
+                        viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = False
+                        viewer.sensors.visible = False
                     continue
+                cfg = snap.world_config
                 a = np.linspace(0, 2 * np.pi, 33)
-                r = snap.world_config.robot_radius * 1.9
-                ring = robot.position + r * np.stack([np.cos(a), np.sin(a)], axis=1)
+                ring = robot.position + cfg.robot_radius * 1.9 * np.stack([np.cos(a), np.sin(a)], axis=1)
                 pts = np.zeros((4, 3), np.float32)
                 pts[:, :2], pts[:, 2] = robot.sensor_points, Z_TOP
                 with viewer.client.atomic():
                     viewer.ring.points = pal.closed_segments(ring[:-1], Z_TOP)
+                    disc, heading, colour = self._disc(robot, cfg)
+                    viewer.disc.points, viewer.disc.colors, viewer.heading.points = disc, colour, heading
                     viewer.sensors.points = pts
                     if not viewer.ring.visible:
-                        viewer.ring.visible = viewer.sensors.visible = True
+                        viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = True
+                        viewer.sensors.visible = True
 
     @staticmethod
-    def _move_camera(client: Any, robot: RobotView) -> None:
-        x, y = (float(v) for v in robot.position)
-        height = 12.0
+    def _disc(robot: RobotView, cfg: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The followed robot's disc and heading dot, as the shared scene draws them, just under the
+        ring: the disc's point, the dot's, and the disc's colour (its charge's)."""
+        ahead = 0.6 * cfg.robot_radius * np.array([np.cos(robot.heading), np.sin(robot.heading)])
+        disc, heading = np.zeros((1, 3), np.float32), np.zeros((1, 3), np.float32)
+        disc[0, :2], disc[0, 2] = robot.position, Z_TOP - 0.01
+        heading[0, :2], heading[0, 2] = robot.position + ahead, Z_TOP - 0.005
+        colour = pal.robot_colours(np.array([robot.charge]), cfg.capacity).astype(np.uint8)
+        return disc, heading, colour
+
+    @staticmethod
+    def _move_camera(client: Any, position: np.ndarray) -> None:
+        """The page's camera straight above ``position``, :data:`FOLLOW_HEIGHT` up, north up."""
+        x, y = (float(v) for v in position[:2])
         with client.atomic():
-            client.camera.position = (x, y - 1e-3 * height, height)
+            client.camera.position = (x, y - 1e-3 * FOLLOW_HEIGHT, FOLLOW_HEIGHT)
             client.camera.look_at = (x, y, 0.0)
 
     @staticmethod

@@ -1,0 +1,143 @@
+"""What a phone's page lays out differently, and a notice that leaves the floor (issue 41, item 5).
+
+viser picks its layout from the page's width: under its ``xs`` breakpoint
+(36em, 576 px) the panel is a bottom sheet, 20em wide, open, over the
+arena's lower right, with every folder in it; its theme has no setting for
+this. Measured at 390x844 in Chromium: the sheet covered the lower half of
+the floor, and *Be the light* and *Challenge* sat below about 15 strategy
+controls. viser's "Software WebGL rendering detected" notice (its own,
+shown whenever the page draws in software, not configurable) covered the
+top third of the screen until closed.
+
+:data:`LAYOUT_JS`, sent to each page at connect (:mod:`sandbox.app.gate`):
+
+- **A drawer.** On a narrow page the sheet spans the width and starts
+  closed (its own handle, "Phototaxis sandbox", opens and closes it), so
+  the arena is whole; the framing already fits the arena to the width,
+  at the page's top, and the open drawer stops below it.
+- **One tap away.** Two buttons over the floor's lower left, under the
+  open drawer: *Be the light* presses the panel's own button (its label
+  follows the panel's: *Give the light back*), *Challenge* opens the
+  drawer at the Challenge folder. They act through the panel's controls,
+  so the server checks them as it checks the panel.
+- **The notice goes.** The software-rendering notice closes after
+  :data:`NOTICE_SECONDS`, on every width.
+"""
+
+from __future__ import annotations
+
+import json
+
+#: viser's breakpoint for its phone layout (Mantine's xs: 36em at 16 px).
+NARROW = "(max-width: 576px)"
+#: Seconds viser's software-rendering notice stays before the page closes it.
+NOTICE_SECONDS = 4.0
+#: The notice's title, as viser 1.1.1 shows it.
+SOFTWARE_NOTICE = "Software WebGL rendering detected"
+#: The lamp's button labels (sandbox.app.panel.lamp) and the Challenge folder's (sandbox.app.panel.challenge).
+LAMP_LABELS = ("Be the light", "Give the light back")
+CHALLENGE = "Challenge"
+START_ROUND = "Start a round"
+#: The id of the shortcuts' bar (tests find it by it).
+SHORTCUTS_ID = "phototaxis-shortcuts"
+
+LAYOUT_JS = """(() => {
+  if (window.__phototaxisLayout) return;  // a page that reconnects keeps one observer
+  window.__phototaxisLayout = true;
+  const NARROW = window.matchMedia(%(narrow)s);
+  const NOTICE = %(notice)s, NOTICE_MS = %(notice_ms)d;
+  const LAMP = %(lamp)s, CHALLENGE = %(challenge)s, START = %(start)s, BAR = %(bar)s;
+  const closing = new WeakSet(), drawers = new WeakSet();
+  const button = (labels) => [...document.querySelectorAll("button")].find(  // the panel's, not ours
+    (b) => labels.includes(b.textContent.trim()) && !b.closest("#" + BAR));
+  const shown = (el) => !!el && el.getBoundingClientRect().height > 0;
+
+  // viser's software-rendering notice: closed after a few seconds.
+  const closeNotice = () => {
+    for (const note of document.querySelectorAll(".mantine-Notification-root")) {
+      if (closing.has(note) || !note.textContent.includes(NOTICE)) continue;
+      closing.add(note);
+      setTimeout(() => note.querySelector(".mantine-Notification-closeButton")?.click(), NOTICE_MS);
+    }
+  };
+
+  // The phone's bottom sheet (a fixed Paper at the page's bottom): full width, closed at first.
+  const sheet = () => [...document.querySelectorAll(".mantine-Paper-root")].find(
+    (p) => p.style.position === "fixed" && p.style.bottom === "0px");
+  const handleOf = (paper) => paper.querySelector("div[style*='cursor: pointer']");
+  const sheetOpen = (paper) => paper.getBoundingClientRect().height > 1.5 * handleOf(paper).getBoundingClientRect().height;
+  const makeDrawer = () => {
+    const paper = sheet();
+    if (!paper || drawers.has(paper) || !handleOf(paper)) return;
+    drawers.add(paper);
+    paper.style.width = "100%%";
+    // Open, it ends where the arena begins: a phone frames the arena as wide as the page at its top
+    // (sandbox.app.scene.top_down_camera), so the floor's square is 100vw tall. viser's sheet took 60 %%.
+    paper.style.maxHeight = "max(40vh, calc(100vh - 100vw - 4px))";
+    for (const box of paper.querySelectorAll("div[style*='width: 20em']")) box.style.width = "100%%";  // its contents
+    if (sheetOpen(paper)) handleOf(paper).click();  // closed: the arena whole until the drawer is opened
+  };
+
+  // Be the light and Challenge, one tap away on a phone.
+  const openChallenge = () => {
+    const paper = sheet();
+    if (paper && !sheetOpen(paper)) handleOf(paper).click();
+    setTimeout(() => {
+      const title = [...document.querySelectorAll(".mantine-Paper-root")].find(  // a folder's label: text, chevron
+        (e) => e.firstChild?.nodeType === Node.TEXT_NODE && e.firstChild.textContent.trim() === CHALLENGE);
+      if (!title) return;
+      if (!shown(button([START]))) title.click();
+      setTimeout(() => title.scrollIntoView({block: "start", behavior: "smooth"}), 350);
+    }, 350);
+  };
+  const shortcuts = () => {
+    let bar = document.getElementById(BAR);
+    if (!NARROW.matches) {
+      if (bar) bar.style.display = "none";
+      return;
+    }
+    if (!bar) {
+      bar = document.createElement("div");
+      bar.id = BAR;
+      bar.style.cssText = "position: fixed; left: 8px; bottom: calc(3.5em + 10px); z-index: 9; display: flex; " +
+                          "gap: 8px; font: 600 15px system-ui, sans-serif;";
+      const make = (name, act) => {
+        const b = document.createElement("button");
+        b.type = "button";
+        b.dataset.shortcut = name;
+        b.textContent = name;
+        b.style.cssText = "padding: 10px 14px; border-radius: 8px; border: 0; color: #111; " +
+                          "background: rgb(255, 190, 40); box-shadow: 0 2px 6px rgba(0,0,0,.5);";
+        b.addEventListener("click", act);
+        bar.appendChild(b);
+        return b;
+      };
+      make(LAMP[0], () => button(LAMP)?.click());
+      make(CHALLENGE, openChallenge);
+      document.body.appendChild(bar);
+    }
+    bar.style.display = "flex";
+    const lamp = button(LAMP);
+    const first = bar.firstElementChild;
+    if (lamp && first.textContent !== lamp.textContent.trim()) first.textContent = lamp.textContent.trim();
+    const paper = sheet();
+    bar.style.visibility = paper && sheetOpen(paper) ? "hidden" : "visible";  // under the open drawer
+  };
+
+  const look = () => {
+    closeNotice();
+    if (NARROW.matches) makeDrawer();
+    shortcuts();
+  };
+  let queued = false;
+  new MutationObserver(() => {
+    if (queued) return;
+    queued = true;
+    requestAnimationFrame(() => { queued = false; look(); });
+  }).observe(document.body, {childList: true, subtree: true, characterData: true});
+  NARROW.addEventListener("change", look);
+  setInterval(() => { if (NARROW.matches) look(); }, 500);  // the drawer opened or closed (a style, unobserved)
+  look();
+})();""" % {"narrow": json.dumps(NARROW), "notice": json.dumps(SOFTWARE_NOTICE),
+            "notice_ms": round(1000 * NOTICE_SECONDS), "lamp": json.dumps(list(LAMP_LABELS)),
+            "challenge": json.dumps(CHALLENGE), "start": json.dumps(START_ROUND), "bar": json.dumps(SHORTCUTS_ID)}

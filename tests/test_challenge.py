@@ -1,0 +1,117 @@
+"""A challenge that teaches (issue 41, item 6): the score counts the boxes brought into the goal, the
+lamp starts where the robots are, and a hint comes after a while without progress."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from sandbox.app.panel.challenge import HINT, ChallengeFolder
+from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
+from sandbox.model.challenge import Gain, lamp_start, paper_gain
+from sandbox.model.config import Config
+
+
+def test_a_gain_counts_only_the_boxes_brought_in():
+    assert Gain(started=27, ended=27, boxes=80).share == 0.0  # doing nothing scores nothing
+    gain = Gain(started=20, ended=50, boxes=80)
+    assert gain.brought == 30 and gain.share == 0.5
+    assert Gain(started=20, ended=15, boxes=80).brought == -5  # pushed out
+    assert Gain(started=80, ended=80, boxes=80).share == 0.0  # nothing left to bring
+
+
+def test_the_lamp_starts_on_the_densest_group_of_robots_not_their_centroid():
+    rng = np.random.default_rng(1)
+    group = np.array([50.0, 12.0]) + rng.uniform(-1, 1, (12, 2))
+    scattered = rng.uniform(0, 64, (30, 2))
+    robots = np.vstack([scattered, group])
+    x, y = lamp_start(robots, radius=2.5)
+    assert np.hypot(x - 50, y - 12) < 1.5, (x, y)
+    assert any(np.allclose((x, y), r) for r in robots)  # on a robot
+    many = np.vstack([rng.uniform(0, 64, (50_000, 2)), np.array([8.0, 56.0]) + rng.uniform(-1, 1, (5_000, 2))])
+    assert np.hypot(*(np.array(lamp_start(many, 2.5)) - [8, 56])) < 1.5  # a large swarm: sampled, in time
+    with pytest.raises(ValueError, match="no robots"):
+        lamp_start(np.zeros((0, 2)), 2.5)
+
+
+def test_in_the_papers_world_doing_nothing_scores_nothing():
+    """Issue 41: 'doing nothing scores about 33 %': a third of the paper's scattered boxes start in the goal."""
+    gain = paper_gain(Config(), 0, 0, None)
+    assert gain.boxes == 500 and gain.started > 100  # 167 at seed 0
+    assert gain.brought == 0 and gain.share == 0.0
+
+
+class Markdown:
+    content = ""
+
+
+class Timers:
+    """The event queue's ``after``, run by hand: the test says when time has passed."""
+
+    def __init__(self):
+        self.waiting = []
+
+    def after(self, seconds, fn, *args):
+        timer = SimpleNamespace(seconds=seconds, fn=fn, args=args, cancelled=False)
+        timer.cancel = lambda: setattr(timer, "cancelled", True)
+        self.waiting.append(timer)
+        return timer
+
+    def pass_time(self):
+        due, self.waiting = [t for t in self.waiting if not t.cancelled], []
+        for timer in due:
+            timer.fn(*timer.args)
+        return len(due)
+
+
+def frame(step, in_goal, world=2, program=LAMP_PROGRAM, robots=((10.0, 10.0), (10.5, 10.0), (40.0, 40.0))):
+    boxes = np.zeros(10, bool)
+    boxes[:in_goal] = True
+    return SimpleNamespace(step=step, box_in_goal=boxes, world_key=world, program=program,
+                           robot_positions=np.array(robots))
+
+
+def a_round(hint_seconds=10.0):
+    """A challenge folder over stand-ins for the runner and the lockstep, a round begun in world 2."""
+    timers, lamps, playing = Timers(), [], []
+    runner = SimpleNamespace(latest=frame(500, 0, world=1, program=PAPER_PROGRAM),
+                             set_lamp=lambda centre, radius, mode, on_done, on_error: (lamps.append(centre),
+                                                                                       on_done(None)))
+    lockstep = SimpleNamespace(set_playing=playing.append, reset=lambda seed, on_done, on_error: on_done(None))
+    lamp = SimpleNamespace(radius=SimpleNamespace(value=1.0))
+    folder = ChallengeFolder(None, runner, lockstep, lamp, on_change=lambda what: None, after=timers.after)
+    folder.status, folder.hint, folder.scores = Markdown(), Markdown(), Markdown()
+    folder.round_steps, folder.hint_seconds = 10_000, hint_seconds
+    folder.start("Ada", None)
+    assert lamps == [] and playing == [False]  # the old world's frame: nothing begins on it
+    folder.update(frame(0, 3, program=PAPER_PROGRAM))  # the round's world, at step 0
+    return folder, timers, lamps, playing
+
+
+def test_a_round_lights_the_robots_counts_from_its_start_and_hints_after_no_progress():
+    folder, timers, lamps, playing = a_round(hint_seconds=10.0)
+    assert lamps in ([(10.0, 10.0)], [(10.5, 10.0)]) and playing == [False, True]  # on the pair, then playing
+    assert folder.round.started == 3
+    assert [t.seconds for t in timers.waiting] == [10.0]
+    folder.update(frame(100, 3))
+    assert "0 boxes brought in" in folder.status.content and folder.hint.content == ""
+    assert timers.pass_time() == 1  # ten seconds and no box brought in
+    assert folder.hint.content == HINT
+    folder.update(frame(200, 5))  # two boxes in: the hint goes and waits again
+    assert folder.hint.content == "" and "2 boxes brought in" in folder.status.content
+    folder.update(frame(300, 4))  # one out again: no progress, the wait goes on
+    assert len(timers.waiting) == 1
+    folder.update(frame(400, 6))
+    assert len([t for t in timers.waiting if not t.cancelled]) == 1  # each progress re-arms one wait
+    folder.runner.world_spec = lambda on_done, on_error: None
+    folder.update(frame(10_000, 7))  # the round's end: the wait is cancelled
+    assert folder.round.score == Gain(3, 7, 10) and timers.pass_time() == 0 and folder.hint.content == ""
+
+
+def test_a_round_abandoned_takes_its_hint_with_it():
+    folder, timers, _, _ = a_round()
+    folder.update(frame(100, 3, world=3))
+    assert folder.round is None and "abandoned" in folder.status.content
+    assert timers.pass_time() == 0 and folder.hint.content == ""
