@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.runner import Runner
-from sandbox.app.scene import POINT_GRID, CompactSender, SceneView, top_down_camera
+from sandbox.app.scene import POINT_GRID, CompactSender, SceneView, compare_camera, compare_offset, top_down_camera
 from sandbox.app.snapshot import caption, case_name
 from sandbox.model.config import Config
 
@@ -245,13 +245,20 @@ def test_the_caption_sits_where_every_framing_of_the_page_shows_it(snapshot):
     SceneView(LabelScene(), snapshot, caption_over_construction=True)
     wall = cfg.centre + cfg.construction_size / 2
     assert labels["/caption"]["position"][:2] == (wall, wall + 0.3)
-    # Beside a compared world, the running world's caption goes under its arena's bottom-left corner
-    # (two above their arenas overlapped), and back when compare mode ends.
+    # Beside a compared world, each world's caption sits directly over its construction wall's top-left
+    # corner in two lines (two captions on one line ran into each other), with its share in the goal
+    # large under the wall, and back when compare mode ends.
     view = SceneView(LabelScene(), snapshot)
-    view.set_caption_below(True, snapshot)
-    assert labels["/caption"]["position"][:2] == (0.0, -0.8) and labels["/caption"]["anchor"] == "top-left"
-    view.set_caption_below(False, snapshot)
-    assert labels["/caption"]["anchor"] == "bottom-right"
+    assert labels["/readout"]["visible"] is False
+    view.set_compared((70.0, 0.0), snapshot)
+    low = cfg.centre - cfg.construction_size / 2
+    assert labels["/caption"]["position"][:2] == (low, wall + 0.3) and labels["/caption"]["anchor"] == "bottom-left"
+    assert view.handles["readout"].visible and labels["/readout"]["font_size_mode"] == "scene"
+    assert view._caption(snapshot).count("\n") == 1 and "% in goal" not in view._caption(snapshot)
+    view.set_compared((70.0, 0.0), snapshot, second=True)  # the right world's grows leftwards, into the gap
+    assert labels["/caption"]["position"][:2] == (wall, wall + 0.3) and labels["/caption"]["anchor"] == "bottom-right"
+    view.set_compared(None, snapshot)
+    assert labels["/caption"]["anchor"] == "bottom-right" and not view.handles["readout"].visible
     # The compared world's nodes live under its own root, moved along the floor.
     SceneView(LabelScene(), snapshot, root="/compare", offset=(70.0, 0.0))
     assert labels["/compare/caption"]["position"][:2] == (cfg.arena_size, cfg.arena_size + 0.8)
@@ -260,10 +267,10 @@ def test_the_caption_sits_where_every_framing_of_the_page_shows_it(snapshot):
 def test_compare_mode_frames_both_arenas(snapshot):
     """The camera over two arenas side by side: centred between them, as high as their width needs."""
     config = snapshot.world_config
-    s, beside = config.arena_size, config.arena_size + 6.0
-    position, look_at, fov = top_down_camera(config, 1.4, beside=beside)
-    assert look_at[0] == pytest.approx(s / 2 + beside / 2)  # halfway between the two arenas' centres
-    half_width = (1.12 * s + beside) / 2  # both arenas and their margins
+    s, offset = config.arena_size, compare_offset(config)
+    position, look_at, fov = compare_camera(config, 1.4, offset, whole=True)
+    assert look_at[0] == pytest.approx(s / 2 + offset[0] / 2)  # halfway between the two arenas' centres
+    half_width = (1.12 * s + offset[0]) / 2  # both arenas and their margins
     assert position[2] == pytest.approx(half_width / 1.4 / np.tan(fov / 2))
     one, _, _ = top_down_camera(config, 1.4)
     assert position[2] > one[2]
