@@ -270,7 +270,72 @@ def test_compare_mode_frames_both_arenas(snapshot):
     s, offset = config.arena_size, compare_offset(config)
     position, look_at, fov = compare_camera(config, 1.4, offset, whole=True)
     assert look_at[0] == pytest.approx(s / 2 + offset[0] / 2)  # halfway between the two arenas' centres
-    half_width = (1.12 * s + offset[0]) / 2  # both arenas and their margins
+    half_width = (1.12 * s + offset[0]) / 2 * 1.02  # both arenas, their margins and a pad for the captions
     assert position[2] == pytest.approx(half_width / 1.4 / np.tan(fov / 2))
     one, _, _ = top_down_camera(config, 1.4)
     assert position[2] > one[2]
+
+
+# ------------------------------------------------ compare mode for a room (issue 41, item 1)
+def visible_floor(position, look_at, fov, aspect):
+    """(left, right, bottom, top) of the floor a top-down camera shows in a view ``aspect`` wide."""
+    half_h = position[2] * np.tan(fov / 2)
+    return (look_at[0] - half_h * aspect, look_at[0] + half_h * aspect, look_at[1] - half_h, look_at[1] + half_h)
+
+
+def inside(box, frame, tolerance=1e-6) -> bool:
+    return (frame[0] - tolerance <= box[0] and box[1] <= frame[1] + tolerance and frame[2] - tolerance <= box[2]
+            and box[3] <= frame[3] + tolerance)
+
+
+def overlap(a, b) -> bool:
+    return a[0] < b[1] and b[0] < a[1] and a[2] < b[3] and b[2] < a[3]
+
+
+#: Canvases (width, height in CSS px): a projector with the panel folded or open beside it, a wide screen,
+#: a tall screen and a phone upright.
+CANVASES = {"projector, presenter": (984, 768), "projector, panel open": (604, 768), "wide screen": (1560, 1000),
+            "tall screen": (768, 1024), "phone": (390, 844)}
+
+
+@pytest.mark.parametrize("canvas", CANVASES)
+@pytest.mark.parametrize("view", ["whole", "construction", "presenter"])
+def test_compare_framing_shows_every_caption_and_readout_apart(snapshot, canvas, view):
+    """Both worlds, each with its caption over it, its share in the goal under it and the difference
+    between them, all in the page's view and none over another; the layout is the one a page of this shape
+    asks for (below on a page taller than wide). On a projector, none lies where viser stacks its notices
+    (the canvas's top-left 310 x 150 px)."""
+    from sandbox.app.scene import (caption_box, compare_camera, compare_legend_box, construction_box,
+                                   difference_box, readout_box, shifted)
+
+    config = snapshot.world_config
+    width, height = CANVASES[canvas]
+    aspect = width / height
+    offset = compare_offset(config, stacked=aspect < 1.0)
+    legend = 368 / 380 if view == "presenter" else None
+    position, look_at, fov = compare_camera(config, aspect, offset, whole=view == "whole", legend_height_per_width=legend)
+    frame = visible_floor(position, look_at, fov, aspect)
+    view_height = frame[3] - frame[2]
+    labels = {"left caption": caption_box(config, offset, False, view_height),
+              "right caption": caption_box(config, offset, True, view_height),
+              "left readout": readout_box(config), "right readout": shifted(readout_box(config), offset),
+              "difference": difference_box(config, offset)}
+    areas = {"left area": construction_box(config), "right area": shifted(construction_box(config), offset)}
+    if legend:
+        areas["legend"] = compare_legend_box(config, offset, legend)
+    for name, box in {**labels, **areas}.items():
+        assert inside(box, frame), f"{name} {np.round(box, 1)} is not all in view {np.round(frame, 1)}"
+    names = list(labels) + list(areas)
+    boxes = {**labels, **areas}
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            if a in labels or b in labels:
+                assert not overlap(boxes[a], boxes[b]), f"{a} {np.round(boxes[a], 1)} covers {b} {np.round(boxes[b], 1)}"
+    if canvas == "projector, presenter":
+        scale = width / (frame[1] - frame[0])  # px per m
+        notices = (frame[0], frame[0] + 310 / scale, frame[3] - 150 / scale, frame[3])
+        for name, box in labels.items():
+            assert not overlap(box, notices), f"{name} lies under viser's notices"
+    # As large as the room needs: at a projector's 1024 x 768 each construction area is at least 150 px wide.
+    if canvas == "projector, presenter" and view != "whole":
+        assert config.construction_size * width / (frame[1] - frame[0]) >= 150

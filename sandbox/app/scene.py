@@ -178,10 +178,6 @@ READOUT_HEIGHT, DIFFERENCE_HEIGHT = 3.2, 2.4
 LABEL_BLOCK = 1.45
 #: Gap (m) between a construction wall and the label above or below it.
 LABEL_GAP = 0.4
-#: Share of the view's height kept above the framed floor for the captions: two lines at scale 1.2
-#: (viser draws a line 12 px x scale high in an 800 px high view, and scales it with the view's height)
-#: with their line height and padding are 4.7 % of it.
-CAPTION_ROOM = 0.07
 #: The presenter's legend in compare mode: at most this wide (m), in the floor's gap between the worlds.
 COMPARE_LEGEND_WIDTH = 30.0
 
@@ -202,8 +198,11 @@ def is_stacked(offset: tuple[float, float]) -> bool:
 def caption_anchor(offset: tuple[float, float], second: bool) -> str:
     """Where a compared world's caption hangs from its construction wall's top: side by side, the
     left world's from its left corner and the right one's from its right corner, both growing into
-    the floor between them; stacked, both from the right corner, growing left (the legend's side)."""
-    return "bottom-right" if second or is_stacked(offset) else "bottom-left"
+    the floor between them; stacked, from the wall's middle (a tall view is narrow: a caption grown
+    from a corner ran off it)."""
+    if is_stacked(offset):
+        return "bottom-center"
+    return "bottom-right" if second else "bottom-left"
 
 
 def union(*boxes: Box) -> Box:
@@ -252,7 +251,7 @@ def compare_legend_box(config: Config, offset: tuple[float, float], height_per_w
     gx, gy = difference_anchor(config, offset)
     if is_stacked(offset):
         width = COMPARE_LEGEND_WIDTH
-        right = view[0] - LABEL_GAP
+        right = min(view[0], difference_box(config, offset)[0]) - LABEL_GAP
         height = width * height_per_width
         return (right - width, right, gy - height / 2.0, gy + height / 2.0)
     gap = (view[0] + offset[0]) - view[1]  # between the two construction views
@@ -277,15 +276,37 @@ def compare_floor_box(config: Config, offset: tuple[float, float], whole: bool,
     return union(*parts)
 
 
+#: A compare caption's longest line, in characters, as framed for ("star-switch (star + switch 0.25)": 32).
+CAPTION_CHARS = 36
+
+
+def caption_box(config: Config, offset: tuple[float, float], second: bool, view_height: float,
+                chars: int = CAPTION_CHARS) -> Box:
+    """The floor a compare caption covers in a view ``view_height`` metres high: two lines of
+    screen-sized text (12 px x 1.2 an em in an 800 px high view, scaled with the view; a character
+    about half an em wide, a line 1.2 em, and viser's padding)."""
+    em = 12 * 1.2 / 800 * view_height
+    width, height = 0.5 * em * chars, 2.6 * em
+    low, high, _, top = construction_box(config)
+    left = {"bottom-left": low, "bottom-center": (low + high - width) / 2.0}.get(caption_anchor(offset, second),
+                                                                               high - width)
+    box = (left, left + width, top + 0.3, top + 0.3 + height)
+    return shifted(box, offset) if second else box
+
+
 def compare_camera(config: Config, aspect: float, offset: tuple[float, float], *, whole: bool,
                    legend_height_per_width: float | None = None,
                    fov_deg: float = 50.0) -> tuple[np.ndarray, np.ndarray, float]:
     """Camera position, look-at point and field of view that frame both of compare mode's worlds
-    (:func:`compare_floor_box`) in a view ``aspect`` wide, with room above each for its caption."""
-    box = compare_floor_box(config, offset, whole, legend_height_per_width)
-    height = max(box[3] - box[2], (box[1] - box[0]) / max(aspect, 0.1))
-    box = (*box[:3], box[3] + CAPTION_ROOM * height)
-    return camera_over(box, aspect, fov_deg, top_on_phone=True)
+    (:func:`compare_floor_box`) in a view ``aspect`` wide, with their captions: sized in screen pixels,
+    they cover more floor the more floor is in view (so the box grows twice, with the view it makes)."""
+    floor = compare_floor_box(config, offset, whole, legend_height_per_width)
+    box = floor
+    for _ in range(4):  # converges: a caption covers a few per cent of the view's height
+        height = max(box[3] - box[2], (box[1] - box[0]) / max(aspect, 0.1))
+        box = union(floor, caption_box(config, offset, False, height), caption_box(config, offset, True, height))
+    pad = 0.01 * max(box[1] - box[0], box[3] - box[2])  # and what the last round would still add
+    return camera_over((box[0] - pad, box[1] + pad, box[2] - pad, box[3] + pad), aspect, fov_deg, top_on_phone=True)
 
 
 def configure_scene(server: Any, config: Config, whole: bool = True) -> None:
@@ -431,7 +452,7 @@ class SceneView:
         else:
             low, high, gap = 0.0, cfg.arena_size, 0.8
         anchor = self.compared or "bottom-right"
-        position = (low if anchor == "bottom-left" else high, high + gap)
+        position = ({"bottom-left": low, "bottom-center": (low + high) / 2.0}.get(anchor, high), high + gap)
         # Its size is in screen pixels: at 1.2 it still fits a phone's width (a larger one, for a
         # projector, would run off a phone that watches the same classroom).
         return self.scene.add_label(f"{self.root}/caption", self._caption(snap), position=(*position, Z_TOP),

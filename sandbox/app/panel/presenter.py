@@ -49,15 +49,13 @@ def title_lines(snap: Snapshot, compared: Snapshot | None, controls: bool) -> tu
     """The title card's three lines: what the class is looking at, what to watch for, what to do."""
     cfg = snap.world_config
     if compared is None:
-        looking = (f"{cfg.robots} robots that only drive towards light push {cfg.boxes} boxes into a "
-                   f"{snap.shape_name} (the blue outline): {case_name(snap.shape_name, snap.strategies)}.")
-        watch = ("Watch the yellow band of lights shrink towards the goal: the robots ride it and bulldoze "
-                 "the boxes in (pink: in the goal).")
+        looking = f"{cfg.robots} robots that only drive towards light push {cfg.boxes} boxes into a {snap.shape_name}."
+        watch = "Watch the yellow band shrink: the robots ride it and push the boxes into the goal (pink)."
     else:
-        looking = (f"Two worlds from the same start: {case_name(snap.shape_name, snap.strategies)} and "
-                   f"{case_name(compared.shape_name, compared.strategies)}, each under its caption.")
-        watch = "Watch which one gets more boxes into its goal: the large share under each, and the difference."
-    act = "Press Play (space) to start." if controls else "The presenter starts it with Play."
+        looking = (f"The same start twice: {case_name(snap.shape_name, snap.strategies)} and "
+                   f"{case_name(compared.shape_name, compared.strategies)}.")
+        watch = "Watch which one gets more boxes into its goal: the large share under each."
+    act = "**Press Play (space) to start.**" if controls else "The presenter starts it with Play."
     return looking, watch, act
 
 
