@@ -99,7 +99,8 @@ class PresenterScreen:
         partner = self._compared()
         snap = self.runner.latest
         lines = title_lines(snap, None if partner is None else partner.latest, controls)
-        with client.gui.add_modal(f"Phototaxis: {case_name(snap.shape_name, snap.strategies)}") as card:
+        card = client.gui.add_modal(f"Phototaxis: {case_name(snap.shape_name, snap.strategies)}")
+        with card:
             client.gui.add_markdown("  \n".join(lines))
             if controls:
                 play = client.gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY, hint="Start the simulation (space)")
