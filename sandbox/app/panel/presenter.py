@@ -17,7 +17,7 @@ floor's side of the panel, for a room.
 - **Joining mid-run.** A page that may control the simulation and arrives
   after step 0 is offered *Start over* (a reset with the same seed: the same
   run again from its start) in a floating panel at the canvas's bottom
-  right, which goes away after a minute or when answered. A watching page
+  right, which goes away after two minutes or when answered. A watching page
   gets nothing: it just watches.
 
 "First visit" is read as "arrives while the world has not been played yet":
@@ -37,8 +37,8 @@ import viser
 
 from sandbox.app.snapshot import Snapshot, case_name
 
-#: How long the Start over offer stays (s).
-OFFER_SECONDS = 60.0
+#: How long the Start over offer stays (s): a loaded classroom laptop may take half a minute to show it.
+OFFER_SECONDS = 120.0
 #: The on-screen bar's and the offer's width (CSS px): buttons large enough to hit on a projector.
 BAR_WIDTH, OFFER_WIDTH = 210.0, 300.0
 #: Their gap to the canvas's edges (CSS px).
