@@ -130,3 +130,75 @@ def test_start_over_is_offered_to_a_controlling_page_mid_run_not_to_a_watcher(ap
         for context in (teacher, student):
             if context is not None:
                 context.close()
+
+
+def floor_to_page(client, canvas: dict, box) -> dict:
+    """A floor box (left, right, bottom, top, m) where the page draws it (CSS px), through the camera the
+    page last reported: top-down, so a metre is the same number of pixels across and up."""
+    import numpy as np
+
+    position, look_at = np.asarray(client.camera.position), np.asarray(client.camera.look_at)
+    per_metre = canvas["height"] / 2 / (position[2] * np.tan(client.camera.fov / 2))
+    x = canvas["x"] + canvas["width"] / 2 + (np.array(box[:2]) - look_at[0]) * per_metre
+    y = canvas["y"] + canvas["height"] / 2 - (np.array(box[2:]) - look_at[1]) * per_metre
+    return {"x": float(x[0]), "y": float(y[1]), "width": float(x[1] - x[0]), "height": float(y[0] - y[1])}
+
+
+def within(a: dict, b: dict) -> bool:
+    return (b["x"] - 1 <= a["x"] and a["x"] + a["width"] <= b["x"] + b["width"] + 1 and b["y"] - 1 <= a["y"]
+            and a["y"] + a["height"] <= b["y"] + b["height"] + 1)
+
+
+def covers(a: dict, b: dict) -> bool:
+    return (a["x"] < b["x"] + b["width"] and b["x"] < a["x"] + a["width"] and a["y"] < b["y"] + b["height"]
+            and b["y"] < a["y"] + a["height"])
+
+
+def test_compare_mode_on_a_projector_shows_every_caption_and_readout_uncovered(browser):
+    """Issue 41, item 1, at 1024 x 768 in the presenter layout: both worlds framed, each caption, readout and
+    the difference in the canvas, none under a notice (viser's own included) or the on-screen panels."""
+    import numpy as np
+
+    from sandbox.app.compare import side_config
+    from sandbox.app.scene import caption_box, compare_camera, difference_box, readout_box, shifted
+    from sandbox.app.server import App, free_port
+    from sandbox.model.config import Config
+
+    base = Config(robots=40, boxes=80)
+    app = App(side_config("star", base), port=free_port(), steps_per_frame=4, fps=15, whole_arena=False,
+              compare=(side_config("star-switch", base), "star-switch"))
+    app.start()
+    context = None
+    try:
+        context, page, client_id, _ = open_page(browser, app, token=False)  # this machine's page: it controls
+        client = app.server.get_clients()[client_id]
+        config, offset = app.runner.latest.world_config, app.panel.framing.offset
+        legend = app.panel.framing._legend_aspect
+
+        def framed() -> bool:
+            aspect = client.camera.aspect or 1.0
+            position, look_at, _ = compare_camera(config, aspect, offset, whole=False, legend_height_per_width=legend)
+            return bool(np.allclose(client.camera.look_at, look_at, atol=0.05)
+                        and np.allclose(client.camera.position, position, atol=0.05))
+
+        wait_until(framed, what="the page framed on both worlds")
+        wait_until(lambda: app.runner.latest.sample.fraction_in_goal > 0, what="a share in the goal to show")
+        shot(page, "room-compare.png")
+        canvas = max((c.bounding_box() for c in page.locator("canvas").all()), key=lambda b: b["width"] * b["height"])
+        view_height = 2 * client.camera.position[2] * np.tan(client.camera.fov / 2)
+        labels = {"left caption": caption_box(config, offset, False, view_height),
+                  "right caption": caption_box(config, offset, True, view_height),
+                  "left readout": readout_box(config), "right readout": shifted(readout_box(config), offset),
+                  "difference": difference_box(config, offset)}
+        shown = {name: floor_to_page(client, canvas, box) for name, box in labels.items()}
+        covering = [page.locator(".mantine-Notification-root").nth(i).bounding_box()
+                    for i in range(page.locator(".mantine-Notification-root").count())]
+        covering += [b.bounding_box() for b in page.get_by_role("button").all() if b.is_visible()]
+        for name, box in shown.items():
+            assert within(box, canvas), f"{name} at {box} is not all on the canvas {canvas}"
+            for other in filter(None, covering):
+                assert not covers(box, other), f"{name} at {box} lies under {other}"
+    finally:
+        if context is not None:
+            context.close()
+        app.stop()

@@ -90,10 +90,14 @@ class Framing:
             frame_arena(client, config, whole=view == WHOLE_ARENA)
 
     def arrive(self, client: Any) -> None:
-        """A page that connected: the default view's layout (its camera is framed as it reports its shape)."""
+        """A page that connected: the default view's layout (its camera is framed as it reports its shape).
+        The presenter's legend goes on its floor at once, with the rest of the first frame, not when the
+        page first reports its window (seconds later on a loaded machine; a phone's report takes it away)."""
         if self.of(client.client_id) == PRESENTER:
             client.gui.main_panel.minimize()
             self.on_presenter(client, True)
+            with self._lock:
+                self._show_legend(client, self.runner.latest.world_config, True)
 
     def forget(self, client_id: int) -> None:
         with self._lock:
