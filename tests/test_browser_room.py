@@ -183,7 +183,6 @@ def test_compare_mode_on_a_projector_shows_every_caption_and_readout_uncovered(b
 
         wait_until(framed, what="the page framed on both worlds")
         wait_until(lambda: app.runner.latest.sample.fraction_in_goal > 0, what="a share in the goal to show")
-        shot(page, "room-compare.png")
         canvas = max((c.bounding_box() for c in page.locator("canvas").all()), key=lambda b: b["width"] * b["height"])
         view_height = 2 * client.camera.position[2] * np.tan(client.camera.fov / 2)
         labels = {"left caption": caption_box(config, offset, False, view_height),
@@ -191,6 +190,22 @@ def test_compare_mode_on_a_projector_shows_every_caption_and_readout_uncovered(b
                   "left readout": readout_box(config), "right readout": shifted(readout_box(config), offset),
                   "difference": difference_box(config, offset)}
         shown = {name: floor_to_page(client, canvas, box) for name, box in labels.items()}
+
+        def drawn(name: str) -> bool:
+            """Whether the page draws the label there: viser gives a label a light background."""
+            import io
+
+            from PIL import Image
+
+            picture = np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("L"))
+            box = shown[name]
+            x0, y0 = int(box["x"] + 0.3 * box["width"]), int(box["y"] + 0.2 * box["height"])
+            x1, y1 = int(box["x"] + 0.7 * box["width"]), int(box["y"] + 0.5 * box["height"])
+            return bool((picture[y0:y1, x0:x1] > 200).mean() > 0.3)
+
+        for name in ("left readout", "right readout", "difference"):
+            wait_until(lambda name=name: drawn(name), what=f"the {name} drawn where it was framed")
+        shot(page, "room-compare.png")
         covering = [page.locator(".mantine-Notification-root").nth(i).bounding_box()
                     for i in range(page.locator(".mantine-Notification-root").count())]
         covering += [b.bounding_box() for b in page.get_by_role("button").all() if b.is_visible()]
