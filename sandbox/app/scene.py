@@ -196,13 +196,11 @@ def is_stacked(offset: tuple[float, float]) -> bool:
 
 
 def caption_anchor(offset: tuple[float, float], second: bool) -> str:
-    """Where a compared world's caption hangs from its construction wall's top: side by side, the
-    left world's from its left corner and the right one's from its right corner, both growing into
-    the floor between them; stacked, from the wall's middle (a tall view is narrow: a caption grown
-    from a corner ran off it)."""
-    if is_stacked(offset):
-        return "bottom-center"
-    return "bottom-right" if second else "bottom-left"
+    """Where a compared world's caption hangs from its construction wall's top: side by side, from its
+    left corner, growing right (two growing towards each other met on a projector's canvas beside the
+    open panel); stacked, from the wall's middle (a tall view is narrow: a caption grown from a corner
+    ran off it). The framing makes room for them (:func:`compare_camera`)."""
+    return "bottom-center" if is_stacked(offset) else "bottom-left"
 
 
 def union(*boxes: Box) -> Box:
@@ -276,17 +274,18 @@ def compare_floor_box(config: Config, offset: tuple[float, float], whole: bool,
     return union(*parts)
 
 
-#: A compare caption's longest line, in characters, as framed for ("star-switch (star + switch 0.25)": 32).
-CAPTION_CHARS = 36
+#: A compare caption's longest line, in characters, as framed for ("step 14,700 | contracting, cycle 12": 35),
+#: and a character's width in ems (viser's sans-serif: "step 5,425 | contracting, cycle 0" measured 0.44).
+CAPTION_CHARS, CHAR_EM = 35, 0.45
 
 
 def caption_box(config: Config, offset: tuple[float, float], second: bool, view_height: float,
                 chars: int = CAPTION_CHARS) -> Box:
     """The floor a compare caption covers in a view ``view_height`` metres high: two lines of
     screen-sized text (12 px x 1.2 an em in an 800 px high view, scaled with the view; a character
-    about half an em wide, a line 1.2 em, and viser's padding)."""
+    :data:`CHAR_EM` wide, a line 1.2 em, and viser's padding)."""
     em = 12 * 1.2 / 800 * view_height
-    width, height = 0.5 * em * chars, 2.6 * em
+    width, height = CHAR_EM * em * chars, 2.6 * em
     low, high, _, top = construction_box(config)
     left = {"bottom-left": low, "bottom-center": (low + high - width) / 2.0}.get(caption_anchor(offset, second),
                                                                                high - width)
@@ -302,7 +301,7 @@ def compare_camera(config: Config, aspect: float, offset: tuple[float, float], *
     they cover more floor the more floor is in view (so the box grows twice, with the view it makes)."""
     floor = compare_floor_box(config, offset, whole, legend_height_per_width)
     box = floor
-    for _ in range(4):  # converges: a caption covers a few per cent of the view's height
+    for _ in range(40):  # converges: a caption is narrower than the view it is framed for
         height = max(box[3] - box[2], (box[1] - box[0]) / max(aspect, 0.1))
         box = union(floor, caption_box(config, offset, False, height), caption_box(config, offset, True, height))
     pad = 0.01 * max(box[1] - box[0], box[3] - box[2])  # and what the last round would still add
@@ -443,9 +442,8 @@ class SceneView:
         """What runs, above the arena's top-right corner (viser stacks its notifications at the page's
         top left), or the construction wall's (:attr:`caption_over_construction`). In compare mode
         (:attr:`compared`) it sits directly above the construction wall, each world's over its own
-        area, in two lines that grow from the wall's corner into the floor between the worlds (or, one
-        below the other, to the left): a caption is sized in screen pixels, and two on one line ran
-        into each other, or off the page, once the arenas were narrower than them."""
+        area, in two lines (:func:`caption_anchor`): a caption is sized in screen pixels, and two on one
+        line ran into each other once the arenas were narrower than them."""
         cfg = snap.world_config
         if self.caption_over_construction or self.compared:
             low, high, gap = cfg.centre - cfg.construction_size / 2.0, cfg.centre + cfg.construction_size / 2.0, 0.3

@@ -11,11 +11,14 @@ import viser
 from sandbox.app.compare import COMPARE_CASES, SAME, Comparison, partner_config, side_name
 from sandbox.app.panel.common import notify_error
 from sandbox.app.runner import wait_for
+from sandbox.app.scene import PHONE_ASPECT
 from sandbox.app.snapshot import Snapshot
 
 NOTHING = "nothing"
-#: A page narrower than this (width / height) gets the second world below the first, not beside it.
-TALL = 1.0
+#: A page narrower than this (width / height) gets the second world below the first, not beside it: a phone
+#: or a portrait screen. A 1024 x 768 projector's canvas beside the open panel (0.79) keeps them side by
+#: side, which it needs once the panel folds (the layout is chosen when the comparison starts).
+TALL = PHONE_ASPECT
 #: The Compare with... choices: none, the running world under the paper's lights, a case.
 CHOICES = (NOTHING, SAME, *COMPARE_CASES)
 
