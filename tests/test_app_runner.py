@@ -554,7 +554,7 @@ def test_a_page_is_framed_under_the_framings_lock(monkeypatch):
 
     moves = []
     monkeypatch.setattr(module, "aim_camera", lambda client, *camera: moves.append(("presenter", lock_held())))
-    monkeypatch.setattr(module, "frame_arena", lambda client, config, whole, beside: moves.append(
+    monkeypatch.setattr(module, "frame_arena", lambda client, config, whole: moves.append(
         ("whole arena" if whole else "construction area", lock_held())))
     monkeypatch.setattr(module, "add_floor_legend", lambda *args, **kwargs: SimpleNamespace(remove=lambda: None))
     panel = SimpleNamespace(minimize=lambda: None, expand=lambda: None)

@@ -694,9 +694,10 @@ def test_compare_mode_from_the_panel_and_learn(app, page, tmp_path):
     # The status line, first on the server (a loaded machine builds the two worlds slowly), then on the page.
     wait_until(lambda: "in the goal, step" in app.panel.compare.status.content, what="the compare status line")
     page.get_by_text("in the goal, step", exact=False).first.wait_for()
-    # Each world has its caption on the floor.
-    wait_until(lambda: app.comparison.view.handles["caption"].text.startswith("star-switch (star + switch 0.25) | step"),
+    # Each world has its caption on the floor (two lines over its construction area) and its share in the goal.
+    wait_until(lambda: app.comparison.view.handles["caption"].text.startswith("star-switch (star + switch 0.25)\nstep"),
                what="the second world's caption")
+    assert app.comparison.view.handles["readout"].text.endswith("% in goal") and app.view.handles["readout"].visible
     click_button(page, "Pause")
     # Paused, both run on to the lockstep's target: equal steps short of it are only a moment on the way.
     wait_until(lambda: not app.runner.playing and not partner.latest.playing
@@ -733,7 +734,7 @@ def test_compare_mode_from_the_panel_and_learn(app, page, tmp_path):
                what="the dropdown to show the comparison")
     open_folder(page, "Learn")
     choose(page, "Compare with...", "nothing")
-    wait_until(lambda: app.comparison.runner is None and app.panel.framing.beside is None, what="compare mode off")
+    wait_until(lambda: app.comparison.runner is None and app.panel.framing.offset is None, what="compare mode off")
     open_folder(page, "Compare")
     assert not app.runner.errors
 

@@ -191,7 +191,7 @@ def comparing_app():
 def test_the_app_draws_both_worlds_and_charts_both(comparing_app):
     app = comparing_app
     partner = app.comparison.runner
-    assert partner is not None and app.panel.framing.beside == SMALL.arena_size + 6.0
+    assert partner is not None and app.panel.framing.offset == (SMALL.arena_size + 6.0, 0.0)
     wait_until(lambda: app.panel.compare.choice.value == "star-switch", what="the dropdown to show the comparison")
     names = {handle.name for handle in app.comparison.view.handles.values()}
     assert {"/compare", "/compare/swarm/robots", "/compare/caption", "/compare/goal"} <= names
@@ -210,7 +210,7 @@ def test_the_app_draws_both_worlds_and_charts_both(comparing_app):
     worlds = {row.split(",")[0] for row in rows[1:]}
     assert worlds == {"left: star", "right: star-switch"}
     app.panel.compare.choose("nothing", None)
-    wait_until(lambda: app.comparison.runner is None and app.panel.framing.beside is None,
+    wait_until(lambda: app.comparison.runner is None and app.panel.framing.offset is None,
                what="the comparison to end and the pages to frame one world")
     assert app.runner.hold_at is None and partner.stopped and not app.comparison.view
     app.panel.metrics._charted_at = 0.0
@@ -283,7 +283,7 @@ def test_when_the_compared_worlds_process_dies_compare_mode_ends_and_says_so():
         app.comparison._on_crash = lambda why: (told.append(why), app._on_partner_crash(why))
         partner = app.comparison.runner
         os.kill(partner.process.pid, signal.SIGKILL)
-        wait_until(lambda: app.comparison.runner is None and app.panel.framing.beside is None,
+        wait_until(lambda: app.comparison.runner is None and app.panel.framing.offset is None,
                    what="compare mode to end")
         assert told and partner._stop.is_set() and not partner.process.is_alive() and app.runner.hold_at is None
         wait_until(lambda: app.panel.compare.choice.value == "nothing", what="the dropdown to say so")

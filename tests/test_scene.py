@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.runner import Runner
-from sandbox.app.scene import POINT_GRID, CompactSender, SceneView, top_down_camera
+from sandbox.app.scene import POINT_GRID, CompactSender, SceneView, compare_camera, compare_offset, top_down_camera
 from sandbox.app.snapshot import caption, case_name
 from sandbox.model.config import Config
 
@@ -245,13 +245,21 @@ def test_the_caption_sits_where_every_framing_of_the_page_shows_it(snapshot):
     SceneView(LabelScene(), snapshot, caption_over_construction=True)
     wall = cfg.centre + cfg.construction_size / 2
     assert labels["/caption"]["position"][:2] == (wall, wall + 0.3)
-    # Beside a compared world, the running world's caption goes under its arena's bottom-left corner
-    # (two above their arenas overlapped), and back when compare mode ends.
+    # Beside a compared world, each world's caption sits directly over its construction wall's top-left
+    # corner in two lines (two captions on one line ran into each other), with its share in the goal
+    # large under the wall, and back when compare mode ends.
     view = SceneView(LabelScene(), snapshot)
-    view.set_caption_below(True, snapshot)
-    assert labels["/caption"]["position"][:2] == (0.0, -0.8) and labels["/caption"]["anchor"] == "top-left"
-    view.set_caption_below(False, snapshot)
-    assert labels["/caption"]["anchor"] == "bottom-right"
+    assert labels["/readout"]["visible"] is False
+    view.set_compared((70.0, 0.0), snapshot)
+    low = cfg.centre - cfg.construction_size / 2
+    assert labels["/caption"]["position"][:2] == (low, wall + 0.3) and labels["/caption"]["anchor"] == "bottom-left"
+    assert view.handles["readout"].visible and labels["/readout"]["font_size_mode"] == "scene"
+    assert view._caption(snapshot).count("\n") == 1 and "% in goal" not in view._caption(snapshot)
+    view.set_compared((0.0, -70.0), snapshot, second=True)  # one below the other: from the wall's middle
+    assert labels["/caption"]["position"][:2] == (cfg.centre, wall + 0.3)
+    assert labels["/caption"]["anchor"] == "bottom-center"
+    view.set_compared(None, snapshot)
+    assert labels["/caption"]["anchor"] == "bottom-right" and not view.handles["readout"].visible
     # The compared world's nodes live under its own root, moved along the floor.
     SceneView(LabelScene(), snapshot, root="/compare", offset=(70.0, 0.0))
     assert labels["/compare/caption"]["position"][:2] == (cfg.arena_size, cfg.arena_size + 0.8)
@@ -260,10 +268,79 @@ def test_the_caption_sits_where_every_framing_of_the_page_shows_it(snapshot):
 def test_compare_mode_frames_both_arenas(snapshot):
     """The camera over two arenas side by side: centred between them, as high as their width needs."""
     config = snapshot.world_config
-    s, beside = config.arena_size, config.arena_size + 6.0
-    position, look_at, fov = top_down_camera(config, 1.4, beside=beside)
-    assert look_at[0] == pytest.approx(s / 2 + beside / 2)  # halfway between the two arenas' centres
-    half_width = (1.12 * s + beside) / 2  # both arenas and their margins
+    s, offset = config.arena_size, compare_offset(config)
+    position, look_at, fov = compare_camera(config, 1.4, offset, whole=True)
+    assert look_at[0] == pytest.approx(s / 2 + offset[0] / 2)  # halfway between the two arenas' centres
+    half_width = (1.12 * s + offset[0]) / 2 * 1.02  # both arenas, their margins and a pad for the captions
     assert position[2] == pytest.approx(half_width / 1.4 / np.tan(fov / 2))
     one, _, _ = top_down_camera(config, 1.4)
     assert position[2] > one[2]
+
+
+# ------------------------------------------------ compare mode for a room (issue 41, item 1)
+def visible_floor(position, look_at, fov, aspect):
+    """(left, right, bottom, top) of the floor a top-down camera shows in a view ``aspect`` wide."""
+    half_h = position[2] * np.tan(fov / 2)
+    return (look_at[0] - half_h * aspect, look_at[0] + half_h * aspect, look_at[1] - half_h, look_at[1] + half_h)
+
+
+def inside(box, frame, tolerance=1e-6) -> bool:
+    return (frame[0] - tolerance <= box[0] and box[1] <= frame[1] + tolerance and frame[2] - tolerance <= box[2]
+            and box[3] <= frame[3] + tolerance)
+
+
+def overlap(a, b) -> bool:
+    return a[0] < b[1] and b[0] < a[1] and a[2] < b[3] and b[2] < a[3]
+
+
+#: Canvases (width, height in CSS px): a projector with the panel folded or open beside it, a wide screen,
+#: a tall screen and a phone upright.
+CANVASES = {"projector, presenter": (984, 768), "projector, panel open": (604, 768), "wide screen": (1560, 1000),
+            "wide screen, panel open": (1180, 1000), "tall screen": (768, 1024),
+            "tall screen, panel open": (348, 1024), "phone": (390, 844)}
+
+
+@pytest.mark.parametrize("canvas", CANVASES)
+@pytest.mark.parametrize("view", ["whole", "construction", "presenter"])
+def test_compare_framing_shows_every_caption_and_readout_apart(snapshot, canvas, view):
+    """Both worlds, each with its caption over it, its share in the goal under it and the difference
+    between them, all in the page's view and none over another; the layout is the one a page of this shape
+    asks for (below on a page taller than wide). On a projector, none lies where viser stacks its notices
+    (the canvas's top-left 310 x 150 px)."""
+    from sandbox.app.panel.compare import TALL
+    from sandbox.app.scene import (caption_box, compare_camera, compare_legend_box, construction_box,
+                                   difference_box, readout_box, shifted)
+
+    config = snapshot.world_config
+    width, height = CANVASES[canvas]
+    if view == "presenter" and "panel open" in canvas:
+        pytest.skip("the presenter layout folds the panel")
+    aspect = width / height
+    offset = compare_offset(config, stacked=aspect < TALL)
+    legend = 368 / 380 if view == "presenter" else None
+    position, look_at, fov = compare_camera(config, aspect, offset, whole=view == "whole", legend_height_per_width=legend)
+    frame = visible_floor(position, look_at, fov, aspect)
+    view_height = frame[3] - frame[2]
+    labels = {"left caption": caption_box(config, offset, False, view_height),
+              "right caption": caption_box(config, offset, True, view_height),
+              "left readout": readout_box(config), "right readout": shifted(readout_box(config), offset),
+              "difference": difference_box(config, offset)}
+    areas = {"left area": construction_box(config), "right area": shifted(construction_box(config), offset)}
+    if legend:
+        areas["legend"] = compare_legend_box(config, offset, legend)
+    for name, box in {**labels, **areas}.items():
+        assert inside(box, frame), f"{name} {np.round(box, 1)} is not all in view {np.round(frame, 1)}"
+    names = list(labels) + list(areas)
+    boxes = {**labels, **areas}
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            if a in labels or b in labels:
+                assert not overlap(boxes[a], boxes[b]), f"{a} {np.round(boxes[a], 1)} covers {b} {np.round(boxes[b], 1)}"
+    if canvas == "projector, presenter":
+        scale = width / (frame[1] - frame[0])  # px per m
+        notices = (frame[0], frame[0] + 310 / scale, frame[3] - 150 / scale, frame[3])
+        for name, box in labels.items():
+            assert not overlap(box, notices), f"{name} lies under viser's notices"
+    # As large as the room needs: at a projector's 1024 x 768 each construction area is at least 150 px wide.
+    if canvas == "projector, presenter" and view != "whole":
+        assert config.construction_size * width / (frame[1] - frame[0]) >= 150

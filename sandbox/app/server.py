@@ -161,7 +161,9 @@ class App:
         if failed:
             client.add_notification("The simulation cannot start", failed[0].upper() + failed[1:] + ".",
                                     color="red", auto_close_seconds=None)
-        self.panel.welcome(client)
+        # Its title card at step 0, or (if it may control the simulation) Start over mid-run.
+        grant = self.gate.grant(client.client_id)
+        self.panel.welcome(client, controls=grant is not None and grant.controls)
         if self.auto_paused:  # after the page's own parts exist: the frames it then gets are for it
             self.auto_paused = False
             self.lockstep.set_playing(True)
@@ -199,11 +201,11 @@ class App:
             self.auto_paused = True
             self.lockstep.set_playing(False)
 
-    def _reframe_all(self, beside: float | None) -> None:
+    def _reframe_all(self, offset: tuple[float, float] | None) -> None:
         """Compare mode began or ended: every page frames both worlds, or the one."""
-        self.panel.framing.beside = beside
-        with self.server.atomic():  # beside the second world, the caption goes under the arena
-            self.view.set_caption_below(beside is not None, self.runner.latest)
+        self.panel.framing.offset = offset
+        with self.server.atomic():  # beside a second world, the caption goes over the construction wall
+            self.view.set_compared(offset, self.runner.latest)
         for client in list(self.server.get_clients().values()):
             if client.client_id not in self.panel.inspector.followers:
                 self.panel.framing.apply(client)

@@ -25,6 +25,7 @@ from sandbox.app.panel.inspector import InspectorFolder
 from sandbox.app.panel.lamp import LampFolder
 from sandbox.app.panel.metrics import MetricsFolder
 from sandbox.app.panel.parameters import ParametersFolder
+from sandbox.app.panel.presenter import PresenterScreen
 from sandbox.app.panel.program import ProgramFolder
 from sandbox.app.panel.recording import RecordFolder
 from sandbox.app.panel.result import ResultFolder
@@ -48,8 +49,10 @@ class Panel:
         self.runner = runner
         self.comparison = comparison
         lockstep = comparison.lockstep
-        #: How each viewer frames the floor (its View, the presenter layout).
-        self.framing = Framing(runner, default_view)
+        #: How each viewer frames the floor (its View, the presenter layout), and what the presenter's
+        #: screen adds to a page: its title card, its on-screen bar, its Start over offer.
+        self.framing = Framing(runner, default_view, on_presenter=lambda client, shown: self.presenter.presenting(
+            client, shown))
         self._last_refresh = 0.0
         self.parameters = ParametersFolder(gui, runner)
         self.metrics = MetricsFolder(gui, runner, compared=lambda: comparison.runner)
@@ -72,8 +75,10 @@ class Panel:
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
         self.result = ResultFolder(gui, runner, server.scene, post=post)
         self.record = RecordFolder(gui, server, runner)
+        self.presenter = PresenterScreen(runner, lockstep, self.run, compared=lambda: comparison.runner, events=events)
         self.folders = (self.run, self.compare, self.shape, self.advice, self.strategies, self.program, self.lamp,
-                        self.challenge, self.metrics, self.result, self.inspector, self.record, self.parameters)
+                        self.challenge, self.metrics, self.result, self.inspector, self.record, self.parameters,
+                        self.presenter)
         snap = runner.latest
         self._build_legend(gui)
         for folder in self.folders:
@@ -91,9 +96,11 @@ class Panel:
         for folder in self.folders:
             folder.update(snap)
 
-    def welcome(self, client: Any) -> None:
-        """A page connected: its own inspector and layout, and the drawing preview warmed up."""
+    def welcome(self, client: Any, controls: bool = True) -> None:
+        """A page connected (``controls``: it may control the simulation): its own inspector, title card
+        or Start over offer, and layout, and the drawing preview warmed up."""
         self.inspector.attach(client)
+        self.presenter.arrive(client, controls)
         self.framing.arrive(client)
         self.shape.draw.warm_up()
 
@@ -101,6 +108,7 @@ class Panel:
         """A page left: its own inspector and layout go with it."""
         self.inspector.detach(client_id)
         self.framing.forget(client_id)
+        self.presenter.forget(client_id)
 
     def on_frame_drawn(self) -> None:
         self.record.on_frame_drawn()
@@ -125,7 +133,7 @@ class Panel:
         point = floor_point(event.ray_origin, event.ray_direction)
         if point is None:
             return
-        if self.comparison.runner is not None and point[0] > self.comparison.beside - 1.0:
+        if self.comparison.covers(point):
             return  # on the compared world: the shape, the lamp and the inspector act on the running one
         # The drawing picks its points and edges within a few of the clicking page's pixels: it needs the page.
         if not self.shape.draw.click(point, event.client) and not self.lamp.click(point, event.client):

@@ -9,11 +9,16 @@ from typing import Any, Callable
 import viser
 
 from sandbox.app.compare import COMPARE_CASES, SAME, Comparison, partner_config, side_name
-from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.panel.common import notify_error
 from sandbox.app.runner import wait_for
+from sandbox.app.scene import PHONE_ASPECT
 from sandbox.app.snapshot import Snapshot
 
 NOTHING = "nothing"
+#: A page narrower than this (width / height) gets the second world below the first, not beside it: a phone
+#: or a portrait screen. A 1024 x 768 projector's canvas beside the open panel (0.79) keeps them side by
+#: side, which it needs once the panel folds (the layout is chosen when the comparison starts).
+TALL = PHONE_ASPECT
 #: The Compare with... choices: none, the running world under the paper's lights, a case.
 CHOICES = (NOTHING, SAME, *COMPARE_CASES)
 
@@ -32,7 +37,8 @@ class CompareFolder:
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
         with gui.add_folder("Compare", expand_by_default=False):
-            gui.add_markdown("A second world to the right of this one, from the same seed: the same robots and "
+            gui.add_markdown("A second world to the right of this one (below it on a page taller than wide), from "
+                             "the same seed: the same robots and "
                              "boxes, with the strategies of a paper case (or the same settings under the paper's "
                              "lights, against your lamp or program). Play, pause, step, reset and speed act on "
                              "both; the charts show both.")
@@ -64,7 +70,7 @@ class CompareFolder:
             self.status.content = "Starting the second world..."
             try:
                 config, shape = self._partner(choice)
-                self.comparison.begin(config, shape, choice)
+                self.comparison.begin(config, shape, choice, stacked=tall(client))
             except Exception as exc:  # a refused goal or a process that would not start: say so
                 self._post(self._refused, client, exc)
                 return
@@ -82,10 +88,10 @@ class CompareFolder:
         self.show(NOTHING if self.comparison.runner is None else self.comparison.label)
 
     def _began(self, choice: str, client: Any) -> None:
+        # No notice: it covered the right world's caption for seconds (issue 41); the captions, the
+        # readouts and this folder's status say what runs.
         self._starting = False
         self._on_change(f"compare: {choice}")
-        notify(client, "Comparing", "Both worlds start again from step 0 with the same seed; the second one "
-               "is to the right.", "blue")
 
     def show(self, choice: str) -> None:
         """The dropdown shows ``choice`` (without acting on it; a config file's name is not a choice)."""
@@ -127,7 +133,16 @@ class CompareFolder:
                 self.status.content = ""
             return
         other = partner.latest
+        first, second = ("Top", "Bottom") if self.comparison.stacked else ("Left", "Right")
         self.status.content = (
-            f"**Left** {side_name(snap)}: {100 * snap.sample.fraction_in_goal:.1f} % in the goal, step "
-            f"{snap.step:,}  \n**Right** {side_name(other)}: {100 * other.sample.fraction_in_goal:.1f} % in the "
+            f"**{first}** {side_name(snap)}: {100 * snap.sample.fraction_in_goal:.1f} % in the goal, step "
+            f"{snap.step:,}  \n**{second}** {side_name(other)}: {100 * other.sample.fraction_in_goal:.1f} % in the "
             f"goal, step {other.step:,}")
+
+
+def tall(client: Any) -> bool:
+    """Whether the page that asks for a comparison is taller than wide: the shared scene has one layout
+    for every page, and it follows the page that runs the comparison (the presenter's, which the room
+    reads); the other pages frame both worlds as their windows allow."""
+    aspect = getattr(getattr(client, "camera", None), "aspect", None)
+    return bool(aspect) and float(aspect) < TALL

@@ -8,15 +8,21 @@ Each viewer chooses for itself, like its
 camera; ``serve --classroom`` starts every page in it. A portrait view (a
 phone) has no room beside the construction area: there the presenter layout
 frames the construction area alone, with the legend in the panel.
+
+In compare mode every view frames both worlds (issue 41, item 1): the whole
+arenas, or both construction areas with their captions, readouts and the
+difference between them; the presenter's legend then lies on the floor
+between the worlds (or left of them, stacked).
 """
 
 from __future__ import annotations
 
 import threading
-from typing import Any
+from typing import Any, Callable
 
 from sandbox.app.legend import legend_picture
-from sandbox.app.scene import PHONE_ASPECT, add_floor_legend, aim_camera, frame_arena, presenter_camera
+from sandbox.app.scene import (PHONE_ASPECT, add_floor_legend, aim_camera, compare_camera, compare_legend_box,
+                               frame_arena, presenter_camera)
 
 CONSTRUCTION = "Construction area"
 WHOLE_ARENA = "Whole arena"
@@ -28,12 +34,15 @@ VIEWS = (CONSTRUCTION, WHOLE_ARENA, PRESENTER)
 class Framing:
     """Each viewer's view (one of :data:`VIEWS`), and what the presenter layout adds to its page."""
 
-    def __init__(self, runner: Any, default: str = WHOLE_ARENA):
+    def __init__(self, runner: Any, default: str = WHOLE_ARENA,
+                 on_presenter: Callable[[Any, bool], None] = lambda client, shown: None):
+        """``on_presenter(client, shown)`` hears a page enter (True) or leave the presenter layout (its
+        on-screen bar: :mod:`sandbox.app.panel.presenter`)."""
         if default not in VIEWS:
             raise ValueError(f"unknown view {default!r}: one of {', '.join(VIEWS)}")
-        self.runner, self.default = runner, default
-        #: Compare mode: how far right of the running world the second one lies (m), framed with it.
-        self.beside: float | None = None
+        self.runner, self.default, self.on_presenter = runner, default, on_presenter
+        #: Compare mode: where the second world lies (m along the floor from the running one), framed with it.
+        self.offset: tuple[float, float] | None = None
         self._views: dict[int, str] = {}
         self._legends: dict[int, Any] = {}
         self._lock = threading.RLock()
@@ -55,6 +64,8 @@ class Framing:
                 client.gui.main_panel.minimize()
             elif view != PRESENTER and was == PRESENTER:
                 client.gui.main_panel.expand()
+        if (view == PRESENTER) != (was == PRESENTER):
+            self.on_presenter(client, view == PRESENTER)
         self.apply(client)
 
     def toggle_presenter(self, client: Any) -> None:
@@ -65,25 +76,34 @@ class Framing:
     def apply(self, client: Any) -> None:
         """Frame this viewer's camera for its view and window; the presenter's legend on its floor.
 
-        All of it under the lock, from reading the view to moving the camera: the server's fit thread
-        applies a page's view as its window reports its shape, and a View button chosen meanwhile
-        must not be framed first and then overwritten by the view the fit read before it (seen on a
-        loaded machine: the whole arena chosen, the presenter's camera left)."""
+        All of it on the app's event thread (and under the lock, for callers outside it), from reading
+        the view to moving the camera: a View button chosen while a page's camera is fitted must not be
+        framed first and then overwritten by the view read before it (seen on a loaded machine when
+        the fitting ran in a thread of its own: the whole arena chosen, the presenter's camera left)."""
         config = self.runner.latest.world_config
         aspect = float(getattr(client.camera, "aspect", 0.0) or 1.4)
         with self._lock:
             view = self.of(client.client_id)
-            presenter = view == PRESENTER and aspect >= PHONE_ASPECT
+            presenter = view == PRESENTER and (aspect >= PHONE_ASPECT or self.offset is not None)
             self._show_legend(client, config, presenter)
-            if not presenter:
-                frame_arena(client, config, whole=view == WHOLE_ARENA, beside=self.beside)
-                return
-            aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect, beside=self.beside))
+            if self.offset is not None:
+                aim_camera(client, *compare_camera(config, aspect, self.offset, whole=view == WHOLE_ARENA,
+                                                   legend_height_per_width=self._legend_aspect if presenter
+                                                   else None))
+            elif presenter:
+                aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect))
+            else:
+                frame_arena(client, config, whole=view == WHOLE_ARENA)
 
     def arrive(self, client: Any) -> None:
-        """A page that connected: the default view's layout (its camera is framed as it reports its shape)."""
+        """A page that connected: the default view's layout (its camera is framed as it reports its shape).
+        The presenter's legend goes on its floor at once, with the rest of the first frame, not when the
+        page first reports its window (seconds later on a loaded machine; a phone's report takes it away)."""
         if self.of(client.client_id) == PRESENTER:
             client.gui.main_panel.minimize()
+            self.on_presenter(client, True)
+            with self._lock:
+                self._show_legend(client, self.runner.latest.world_config, True)
 
     def forget(self, client_id: int) -> None:
         with self._lock:
@@ -91,12 +111,14 @@ class Framing:
             self._legends.pop(client_id, None)
 
     def _show_legend(self, client: Any, config: Any, shown: bool) -> None:
-        """The legend on this viewer's floor (placed for the world's construction area), or none."""
-        place = (config.centre, config.construction_size)
+        """The legend on this viewer's floor (placed for the world's construction area, and in compare
+        mode between the worlds), or none."""
+        place = (config.centre, config.construction_size, self.offset)
         legend, placed_for = self._legends.get(client.client_id, (None, None))
         if legend is not None and (not shown or placed_for != place):
             legend.remove()
             del self._legends[client.client_id]
             legend = None
         if shown and legend is None:
-            self._legends[client.client_id] = (add_floor_legend(client.scene, config, presenter=True), place)
+            box = None if self.offset is None else compare_legend_box(config, self.offset, self._legend_aspect)
+            self._legends[client.client_id] = (add_floor_legend(client.scene, config, presenter=True, box=box), place)

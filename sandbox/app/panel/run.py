@@ -100,12 +100,12 @@ class RunFolder:
 
     def toggle_play(self) -> None:
         self.lockstep.set_playing(not self.lockstep.playing)
-        self._sync_play_button()
+        self.sync_play_button()
 
     def step(self) -> None:
         """One controller update, paused first."""
         self.lockstep.set_playing(False)
-        self._sync_play_button()
+        self.sync_play_button()
         self.lockstep.step_once(self.runner.latest.world_config.update_every)
 
     def skip_ahead(self, step: int, client: Any) -> None:
@@ -180,9 +180,9 @@ class RunFolder:
             return  # the status line shows the build
         self.status.content = self._status_text(snap)
         if self.play.label != ("Pause" if snap.playing else "Play"):
-            self._sync_play_button()
+            self.sync_play_button()
 
-    def _sync_play_button(self) -> None:
+    def sync_play_button(self) -> None:
         playing = self.runner.playing
         self.play.label = "Pause" if playing else "Play"
         self.play.icon = viser.Icon.PLAYER_PAUSE if playing else viser.Icon.PLAYER_PLAY
