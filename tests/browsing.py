@@ -40,3 +40,13 @@ class PatientBrowser:
 
     def __getattr__(self, name):
         return getattr(self._browser, name)
+
+
+def small_app():
+    """The small live world the browser modules drive (40 robots, 80 boxes, 4 steps a frame at 15 frames
+    a second: quick to build and to draw on a loaded machine), started; the caller stops it."""
+    from sandbox.app.server import App, free_port
+    from sandbox.model.config import Config
+
+    config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
+    return App(config, port=free_port(), steps_per_frame=4, fps=15).start()

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.browsing import BROWSER_MARKS
+from tests.browsing import BROWSER_MARKS, small_app
 from tests.waiting import frames_pass, paused_step, wait_until, wait_until_steady
 
 pytestmark = BROWSER_MARKS
@@ -49,12 +49,7 @@ def done_moving(locator) -> bool:
 
 @pytest.fixture(scope="module")
 def app():
-    from sandbox.app.server import App, free_port
-    from sandbox.model.config import Config
-
-    config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
-    app = App(config, port=free_port(), steps_per_frame=4, fps=15)
-    app.start()
+    app = small_app()
     yield app
     app.stop()
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.browsing import BROWSER_MARKS, playwright_api  # noqa: F401 - skips without Playwright
+from tests.browsing import BROWSER_MARKS, playwright_api, small_app  # noqa: F401 - playwright_api: skips without it
 from tests.test_browser_app import choose
 from tests.waiting import wait_until
 
@@ -22,12 +22,7 @@ SHOTS = os.environ.get("PHOTOTAXIS_SHOTS")
 
 @pytest.fixture(scope="module")
 def app():
-    from sandbox.app.server import App, free_port
-    from sandbox.model.config import Config
-
-    config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
-    app = App(config, port=free_port(), steps_per_frame=4, fps=15)
-    app.start()
+    app = small_app()
     yield app
     app.stop()
 

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.browsing import BROWSER_MARKS, playwright_api
+from tests.browsing import BROWSER_MARKS, playwright_api, small_app
 from tests.waiting import wait_until
 
 pytestmark = BROWSER_MARKS
@@ -39,12 +39,7 @@ PLUS = "29,31; 31,31; 31,29; 33,29; 33,31; 35,31; 35,33; 33,33; 33,35; 31,35; 31
 
 @pytest.fixture(scope="module")
 def app():
-    from sandbox.app.server import App, free_port
-    from sandbox.model.config import Config
-
-    config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
-    app = App(config, port=free_port(), steps_per_frame=4, fps=15)
-    app.start()
+    app = small_app()
     yield app
     app.stop()
 
