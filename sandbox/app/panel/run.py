@@ -59,7 +59,7 @@ class RunFolder:
                                              hint="Run to that step without drawing, as fast as the machine "
                                                   "steps, then show the result")
             self.status = gui.add_markdown(self._status_text(snap))
-            self.cancel = gui.add_button("Cancel", icon=viser.Icon.X, visible=False,
+            self.cancel = gui.add_button("Cancel building", icon=viser.Icon.X, visible=False,
                                          hint="Stop building the new world (the current one goes on), or stop "
                                               "running to the end where it got to")
         runner.on_progress(self._building)
@@ -166,6 +166,9 @@ class RunFolder:
         self.cancel.visible = fraction is not None
         if fraction is None:
             return
+        label = "Cancel building" if self._skipping is None else "Cancel the run to the end"
+        if self.cancel.label != label:
+            self.cancel.label = label
         if self._skipping is None:
             self.status.content = f"**Building the world:** {100 * fraction:.0f} % of the bodies placed"
             return
