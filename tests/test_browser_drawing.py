@@ -495,8 +495,14 @@ def test_from_idea_to_answer_draw_tweak_use_run_to_the_end_and_read(app, page):
         click_floor(page, x, y)
     wait_until(lambda: len(draw.points) == 6, what="the L's six points")
     drag_vertex(page, draw, 3, (35, 32))  # the short arm 3 m wide instead of 2
-    click_floor(page, 32.0, 29.0)  # on edge 1-2, half-way: a point inserted there
-    wait_until(lambda: len(draw.points) == 7, what="the point inserted on edge 1-2")
+    for attempt in range(3):  # on edge 1-2, half-way: a point inserted there (again, as a designer would,
+        click_floor(page, 32.0, 29.0)  # if a camera still easing after the drag took the click elsewhere)
+        try:
+            wait_until(lambda: len(draw.points) == 7, 20, what="the point inserted on edge 1-2")
+            break
+        except AssertionError:
+            if attempt == 2 or len(draw.points) > 7:
+                raise
     assert (35.0, 32.0) in draw.points and (29.0, 29.0) in draw.points  # the moved vertex kept, one more point
     shot(page, "loop-1-tweaked")
     world = app.runner.latest.world_key
