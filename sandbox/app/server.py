@@ -14,7 +14,6 @@ import os
 import contextlib
 import io
 import socket
-import threading
 import time
 from pathlib import Path
 from typing import Any
