@@ -4,6 +4,8 @@ Chromium per module) is in tests/conftest.py."""
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from sandbox.app.live_bench import chromium_path
@@ -44,9 +46,13 @@ class PatientBrowser:
 
 def small_app():
     """The small live world the browser modules drive (40 robots, 80 boxes, 4 steps a frame at 15 frames
-    a second: quick to build and to draw on a loaded machine), started; the caller stops it."""
+    a second: quick to build and to draw on a loaded machine), started; the caller stops it.
+    PHOTOTAXIS_TEST_WORLD=default gives the default world instead (`serve`'s), to measure a bar set for
+    it (the one-minute designer's loop, docs/testing.md)."""
     from sandbox.app.server import App, free_port
     from sandbox.model.config import Config
 
+    if os.environ.get("PHOTOTAXIS_TEST_WORLD") == "default":
+        return App(Config(), port=free_port()).start()
     config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
     return App(config, port=free_port(), steps_per_frame=4, fps=15).start()

@@ -26,6 +26,18 @@ from sandbox.app.panel.common import floor_point
 #: Heights (m) above the floor: over everything the simulation draws (scene.Z_TOP is 0.12), the handles
 #: over the lines so that a press on a vertex grabs the vertex, not the pad under it.
 Z_PAD, Z_PREVIEW, Z_LINE, Z_HANDLE = 0.3, 0.32, 0.34, 0.4
+#: Handles not yet in use: a speck under the floor, where no press can reach them.
+Z_SPARE, SPARE_SCALE = -5.0, 1e-4
+#: The fewest handles the mesh has room for; it doubles when a drawing outgrows it.
+HANDLE_ROOM = 16
+
+
+def handle_room(n: int) -> int:
+    """Room for ``n`` handles: HANDLE_ROOM, doubled as often as needed."""
+    room = HANDLE_ROOM
+    while room < n:
+        room *= 2
+    return room
 #: The veil over the live scene while drawing (the drag surface): dark enough that the outline, its
 #: numbers and the dashed preview read over lights, robots and boxes, light enough to see them move.
 DIM_COLOUR, DIM_OPACITY = (12, 14, 24), 0.55
@@ -97,6 +109,7 @@ class DrawView:
         self._on_pad_drag, self._on_vertex_drag = on_pad_drag, on_vertex_drag
         self._lock = threading.RLock()
         self._handles: Any = None
+        self.handles_shown = 0  # the handles in use: the mesh has room for more
         self._labels: list[Any] = []
         self._pad: Any = None
         self._disc = disc()
@@ -172,27 +185,35 @@ class DrawView:
             handle.visible = True
 
     def _show_handles(self, pts: np.ndarray, red: list[int], selected: int | None = None) -> None:
-        n = len(pts)
-        colours = np.tile(np.array(HANDLE_COLOUR, np.uint8), (max(n, 1), 1))
-        scales = np.full(n, self.handle_radius, np.float32)
-        if n:
-            colours[0] = FIRST_HANDLE_COLOUR
-            for e in red:  # both ends of a crossing edge
-                colours[[e, (e + 1) % n]] = CROSSING_HANDLE_COLOUR
+        """One batched mesh of discs, one per point, with room for more: a batched mesh keeps its
+        instance count, and a new node reaches the page a few frames later than new positions do, so a
+        handle pressed right after its point was placed would miss (the press placed a point instead)."""
+        n = self.handles_shown = len(pts)
+        if n == 0:
+            if self._handles is not None:
+                self._handles.visible = False
+            return
+        room = handle_room(n)
+        colours = np.tile(np.array(HANDLE_COLOUR, np.uint8), (room, 1))
+        scales = np.full(room, SPARE_SCALE, np.float32)
+        scales[:n] = self.handle_radius
+        colours[0] = FIRST_HANDLE_COLOUR
+        for e in red:  # both ends of a crossing edge
+            colours[[e, (e + 1) % n]] = CROSSING_HANDLE_COLOUR
         if selected is not None and 0 <= selected < n:
             colours[selected] = SELECTED_COLOUR
             scales[selected] *= SELECTED_SCALE
-        positions = np.zeros((n, 3), np.float32)
-        positions[:, :2], positions[:, 2] = pts, Z_HANDLE
-        if self._handles is not None and len(self._handles.batched_positions) != n:
-            self._handles.remove()  # a batched mesh keeps its instance count: a new count is a new node
+        positions = np.zeros((room, 3), np.float32)
+        positions[:n, :2], positions[:n, 2] = pts, Z_HANDLE
+        positions[n:, :2], positions[n:, 2] = pts[0], Z_SPARE
+        if self._handles is not None and len(self._handles.batched_positions) != room:
+            self._handles.remove()
             self._handles = None
-        if n == 0:
-            return
         if self._handles is None:
             self._handles = self.scene.add_batched_meshes_simple(
-                "/draw/handles", self._disc[0], self._disc[1], batched_wxyzs=np.tile([1.0, 0, 0, 0], (n, 1)),
-                batched_positions=positions, batched_scales=scales, batched_colors=colours, lod="off", side="double", cast_shadow=False, receive_shadow=False)
+                "/draw/handles", self._disc[0], self._disc[1], batched_wxyzs=np.tile([1.0, 0, 0, 0], (room, 1)),
+                batched_positions=positions, batched_scales=scales, batched_colors=colours, lod="off",
+                side="double", cast_shadow=False, receive_shadow=False)
             self._handles.on_drag(self._vertex_drag)
             return
         self._handles.batched_positions = positions
@@ -200,6 +221,8 @@ class DrawView:
             self._handles.batched_colors = colours
         if not np.array_equal(self._handles.batched_scales, scales):
             self._handles.batched_scales = scales
+        if not self._handles.visible:
+            self._handles.visible = True
 
     def _show_labels(self, pts: np.ndarray) -> None:
         """Vertex numbers beside the handles, up and right, where the line is least likely to run."""
