@@ -205,3 +205,20 @@ def test_routed_callbacks_of_a_click_a_page_of_its_own_and_a_connect_go_through_
         with contextlib.redirect_stdout(io.StringIO()):
             server.stop()
         pool.shutdown(wait=False)
+
+
+def test_a_callback_the_stopping_app_will_not_run_ends_quietly():
+    """A page's last messages arrive while the app stops: viser would log each failed callback as
+    "Task failed with exception". A callback the stopped queue refuses ends with None; any other
+    failure is still the callback's."""
+    from sandbox.app.events import EventQueue
+    from sandbox.app.viser_seam import _Routed
+
+    events = EventQueue().open()
+    routed = _Routed(events.submit, concurrent.futures.ThreadPoolExecutor(1))
+    assert routed.submit(lambda x: x + 1, 1).result(5) == 2
+    failing = routed.submit(lambda: 1 / 0)
+    assert isinstance(failing.exception(5), ZeroDivisionError)
+    events.stop()
+    assert routed.submit(lambda: 1 / 0).result(5) is None
+    routed.shutdown()

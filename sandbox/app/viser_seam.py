@@ -32,6 +32,8 @@ from typing import Any, AsyncGenerator, Callable
 
 import viser
 
+from sandbox.app.events import QueueStopped
+
 #: The viser release whose private code this module uses (pinned in pyproject.toml and by a test).
 WRITTEN_FOR = "1.1.1"
 
@@ -415,7 +417,25 @@ class _Routed:
     replaced (a page half-way through connecting may still have used it)."""
 
     def __init__(self, submit: Callable[..., Future], replaced: Any):
-        self.submit, self._replaced = submit, replaced
+        self._submit, self._replaced = submit, replaced
+
+    def submit(self, fn: Callable, *args: Any) -> Future:
+        """``submit(fn, *args)``, except that a callback the stopping app will not run ends quietly:
+        viser logs a failed callback as "Task failed with exception", and a page's last messages
+        arrive while the app stops (each ``bench --live`` printed two such tracebacks)."""
+        routed, answer = self._submit(fn, *args), Future()
+
+        def settle(done: Future) -> None:
+            error = done.exception()
+            if error is None:
+                answer.set_result(done.result())
+            elif isinstance(error, QueueStopped):
+                answer.set_result(None)
+            else:
+                answer.set_exception(error)
+
+        routed.add_done_callback(settle)
+        return answer
 
     def shutdown(self, *args: Any, **kwargs: Any) -> None:
         self._replaced.shutdown(wait=False)
