@@ -228,23 +228,28 @@ def build(app, page, name: str) -> None:
 def drag_vertex(page, draw, number: int, to, attempts: int = 3, steps: int = 12) -> None:
     """Drag the handle of vertex ``number`` (as the floor shows it) to ``to``. The server has a point
     before the page draws its handle: a press that came first (once, on a loaded machine, right after a
-    template was chosen) turned the camera instead, and while drawing one placed a new point where it was
-    released (the page had not yet drawn the handle of a point just added). Then the stray point is
-    undone, the camera put back and the drag made again, as a designer would."""
+    template was chosen) turned the camera instead, and while drawing one sometimes placed a new point
+    where it was released (the press reached the drawing pad under the handle: seen with the default
+    world's heavier page, 3 frames a second, not on the small one). Then the stray point is undone, the
+    camera put back and the drag made again, as a designer would."""
     target, camera = tuple(map(float, to)), page.client.camera
     kept = (tuple(camera.position), tuple(camera.look_at), tuple(camera.up_direction))
     before = list(draw.points)
     for attempt in range(1, attempts + 1):
         camera_still(page)
         drag_floor(page, draw.points[number - 1], to, steps)
+        moved = lambda: draw.points[number - 1] == target and len(draw.points) == len(before)  # noqa: E731
+        strayed = lambda: len(draw.points) > len(before)  # noqa: E731 - the press missed: a new point
         try:
-            wait_until(lambda: draw.points[number - 1] == target and len(draw.points) == len(before), 20,
-                       what=f"vertex {number} at {to}")
-            return
+            wait_until(lambda: moved() or strayed(), 20, what=f"vertex {number} at {to}")
+            if moved():
+                return
         except AssertionError:
             if attempt == attempts:
                 raise
-        if len(draw.points) > len(before):  # the press missed the handle: the drag placed a new point
+        print(f"\ndrag {attempt} of vertex {number} missed: {draw.points}")
+        assert attempt < attempts, f"vertex {number} never reached {to}"
+        if strayed():
             button(page, "Undo last point").click()
             wait_until(lambda: draw.points == before, 20, what="the stray point taken back")
         camera.position, camera.look_at, camera.up_direction = kept
@@ -269,11 +274,13 @@ def click_edge(page, draw, at, edge: int, attempts: int = 3) -> None:
         try:
             wait_until(lambda: len(draw.points) == len(before) + 1, 20, what=f"a point inserted at {at}")
         except AssertionError:
+            print(f"\nclick {attempt} on edge {edge} made no point")
             if attempt == attempts:
                 raise
             continue
         if draw.points[edge + 1] == target:
             return
+        print(f"\nclick {attempt} on edge {edge} missed: {draw.points}")
         assert attempt < attempts, f"the click meant for edge {edge} at {at} made {draw.points}"
         button(page, "Delete point" if draw.selected is not None else "Undo last point").click()
         wait_until(lambda: draw.points == before, 20, what="the stray point taken back")
@@ -519,7 +526,8 @@ LOOP_END = 100_000
 
 def test_from_idea_to_answer_draw_tweak_use_run_to_the_end_and_read(app, page):
     """Draw an L with 6 m arms by clicks at a person's pace (one every 0.5 s), move one vertex, insert
-    one, use it, run it to 100,000 steps without drawing and read the result in the page."""
+    one, use it and run it to 100,000 steps without drawing (one button), and read the result in the
+    page."""
     draw, result = app.panel.shape.draw, app.panel.result
     clear(page, draw)
     began = clock()
@@ -537,20 +545,17 @@ def test_from_idea_to_answer_draw_tweak_use_run_to_the_end_and_read(app, page):
     click_edge(page, draw, (32.0, 29.0), 0)  # on edge 1-2, half-way: a point inserted there
     assert (35.0, 32.0) in draw.points and (29.0, 29.0) in draw.points  # the moved vertex kept, one more point
     shot(page, "loop-1-tweaked")
-    world, drawn = app.runner.latest.world_key, clock() - began
-    button(page, "Close and use").click()
-    wait_until(lambda: app.runner.latest.world_key != world and app.runner.latest.shape_name == "drawn",
-               what="a new world on the drawn L")
-    used = clock() - began
     if app.panel.run.end_step.value != LOOP_END:  # 100,000 is where the field starts: a designer leaves it
         field = page.get_by_label("Run to step", exact=True)
         field.scroll_into_view_if_needed()
         field.fill(str(LOOP_END))
         field.press("Tab")
         wait_until(lambda: app.panel.run.end_step.value == LOOP_END, what="the end step")
-    button(page, "Run to the end").scroll_into_view_if_needed()
-    button(page, "Run to the end").click()
-    asked = clock() - began
+    world, drawn = app.runner.latest.world_key, clock() - began
+    button(page, "Use and run to the end").click()  # Close and use, then Run to the end: one action
+    wait_until(lambda: app.runner.latest.world_key != world and app.runner.latest.shape_name == "drawn",
+               what="a new world on the drawn L")
+    used = clock() - began
     wait_until(lambda: app.runner.latest.step >= LOOP_END, 300, what="the end of the run")
     ran = clock() - began
     page.get_by_text("of the boxes in the goal", exact=False).first.wait_for()  # the answer, in the page
@@ -558,5 +563,4 @@ def test_from_idea_to_answer_draw_tweak_use_run_to_the_end_and_read(app, page):
     assert "perfect packing" in result.text.content and result.rings is not None
     shot(page, "loop-2-answer")
     print(f"\nfrom the first click to the answer at step {LOOP_END:,}: {read:.0f} s (drawn and tweaked at "
-          f"{drawn:.0f} s, the new world at {used:.0f} s, run to the end asked at {asked:.0f} s, reached at "
-          f"{ran:.0f} s)")
+          f"{drawn:.0f} s, the new world at {used:.0f} s, step {LOOP_END:,} at {ran:.0f} s)")

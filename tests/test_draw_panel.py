@@ -293,3 +293,24 @@ def test_clicks_that_come_while_the_event_thread_is_busy_all_land_in_order(app, 
         release.set()
     wait_until(lambda: len(draw.points) == len(targets), what="every click a point")
     assert draw.points == targets
+
+
+def test_use_and_run_to_the_end_builds_the_drawing_then_runs_it_to_the_end_step(app, draw, page):
+    """One action from a drawing to its answer: the new world on the drawn goal, then Run to the end
+    (to the Run folder's end step); a drawing that cannot be used leaves the button off."""
+    run = app.panel.run
+    draw._change([(10.0, 10.0), (14.0, 14.0), (14.0, 10.0), (10.0, 14.0)])  # a bow tie: crossing edges
+    assert draw.close_and_run.disabled
+    draw._change(SQUARE)
+    assert not draw.close_and_run.disabled
+    ending = run.end_step.value
+    run.end_step.value = 300
+    try:
+        key = app.runner.latest.goal_key
+        page.click(uuid_of(draw.close_and_run))
+        wait_until(lambda: app.runner.latest.goal_key != key and app.runner.latest.shape_name == "drawn",
+                   what="the drawn square in use")
+        wait_until(lambda: app.runner.latest.step >= 300 and not run.run_to_end.disabled, what="the run to step 300")
+        assert app.runner.latest.goal_key != key and len(draw.points) == 4
+    finally:
+        run.end_step.value = ending

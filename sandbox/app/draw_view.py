@@ -186,8 +186,8 @@ class DrawView:
 
     def _show_handles(self, pts: np.ndarray, red: list[int], selected: int | None = None) -> None:
         """One batched mesh of discs, one per point, with room for more: a batched mesh keeps its
-        instance count, and a new node reaches the page a few frames later than new positions do, so a
-        handle pressed right after its point was placed would miss (the press placed a point instead)."""
+        instance count, and a new count was a new node, which the page builds afresh (its mesh and its
+        drag handler) at every click; now a new point is new positions in the same node."""
         n = self.handles_shown = len(pts)
         if n == 0:
             if self._handles is not None:

@@ -64,6 +64,7 @@ class Panel:
         self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark,
                                            reset=self.run.reset)
         self.shape.back_to_defaults = self.strategies.back_to_defaults
+        self.shape.draw.run_to_the_end = self._to_the_end
         self.advice = AdviceFolder(gui, runner, use=self.strategies.use, post=post)
         self.advice.run_to_the_end = self._afresh_to_the_end
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
@@ -113,9 +114,13 @@ class Panel:
     def on_frame_drawn(self) -> None:
         self.record.on_frame_drawn()
 
+    def _to_the_end(self, client: Any) -> None:
+        """Run to the Run folder's end step (the world as it is)."""
+        self.run.skip_ahead(int(self.run.end_step.value), client)
+
     def _afresh_to_the_end(self, client: Any) -> None:
         """A new world with the same seed (the settings just given), run to the Run folder's end step."""
-        self.run.reset(client, on_done=lambda _: self.run.skip_ahead(int(self.run.end_step.value), client))
+        self.run.reset(client, on_done=lambda _: self._to_the_end(client))
 
     def _after_reset(self, client: Any) -> None:
         self.inspector.stop()

@@ -94,7 +94,7 @@ def status_text(n: int, drawing: bool, problem: str, preview: GoalPreview | None
             text += (f"Dashed on the floor: the goal at its final size ({preview.area:.0f} m², centred) in blue, "
                      "the smallest and largest outlines of its light band in orange. ")
             text += "".join(f"Note: {note}. " for note in preview.notes)
-        text += "**Close and use** builds it."
+        text += "**Close and use** builds it; **Use and run to the end** builds it and gives the answer."
     if selected is not None and 0 <= selected < n:
         text += f"\n\n**Point {selected + 1} selected**: drag it, or **Delete point** (the Delete key) removes it."
     if typed_error:
@@ -112,8 +112,10 @@ def _warm_up(config: Any) -> None:
 class DrawFolder:
     """The drawing state and its controls. ``use(vertices, name, client)`` hands a finished goal on."""
 
-    def __init__(self, gui: Any, runner: Any, scene: Any, use: Callable[[Any, str, Any], None]):
+    def __init__(self, gui: Any, runner: Any, scene: Any, use: Callable[..., None]):
         self.gui, self.runner, self._use = gui, runner, use
+        #: *Run to the end* of the Run folder, for a page (set by the panel; None: the button is not offered).
+        self.run_to_the_end: Callable[[Any], None] | None = None
         self.points: list[Point] = []
         #: The index of the selected point (its handle clicked or dragged; Delete removes it), or None.
         self.selected: int | None = None
@@ -154,6 +156,10 @@ class DrawFolder:
             self.close = gui.add_button("Close and use", icon=viser.Icon.CHECK, disabled=True,
                                         hint="Start a new world on this goal (step 0, the same seed); the points "
                                              "stay here to tweak")
+            self.close_and_run = gui.add_button("Use and run to the end", icon=viser.Icon.PLAYER_SKIP_FORWARD,
+                                                disabled=True,
+                                                hint="Close and use, then Run to the end (to Run to step, in Run): "
+                                                     "the answer without watching")
             self.edit = gui.add_button("Edit this goal", icon=viser.Icon.EDIT,
                                        hint="Bring the running goal back here as numbered points")
             self.clear = gui.add_button("Clear", icon=viser.Icon.TRASH, disabled=True)
@@ -180,6 +186,7 @@ class DrawFolder:
             command.on_trigger(lambda event: self.delete_selected())
         self.clear.on_click(lambda event: self._change([]))
         self.close.on_click(self._close_and_use)
+        self.close_and_run.on_click(lambda event: self._close_and_use(event, to_the_end=True))
         self.edit.on_click(lambda event: self.edit_running_goal())
         self.template.on_update(self._pick_template)
         self.apply.on_click(self._apply_typed)
@@ -290,14 +297,17 @@ class DrawFolder:
             self.view.set_pad(on)
             self._refresh()
 
-    def _close_and_use(self, event: viser.GuiEvent) -> None:
+    def _close_and_use(self, event: viser.GuiEvent, to_the_end: bool = False) -> None:
+        """*Close and use* (``to_the_end``: and then *Run to the end*)."""
         with self._lock:
             try:
                 vertices = validate_polygon(self.points, SOURCE)
             except ShapeError as exc:
                 notify_error(event.client, "Shape not used", str(exc))
                 return
-            self._use(vertices, "drawn", event.client)
+            run, client = self.run_to_the_end, event.client
+            then = (lambda: run(client)) if to_the_end and run is not None else None
+            self._use(vertices, "drawn", client, then=then)
             self.drawing = False  # the points stay: the goal can be tweaked and used again
             self.view.set_pad(False)
             self._refresh()
@@ -388,6 +398,7 @@ class DrawFolder:
             for command in self.delete_keys:
                 command.disabled = nothing_selected
         self.close.disabled = n < 3 or bool(self._problem)
+        self.close_and_run.disabled = self.close.disabled or self.run_to_the_end is None
         self.grid.disabled = not self.snap_on.value
         self.status.content = status_text(n, self.drawing, self._problem, self._preview, self._typed_error,
                                           self._red, self.selected)

@@ -156,11 +156,13 @@ class ShapeFolder:
         self.use(vertices, name, client)
         return True
 
-    def use(self, vertices, name: str, client: Any, announce: bool = True, quiet: bool = False) -> None:
+    def use(self, vertices, name: str, client: Any, announce: bool = True, quiet: bool = False,
+            then: Callable[[], None] | None = None) -> None:
         """Use a goal: a new world on it from step 0 with the same seed, the outline and strategies back
         to their defaults unless *Keep outline and strategies* is on. The simulation may still refuse a
         goal that does not fit the arena: then the running world goes on as it was. ``quiet``: part of
-        another action (a paper case), which sets the strategies, starts the world and says what it did."""
+        another action (a paper case), which sets the strategies, starts the world and says what it did.
+        ``then``: what to do once the new world has started (not if the goal was refused)."""
 
         def refused(exc: BaseException) -> None:
             notify_error(client, "Shape not used", str(exc))
@@ -191,6 +193,8 @@ class ShapeFolder:
             said += [note[0].upper() + note[1:] for note in notes]
             notify(client, "Goal changed" if announce else "About this goal", ". ".join(said) + ".",
                    "green" if announce else "blue")
+            if then is not None:
+                then()
 
         self.runner.set_shape(vertices, name, on_done=fitted, on_error=refused)
 
