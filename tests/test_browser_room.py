@@ -57,9 +57,11 @@ def test_the_presenters_first_visit_and_play_from_the_title_card(app, browser):
         card_after = time.monotonic() - answered
         # The grid is drawn (the lights' texture) and the legend lies on this page's floor; the bar is on screen.
         wait_until(lambda: teacher_id in app.panel.framing._legends, what="the legend on the floor")
+        legend_after = time.monotonic() - answered
         bar = page.get_by_role("button", name="Pause", exact=True)
         bar.wait_for()
-        print(f"title card shown {card_after:.1f} s after the page answered")
+        print(f"\ntitle card shown {card_after:.1f} s after the page answered, the legend sent at "
+              f"{legend_after:.1f} s, the bar at {time.monotonic() - answered:.1f} s")
         student, watching, student_id, _ = open_page(browser, app, token=False)
         watching.get_by_text("The presenter starts it with Play.").wait_for()
         assert watching.get_by_role("button", name="Pause", exact=True).count() == 0  # no bar: it only watches
