@@ -49,14 +49,15 @@ def pytest_configure(config) -> None:
 
 
 def pytest_collection_modifyitems(config, items) -> None:
-    """Browser tests share one page per module and build on what the earlier ones left: each module
-    runs in one worker, in order (--dist loadgroup). Every other test goes wherever a worker is free.
-    The slow tests (several seconds each) go first, so that the run does not end with one worker
-    busy on a long test while the others wait."""
-    for item in items:
-        if item.get_closest_marker("browser") is not None:
-            item.add_marker(pytest.mark.xdist_group(item.module.__name__))
-    items.sort(key=lambda item: item.get_closest_marker("slow") is None)  # stable: the rest keep their order
+    """Modules with slow tests (several seconds each) go first, so that the run does not end with one
+    worker busy on a long module while the others wait. Each module runs whole in one worker, in
+    order (--dist loadfile, pyproject.toml): a browser module's tests share one page and build on
+    what the earlier ones left, and any module's server is started once."""
+    def module(item) -> str:
+        return item.nodeid.split("::", 1)[0]
+
+    with_slow = {module(item) for item in items if item.get_closest_marker("slow") is not None}
+    items.sort(key=lambda item: module(item) not in with_slow)  # stable: each module keeps its order
 
 
 @pytest.fixture(scope="module")
@@ -69,3 +70,4 @@ def browser():
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         yield PatientBrowser(browser)
         browser.close()
+
