@@ -438,6 +438,7 @@ def test_thirty_clicks_at_a_persons_pace_give_thirty_points(app, page):
     # more, so each click is off every point's handle and every edge before it.
     angles = np.linspace(0.0, 2.0 * np.pi, CLICKS, endpoint=False)
     targets = [snapped((c + 6.0 * np.cos(a), c + 6.0 * np.sin(a))) for a in angles]
+    camera_still(page)  # an earlier test's drag may have put the camera back: aim once it is still
     began = clock()
     for k, (x, y) in enumerate(targets):
         at_pace(began + k * CLICK_EVERY)
