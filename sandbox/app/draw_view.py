@@ -38,6 +38,8 @@ def handle_room(n: int) -> int:
     while room < n:
         room *= 2
     return room
+
+
 #: The veil over the live scene while drawing (the drag surface): dark enough that the outline, its
 #: numbers and the dashed preview read over lights, robots and boxes, light enough to see them move.
 DIM_COLOUR, DIM_OPACITY = (12, 14, 24), 0.55
