@@ -444,12 +444,50 @@ def test_thirty_clicks_at_a_persons_pace_give_thirty_points(app, page):
         at_pace(began + k * CLICK_EVERY)
         click_floor(page, x, y)
     clicked = clock() - began
-    wait_until(lambda: len(draw.points) >= CLICKS, what=f"{CLICKS} points ({len(draw.points)} so far)")
+    try:
+        wait_until(lambda: len(draw.points) >= CLICKS, timeout=30.0, what=f"{CLICKS} points")
+    except AssertionError:
+        pass  # the comparison below names the clicks that were lost
     landed = clock() - began
-    assert draw.points == targets  # every click, in order, where it was made
+    lost = [(k, t) for k, t in enumerate(targets) if t not in draw.points]
+    stray = [p for p in draw.points if p not in targets]
+    assert draw.points == targets, f"lost clicks (index, point): {lost}; stray points: {stray}"
     shot(page, "clicks-30")
     print(f"\n{CLICKS} clicks made in {clicked:.1f} s (due every {CLICK_EVERY} s), all {CLICKS} points at the "
           f"server {landed:.1f} s after the first")
+
+
+#: Three clicks on the scene's canvas in one turn of the page's script, as a page that was busy handles
+#: the presses that waited for it: one after the other, well inside viser's 20 ms throttle window.
+CLICKS_IN_ONE_TURN_JS = """(points) => {
+  for (const [x, y] of points) {
+    const target = document.elementFromPoint(x, y);  // the canvas a real press there reaches
+    for (const type of ["pointerdown", "pointerup"]) {
+      target.dispatchEvent(new PointerEvent(type, {bubbles: true, cancelable: true, composed: true,
+        pointerId: 1, pointerType: "mouse", isPrimary: true, button: 0, buttons: type === "pointerdown" ? 1 : 0,
+        clientX: x, clientY: y}));
+    }
+  }
+}"""
+
+
+def test_three_clicks_the_page_handles_at_once_give_three_points(app, page):
+    """The lost click of the thirty (sandbox.app.page_sends): three clicks handled within 20 ms gave the
+    first and the last, the middle one merged into the last by viser's throttle."""
+    draw = app.panel.shape.draw
+    clear(page, draw)
+    if not draw.drawing:
+        button(page, "Start drawing").click()
+    wait_until(lambda: draw.drawing and draw.view._pad is not None, what="draw mode")
+    c = app.runner.latest.world_config.centre
+    targets = [snapped((c + dx, c + dy)) for dx, dy in ((-4.0, -3.0), (0.0, 4.0), (4.0, -3.0))]
+    camera_still(page)
+    page.evaluate(CLICKS_IN_ONE_TURN_JS, [list(to_screen(page, *t)) for t in targets])
+    try:
+        wait_until(lambda: len(draw.points) >= len(targets), timeout=20.0, what="three points")
+    except AssertionError:
+        pass  # the comparison below says which click was lost
+    assert draw.points == targets
 
 
 def test_a_click_on_an_edge_inserts_a_point_and_delete_removes_the_selected_one(app, page):
