@@ -159,8 +159,9 @@ class StopsWhileSpawning:
         return getattr(self.real, name)
 
     def Process(self, *args, **kwargs):  # noqa: N802 - multiprocessing's name
-        self.stopper = threading.Thread(target=self.runner.stop)
-        self.stopper.start()
+        stopper = threading.Thread(target=self.runner.stop)
+        stopper.start()
+        self.stopper = stopper  # seen by the test only once started: a thread not yet started cannot be joined
         wait_until(self.runner._stop.is_set, what="the stop to begin")
         process = self.real.Process(*args, **kwargs)
         self.spawned.append(process)
