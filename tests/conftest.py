@@ -70,4 +70,3 @@ def browser():
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         yield PatientBrowser(browser)
         browser.close()
-

@@ -413,14 +413,29 @@ def clear(page, draw) -> None:
     wait_until(lambda: not draw.points, what="cleared")
 
 
+def enter_draw_mode(page, draw) -> None:
+    """Start drawing unless the page already is, and wait for the drag surface."""
+    if not draw.drawing:
+        button(page, "Start drawing").click()
+    wait_until(lambda: draw.drawing and draw.view._pad is not None, what="draw mode")
+
+
+def points_once_landed(draw, count: int, timeout: float) -> list:
+    """The drawing's points once ``count`` have reached the server, or after ``timeout`` s as they are:
+    the caller compares them with its targets, which names a lost click."""
+    try:
+        wait_until(lambda: len(draw.points) >= count, timeout=timeout, what=f"{count} points")
+    except AssertionError:
+        pass
+    return list(draw.points)
+
+
 def start_drawing_on_an_l(page, draw) -> list[tuple[float, float]]:
     """The L template's points in the drawing (6 m arms, on the grid, centred), and draw mode on."""
     clear(page, draw)
     choose(page, "Template", "L")
     wait_until(lambda: len(draw.points) == 6, what="the L template")
-    if not draw.drawing:
-        button(page, "Start drawing").click()
-    wait_until(lambda: draw.drawing and draw.view._pad is not None, what="draw mode")
+    enter_draw_mode(page, draw)
     wait_until(lambda: draw.view._handles is not None and draw.view.handles_shown == 6,
                what="the L's handles")
     return list(draw.points)
@@ -429,9 +444,7 @@ def start_drawing_on_an_l(page, draw) -> list[tuple[float, float]]:
 def test_thirty_clicks_at_a_persons_pace_give_thirty_points(app, page):
     draw = app.panel.shape.draw
     clear(page, draw)
-    if not draw.drawing:
-        button(page, "Start drawing").click()
-    wait_until(lambda: draw.drawing and draw.view._pad is not None, what="draw mode")
+    enter_draw_mode(page, draw)
     assert app.runner.playing  # a running page: frames keep coming while the designer clicks
     c = app.runner.latest.world_config.centre
     # Round a 6 m circle, on the grid's nodes (a click a hair off still snaps there): 0.55 m apart or
@@ -444,14 +457,11 @@ def test_thirty_clicks_at_a_persons_pace_give_thirty_points(app, page):
         at_pace(began + k * CLICK_EVERY)
         click_floor(page, x, y)
     clicked = clock() - began
-    try:
-        wait_until(lambda: len(draw.points) >= CLICKS, timeout=30.0, what=f"{CLICKS} points")
-    except AssertionError:
-        pass  # the comparison below names the clicks that were lost
+    points = points_once_landed(draw, CLICKS, timeout=30.0)
     landed = clock() - began
-    lost = [(k, t) for k, t in enumerate(targets) if t not in draw.points]
-    stray = [p for p in draw.points if p not in targets]
-    assert draw.points == targets, f"lost clicks (index, point): {lost}; stray points: {stray}"
+    lost = [(k, t) for k, t in enumerate(targets) if t not in points]
+    stray = [p for p in points if p not in targets]
+    assert points == targets, f"lost clicks (index, point): {lost}; stray points: {stray}"
     shot(page, "clicks-30")
     print(f"\n{CLICKS} clicks made in {clicked:.1f} s (due every {CLICK_EVERY} s), all {CLICKS} points at the "
           f"server {landed:.1f} s after the first")
@@ -476,18 +486,12 @@ def test_three_clicks_the_page_handles_at_once_give_three_points(app, page):
     first and the last, the middle one merged into the last by viser's throttle."""
     draw = app.panel.shape.draw
     clear(page, draw)
-    if not draw.drawing:
-        button(page, "Start drawing").click()
-    wait_until(lambda: draw.drawing and draw.view._pad is not None, what="draw mode")
+    enter_draw_mode(page, draw)
     c = app.runner.latest.world_config.centre
     targets = [snapped((c + dx, c + dy)) for dx, dy in ((-4.0, -3.0), (0.0, 4.0), (4.0, -3.0))]
     camera_still(page)
     page.evaluate(CLICKS_IN_ONE_TURN_JS, [list(to_screen(page, *t)) for t in targets])
-    try:
-        wait_until(lambda: len(draw.points) >= len(targets), timeout=20.0, what="three points")
-    except AssertionError:
-        pass  # the comparison below says which click was lost
-    assert draw.points == targets
+    assert points_once_landed(draw, len(targets), timeout=20.0) == targets
 
 
 def test_a_click_on_an_edge_inserts_a_point_and_delete_removes_the_selected_one(app, page):
@@ -572,9 +576,7 @@ def test_from_idea_to_answer_draw_tweak_use_run_to_the_end_and_read(app, page):
     draw, result = app.panel.shape.draw, app.panel.result
     clear(page, draw)
     began = clock()
-    if not draw.drawing:
-        button(page, "Start drawing").click()
-    wait_until(lambda: draw.drawing and draw.view._pad is not None, what="draw mode")
+    enter_draw_mode(page, draw)
     for k, (x, y) in enumerate(L_ARMS):
         at_pace(began + 0.5 * (k + 1))
         click_floor(page, x, y)
