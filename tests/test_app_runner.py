@@ -259,6 +259,40 @@ def test_a_paper_case_starts_the_case_and_the_dropdown_shows_what_runs(app):
     assert not client.notes, client.notes
 
 
+def test_one_parameter_group_and_the_charts_picked_are_on_the_page(app):
+    """Issue 41, first visit: a new page builds every control it is sent before it shows anything, so
+    only one group of parameters and the charts picked are shown (viser sends hidden ones, but its page
+    builds nothing for them); a chart shown while paused gets the whole run at once."""
+    parameters, metrics, runner = app.panel.parameters, app.panel.metrics, app.runner
+
+    def groups_shown() -> list[str]:
+        return [title for title, folder in parameters.group_folders.items() if folder.visible]
+
+    def charts_shown() -> list[str]:
+        return [attr for attr in ("chart_goal", "chart_dist", "chart_charged") if getattr(metrics, attr).visible]
+
+    assert groups_shown() == ["Population and bodies"] and parameters.group.value == "Population and bodies"
+    assert len(parameters.group_folders) == 8 and len(parameters.controls) == 62
+    app.events.call(parameters.group.__setattr__, "value", "Robot: gains and energy")
+    wait_until(lambda: groups_shown() == ["Robot: gains and energy"], what="the robot's group alone")
+    assert charts_shown() == ["chart_goal"]
+    wait_until(lambda: len(runner.series()) >= 3, what="a few samples")
+    app.events.call(app.comparison.lockstep.set_playing, False)
+    wait_until(lambda: not runner.latest.playing, what="paused")
+    assert metrics.chart_charged.data[0].tolist() == [0.0, 0.0]  # hidden: never sent
+    app.events.call(metrics.choice.__setattr__, "value", "all three")
+    wait_until(lambda: charts_shown() == ["chart_goal", "chart_dist", "chart_charged"], what="three charts")
+    samples = runner.series()
+    wait_until(lambda: metrics.chart_charged.data[0][-1] == samples[-1].step, what="the run on the new chart")
+    assert len(metrics.chart_charged.data[0]) == len(samples)
+    app.events.call(metrics.choice.__setattr__, "value", "none")
+    wait_until(lambda: charts_shown() == [], what="no chart")
+    with pytest.raises(ValueError, match="no chart choice"):
+        metrics.show_charts("pie")
+    with pytest.raises(ValueError, match="no parameter group"):
+        parameters.show_group("Colours")
+
+
 def test_metrics_csv_and_frames(app):
     wait_until(lambda: app.frames_drawn > 5 and len(app.runner.series()) >= 2)
     lines = app.panel.metrics.csv().splitlines()

@@ -76,6 +76,19 @@ def open_folder(page, title: str) -> None:
     page.get_by_text(title, exact=True).first.click()
 
 
+def show_parameters(page, group: str = "Population and bodies") -> None:
+    """Open Population and physics unless it is open, and show one group of parameters (the panel
+    shows one at a time, and an earlier test may have left another)."""
+    picker = page.get_by_label("group", exact=True)
+    if picker.count():  # a folder still folding reads as shown: wait for it to finish
+        wait_until(lambda: done_moving(picker), 10, "Population and physics to finish opening or closing")
+    if not picker.is_visible():
+        open_folder(page, "Population and physics")
+        picker.wait_for()
+    if picker.input_value() != group:
+        choose(page, "group", group)
+
+
 def click_button(page, name: str) -> None:
     page.get_by_role("button", name=name, exact=True).click()
 
@@ -189,10 +202,23 @@ def test_paper_case_in_one_action(app, page):
                what="back to the circle without strategies")
 
 
+def test_the_charts_picked_are_the_charts_drawn(app, page):
+    """Metrics' *charts* picks which charts the page draws: the goal's at first, all three, or none."""
+    charts = page.locator(".uplot")
+    wait_until(lambda: charts.count() == 1, what="the goal's chart alone")
+    choose(page, "charts", "all three")
+    wait_until(lambda: charts.count() == 3, what="three charts")
+    page.get_by_text("Robots with any charge (green or amber)").wait_for()
+    choose(page, "charts", "none")
+    wait_until(lambda: charts.count() == 0, what="no chart")
+    choose(page, "charts", "boxes in goal")  # as the other tests expect
+    wait_until(lambda: charts.count() == 1, what="the goal's chart again")
+
+
 def test_refused_population_is_never_stored(app, page):
     runner = app.runner
     stored = runner.latest.config.robots
-    open_folder(page, "Population and physics")
+    show_parameters(page)
     robots = page.get_by_label("robots", exact=True)
     for typed, message in (("1000000", "1000000 is outside the allowed range [0, 100000]"),
                            ("100000", "at most 3,007 do")):  # allowed by the range, but cannot be placed
@@ -203,7 +229,7 @@ def test_refused_population_is_never_stored(app, page):
         assert runner.latest.config.robots == stored
     page.reload()
     page.get_by_text("Goal shape", exact=True).wait_for()
-    open_folder(page, "Population and physics")
+    show_parameters(page)
     field = page.get_by_label("robots", exact=True)
     assert int(float(field.input_value())) == stored
     open_folder(page, "Population and physics")  # closed again, as the other tests expect
@@ -214,7 +240,7 @@ def test_the_largest_world_builds_with_progress_and_can_be_cancelled(app, page):
     before = len(runner.latest.robot_positions)
     stored = runner.latest.config.robots
     largest = runner.latest.config.max_robots
-    open_folder(page, "Population and physics")
+    show_parameters(page)
     robots = page.get_by_label("robots", exact=True)
     robots.fill(str(largest))
     robots.press("Tab")
@@ -326,7 +352,7 @@ def test_the_keyboard_runs_the_sandbox(app, page):
     field = page.get_by_label("robots", exact=True)
     opened = not field.is_visible()
     if opened:
-        open_folder(page, "Population and physics")
+        show_parameters(page)
     world = runner.latest.world_key
     field.focus()
     field.press("Space")
@@ -464,14 +490,15 @@ def test_download_shape_and_metrics(app, page, tmp_path):
 
 
 def test_parameters_and_inspector(app, page):
-    open_folder(page, "Population and physics")
+    show_parameters(page)
     robots = page.get_by_label("robots", exact=True)
     robots.fill("25")
     robots.press("Tab")
     wait_until(lambda: app.runner.latest.config.robots == 25, what="the robots setting")
     notification(page, "Applies on reset")
     assert len(app.runner.latest.robot_positions) == 40  # not before a reset
-    open_folder(page, "Robot: gains and energy")
+    show_parameters(page, "Robot: gains and energy")
+    assert not page.get_by_label("robots", exact=True).is_visible()  # one group at a time
     gain = page.get_by_label("k turn", exact=True)
     gain.fill("15")
     gain.press("Tab")
@@ -504,9 +531,7 @@ def test_parameters_and_inspector(app, page):
 def test_profile_switch_shows_its_values_and_applies_on_reset(app, page):
     runner = app.runner
     model = "Model: the authors' program or the paper's text"
-    if not page.get_by_text(model, exact=True).first.is_visible():  # an earlier test may have left it open
-        open_folder(page, "Population and physics")
-    open_folder(page, model)
+    show_parameters(page, model)
     height = page.get_by_label("light height (m)", exact=True)
     assert float(height.input_value()) == 2.0
     choose(page, "profile", "paper-text")
@@ -525,8 +550,7 @@ def test_profile_switch_shows_its_values_and_applies_on_reset(app, page):
 
 def test_boxes_can_start_packed_in_the_goal(app, page):
     runner = app.runner
-    if not page.get_by_label("box start", exact=True).is_visible():  # an earlier test may have left it open
-        open_folder(page, "Population and physics")
+    show_parameters(page)
     choose(page, "box start", "packed")
     wait_until(lambda: runner.latest.config.box_start == "packed", what="the box start setting")
     assert runner.latest.world_config.box_start == "scattered"  # not before a reset

@@ -44,7 +44,7 @@ half or less, **red** empty. An empty robot stops until light reaches it again.
 This is how the authors' program works (the profile called authors-code).
 The paper's text describes photocells on the body's axes and a motor that
 follows the command all the time: pick the profile paper-text under
-Population and physics to see it.
+Population and physics (its group *Model*) to see it.
 """
 
 CYCLE = """\
