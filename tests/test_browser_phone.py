@@ -207,3 +207,28 @@ def test_a_challenges_end_on_a_projector(app, browser, tmp_path):
         folder.round_steps = 20_000
         context.close()
         app.panel.program.load(None, None)
+
+
+def test_a_dropdowns_list_opens_on_the_screen_and_picks(app, phone):
+    """viser places a dropdown's list for its 20em sheet and does not flip it: in the drawer it opened off
+    the screen's right edge and below its bottom. On a phone it is a sheet along the screen's bottom."""
+    _, page = phone
+    if drawer_height(page) < 90:
+        page.get_by_text("Phototaxis sandbox").first.tap()  # the drawer's handle
+        wait_until(lambda: drawer_height(page) > 200, what="the drawer open")
+    picker = page.get_by_label("group", exact=True)
+    if not picker.is_visible():
+        folder = page.get_by_text("Population and physics", exact=True).first
+        folder.scroll_into_view_if_needed()
+        folder.tap()
+        picker.wait_for()
+    picker.scroll_into_view_if_needed()
+    picker.tap()
+    option = page.get_by_role("option", name="Light grid", exact=True)
+    option.wait_for()
+    box = option.bounding_box()
+    assert box and box["x"] >= 0 and box["x"] + box["width"] <= PHONE["width"], box
+    assert box["y"] >= 0 and box["y"] + box["height"] <= PHONE["height"], box
+    option.tap()
+    wait_until(lambda: app.panel.parameters.group.value == "Light grid", what="the group picked on the server")
+    page.get_by_label("light pitch (m)", exact=True).wait_for()
