@@ -95,8 +95,7 @@ class MetricsFolder:
             self.chart_charged = gui.add_uplot(
                 (x, x), self._series_shown["chart_charged"],
                 title="Robots with any charge (green or amber)", scales={"x": {"time": False}}, **common)
-            for attr, *_ in CHARTS:
-                getattr(self, attr).visible = attr in self.shown
+            self._show_only(self.shown)
             self.download_csv = gui.add_button("Download CSV", icon=viser.Icon.FILE_SPREADSHEET,
                                                hint="The metrics time series of this run")
 
@@ -114,11 +113,14 @@ class MetricsFolder:
         at once, paused or not (a hidden chart is not sent its data)."""
         if choice not in CHART_CHOICES:
             raise ValueError(f"no chart choice {choice!r}")
-        self.shown = CHART_CHOICES[choice]
-        for attr, *_ in CHARTS:
-            getattr(self, attr).visible = attr in self.shown
-        self._charted, self._charted_at = None, 0.0
+        self._show_only(CHART_CHOICES[choice])
+        self._charted_at = 0.0  # now, not a period later (what is shown is part of what was charted)
         self.update(self.runner.latest)
+
+    def _show_only(self, shown: tuple[str, ...]) -> None:
+        self.shown = shown
+        for attr, *_ in CHARTS:
+            getattr(self, attr).visible = attr in shown
 
     def update(self, snap: Snapshot) -> None:
         partner = self._compared()
