@@ -677,6 +677,34 @@ def test_run_to_the_end_skips_without_frames_then_explains(app):
     assert any(note[0] == "Stopped" for note in client.notes)
 
 
+def test_run_to_the_end_right_after_a_reset_explains_the_new_world(app):
+    """*Use and run to the end* asks for a reset, then a run to the end: the runner takes both in one turn
+    and takes a frame only after them, so the page may hear the run's answer while the last frame is still
+    the old world's (on a loaded machine it did). CI failed on this once: the explanation waited on the
+    old world and never came."""
+    folder, result = app.panel.run, app.panel.result
+    client = FakeClient()
+    app.events.call(app.lockstep.set_playing, False)
+    old = paused_step(app.runner)
+    old_world = app.runner.latest.world_key
+
+    arrived = threading.Event()
+
+    def reset_then_run() -> None:  # queued together: the runner takes them in one turn, with no frame
+        app.runner.reset(None)
+        folder.skip_ahead(old + 2000, client)
+        app.runner.post(lambda sim: arrived.wait(30))  # and its frame only after the page heard the answer
+
+    app.events.call(reset_then_run)
+    wait_until(lambda: folder._skipping is None, what="the answer, heard before any frame of the new world")
+    arrived.set()
+    wait_until(lambda: app.runner.latest.world_key != old_world and app.runner.latest.step == old + 2000,
+               what="the new world at the end step")
+    wait_until(lambda: f"at step {old + 2000:,}" in result.text.content, what="the explanation")
+    assert result.highlight.value
+    wait_until(lambda: any(note[0] == "Run to the end" for note in client.notes), what="the notice")
+
+
 def test_a_live_worlds_design_downloads_and_plays_back_bit_for_bit():
     """Issue 40, item 6: the page's design of a live world (its light program as it ran) replays it
     exactly: the same state at the same step (serve --design plays it the same way)."""

@@ -13,7 +13,7 @@ import pytest
 
 from tests.browsing import BROWSER_MARKS, playwright_api, small_app  # noqa: F401 - playwright_api: skips without it
 from tests.test_browser_app import choose
-from tests.waiting import wait_until
+from tests.waiting import paused_step, wait_until
 
 pytestmark = BROWSER_MARKS
 
@@ -102,7 +102,8 @@ def test_run_to_the_end_then_the_result_explained(app, page):
     field.fill(str(target))
     field.press("Tab")
     wait_until(lambda: app.panel.run.end_step.value == target, what="the target step")
-    start = app.runner.latest.step
+    app.events.call(app.lockstep.set_playing, False)  # else frames of play come before the run begins
+    start = paused_step(app.runner)
     seen: list[int] = []
     app.runner.subscribe(lambda snap: seen.append(snap.step))
     press(page, "Run to the end", folder="Run")

@@ -79,7 +79,7 @@ def a_round(hint_seconds=10.0):
     runner = SimpleNamespace(latest=frame(500, 0, world=1, program=PAPER_PROGRAM),
                              set_lamp=lambda centre, radius, mode, on_done, on_error: (lamps.append(centre),
                                                                                        on_done(None)))
-    lockstep = SimpleNamespace(set_playing=playing.append, reset=lambda seed, on_done, on_error: on_done(None))
+    lockstep = SimpleNamespace(set_playing=playing.append, reset=lambda seed, on_done, on_error: on_done(2))
     lamp = SimpleNamespace(radius=SimpleNamespace(value=1.0))
     folder = ChallengeFolder(None, runner, lockstep, lamp, on_change=lambda what: None, after=timers.after)
     folder.status, folder.hint, folder.scores = Markdown(), Markdown(), Markdown()
@@ -115,3 +115,28 @@ def test_a_round_abandoned_takes_its_hint_with_it():
     folder.update(frame(100, 3, world=3))
     assert folder.round is None and "abandoned" in folder.status.content
     assert timers.pass_time() == 0 and folder.hint.content == ""
+
+
+def test_a_round_begins_on_its_own_world_not_on_one_an_earlier_reset_built():
+    """CI failed once here (compare mode, a challenge started while the pairing's reset was still in
+    flight): the round began on the pairing's world, published between the round's start and its
+    reset's answer, and was abandoned at the round world's first frame: no score, ever."""
+    timers, lamps = Timers(), []
+    runner = SimpleNamespace(latest=frame(500, 0, world=1, program=PAPER_PROGRAM),
+                             set_lamp=lambda centre, radius, mode, on_done, on_error: (lamps.append(centre),
+                                                                                       on_done(None)))
+
+    def reset(seed, on_done, on_error):
+        runner.latest = frame(0, 1, world=2, program=PAPER_PROGRAM)  # the earlier reset's world, meanwhile
+        on_done(3)  # the round's world: 3
+
+    lockstep = SimpleNamespace(set_playing=lambda playing: None, reset=reset)
+    lamp = SimpleNamespace(radius=SimpleNamespace(value=1.0))
+    folder = ChallengeFolder(None, runner, lockstep, lamp, on_change=lambda what: None, after=timers.after)
+    folder.status, folder.hint, folder.scores = Markdown(), Markdown(), Markdown()
+    folder.start("Ada", None)
+    assert lamps == [] and folder.round.world is None  # not on world 2
+    folder.update(frame(0, 4, world=3, program=PAPER_PROGRAM))
+    assert len(lamps) == 1 and folder.round.world == 3 and folder.round.started == 4
+    folder.update(frame(50, 4, world=3))
+    assert folder.round is not None and "step 50" in folder.status.content

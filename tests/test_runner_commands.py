@@ -68,7 +68,7 @@ def test_callbacks_go_through_deliver_when_given():
     assert future.done() and not built and not progress  # handed over, not called on the runner's thread
     for thunk in handed:
         thunk()
-    assert built == [None] and progress and progress[-1] is None
+    assert built == [runner.latest.world_key] and progress and progress[-1] is None
 
 
 def test_a_command_that_raises_fails_its_future_and_the_loop_goes_on():

@@ -22,7 +22,7 @@ There are two kinds:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Callable, ClassVar
+from typing import Any, Callable, ClassVar, NamedTuple
 
 
 class RunnerStopped(RuntimeError):
@@ -153,10 +153,20 @@ class RunTo(Command):
 @dataclass(frozen=True)
 class SkipAhead(Command):
     """Run to ``step`` without frames, as fast as the world steps headless (*Run to the end*), telling
-    the progress listeners how far it got; a :class:`CancelBuild` stops it where it is. Answers
-    (the step reached, whether it was cancelled)."""
+    the progress listeners how far it got; a :class:`CancelBuild` stops it where it is. Answers an
+    :class:`Arrival`."""
 
     step: int
+
+
+class Arrival(NamedTuple):
+    """Where a :class:`SkipAhead` got to: the step reached, whether it was cancelled, and in which world
+    (its frames' ``world_key``). The world is named because the answer can come before any frame of it:
+    a reset then a run to the end publish no frame between them."""
+
+    step: int
+    cancelled: bool
+    world_key: int
 
 
 @dataclass(frozen=True)

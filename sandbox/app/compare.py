@@ -166,7 +166,7 @@ class Lockstep:
             answers[id(side)] = result
             if len(answers) < 2:
                 return
-            reached = max(r[0] for r in answers.values())  # a cancel may stop them apart: on to the farther
+            reached = max(r.step for r in answers.values())  # a cancel may stop them apart: on to the farther
             with self._lock:
                 self._target = reached
                 for s in self.sides:

@@ -166,8 +166,9 @@ class SimulationRunner(FramePublisher):
 
     def reset(self, seed: int | None = None, *, on_done: Callable[[Any], None] | None = None,
               on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """Rebuild the world with the waiting changes; ``seed`` None keeps the current seed. Building
-        reports to the :meth:`on_progress` listeners and stops at :meth:`cancel_build`
+        """Rebuild the world with the waiting changes; ``seed`` None keeps the current seed. ``on_done``
+        gets the new world's key (its frames' ``world_key``: a frame of an older world may still come
+        after the answer, from a reset asked for earlier). Building reports to the :meth:`on_progress` listeners and stops at :meth:`cancel_build`
         (BuildCancelled; the old world goes on)."""
         return self.ask(Reset(seed), on_done, on_error)
 
@@ -235,7 +236,7 @@ class SimulationRunner(FramePublisher):
     def skip_ahead(self, step: int, *, on_done: Callable[[Any], None] | None = None,
                    on_error: Callable[[BaseException], None] | None = None) -> Future:
         """Run to ``step`` without frames, as fast as headless (*Run to the end*); the progress listeners
-        hear the fraction done, :meth:`cancel_build` stops it. ``on_done`` gets (step reached, cancelled)."""
+        hear the fraction done, :meth:`cancel_build` stops it. ``on_done`` gets an :class:`Arrival`."""
         return self.ask(SkipAhead(int(step)), on_done, on_error)
 
     def design(self, *, on_done: Callable[[Any], None] | None = None,

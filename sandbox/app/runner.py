@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
-from sandbox.app.commands import (Apply, CancelBuild, Command, Controls, Reset, RunnerStopped, RunTo, SetLamp,
+from sandbox.app.commands import (Apply, Arrival, CancelBuild, Command, Controls, Reset, RunnerStopped, RunTo, SetLamp,
                                   SetOutline, SetProgram, SetShape, Setting, SkipAhead, Start, StepOnce,
                                   UpdateConfig, WorldSpec, DesignOf, PlayDesign)
 from sandbox.app.contract import Deliver, SimulationRunner, answer
@@ -324,7 +324,7 @@ class Runner(SimulationRunner):
             self._step(command.step - self.sim.steps_done)
 
     @handles(SkipAhead)
-    def _skip_ahead(self, command: SkipAhead) -> tuple[int, bool]:
+    def _skip_ahead(self, command: SkipAhead) -> Arrival:
         """Step in chunks of :data:`SKIP_CHUNK` with no snapshot between them (the chart's samples are kept),
         telling the progress listeners after each; stop early when cancelled (a cancel that came while
         it waited its turn counts: the page's Cancel shows from the moment it is asked)."""
@@ -344,7 +344,7 @@ class Runner(SimulationRunner):
             self._cancel.clear()
             self._report_progress(None)
         self._record_series(force=True)
-        return self.sim.steps_done, cancelled
+        return Arrival(self.sim.steps_done, cancelled, self._world_key)
 
     @handles(UpdateConfig)
     def _update_config(self, command: UpdateConfig) -> tuple[list[str], Config]:
@@ -356,7 +356,7 @@ class Runner(SimulationRunner):
         return sorted(self.pending), settings
 
     @handles(Reset)
-    def _reset(self, command: Reset) -> None:
+    def _reset(self, command: Reset) -> int:
         self._cancel.clear()
         try:
             self.sim.reset(command.seed, config=self.settings, progress=self._building)
@@ -364,6 +364,7 @@ class Runner(SimulationRunner):
             self._report_progress(None)
         self.pending = {}
         self._new_world()
+        return self._world_key
 
     def _new_world(self) -> None:
         """The simulation was rebuilt: a new goal, new speeds, a new world and its new series."""

@@ -58,7 +58,7 @@ class Panel:
         self.metrics = MetricsFolder(gui, runner, compared=lambda: comparison.runner)
         self.run = RunFolder(gui, runner, lockstep, show_field=lambda on: view.set_show_field(on, runner.latest),
                              after_reset=self._after_reset, framing=self.framing,
-                             after_skip=lambda step, client: self.result.explain_at(step, client))
+                             after_skip=lambda arrival, client: self.result.explain_at(arrival, client))
         self.shape = ShapeFolder(gui, runner, server.scene, on_change=self.metrics.mark, reset=self.run.reset,
                                  post=post)
         self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark,

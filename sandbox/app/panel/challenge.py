@@ -37,14 +37,16 @@ HINT = ("Hint: light the robots where they are, then move the lamp a little at a
 
 @dataclass
 class Round:
-    """One round: who plays, from which world (its key, once built), and how it ended."""
+    """One round: who plays, in which world (its key, once built), and how it ended."""
 
     player: str
     steps: int
-    old_world: int
+    #: The key of the round's world, once built: the round starts on its first frame. Only that key
+    #: will do: a reset asked for before the round's (a compared world being paired) may publish its
+    #: world after the round's reset answered, and a round begun on it was abandoned at the next frame.
+    built: int | None = None
+    #: The world the round began on (the lamp lit, playing).
     world: int | None = None
-    #: The round's world is built (it starts once its first frame is here).
-    built: bool = False
     #: Boxes in the goal when the round began, and the most the player has had in it since.
     started: int | None = None
     most: int | None = None
@@ -99,14 +101,14 @@ class ChallengeFolder:
         player = " ".join(str(name).split())[:NAME_LENGTH] or "player"
         self._cancel_hint()
         with self._lock:
-            r = self.round = Round(player, int(self.round_steps), self.runner.latest.world_key)
+            r = self.round = Round(player, int(self.round_steps))
         self.status.content = f"**{player}**: building the round's world..."
         self.hint.content = ""
         self.lockstep.set_playing(False)
 
-        def built(_: Any) -> None:
+        def built(world_key: int) -> None:
             with self._lock:
-                r.built = True
+                r.built = world_key
             self._begin(r, self.runner.latest)  # its first frame may be here already
 
         def failed(exc: BaseException) -> None:
@@ -122,7 +124,7 @@ class ChallengeFolder:
         """The round's world is built and ``snap`` may be its first frame: count the boxes already in the
         goal, light the lamp on the densest group of robots, and play."""
         with self._lock:
-            if self.round is not r or not r.built or r.world is not None or snap.world_key == r.old_world:
+            if self.round is not r or r.world is not None or snap.world_key != r.built:
                 return
             r.world = snap.world_key
             r.started = r.most = int(np.count_nonzero(snap.box_in_goal))

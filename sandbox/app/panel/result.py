@@ -16,6 +16,7 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
+from sandbox.app.commands import Arrival
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.snapshot import Snapshot, case_name
 from sandbox.model.design import file_bytes
@@ -95,17 +96,18 @@ class ResultFolder:
         self.runner.design(on_done=pack, on_error=lambda exc: notify_error(client, "No design to download",
                                                                            str(exc)))
 
-    def explain_at(self, step: int, client: Any = None) -> None:
-        """Explain the running world once a frame at ``step`` or later shows it (a run to the end's answer
-        comes before the frame that shows where it got to), and tell ``client`` the share."""
-        self._explain_at = (self.runner.latest.world_key, int(step), client)
+    def explain_at(self, arrival: Arrival, client: Any = None) -> None:
+        """Explain the world a run to the end arrived in once a frame at its step or later shows it (the
+        answer comes before that frame; after a reset, before any frame of its world: its key is the
+        arrival's, not the last frame's), and tell ``client`` the share."""
+        self._explain_at = (arrival.world_key, int(arrival.step), client)
 
     def update(self, snap: Snapshot) -> None:
         if self._explain_at is not None:
             world, step, client = self._explain_at
-            if snap.world_key != world:
+            if snap.world_key > world:  # a newer world (keys only grow); an older one's frame may still come
                 self._explain_at = None
-            elif snap.step >= step:
+            elif snap.world_key == world and snap.step >= step:
                 self._explain_at = None
                 self.explain(snap)
                 notify(client, "Run to the end", f"Step {snap.step:,}: {100 * snap.sample.fraction_in_goal:.1f} % of "

@@ -8,6 +8,7 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
+from sandbox.app.commands import Arrival
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.framing import VIEWS, Framing
 from sandbox.app.runner import FASTEST
@@ -21,10 +22,10 @@ MOST_END = 10_000_000
 class RunFolder:
     def __init__(self, gui: Any, runner: Any, lockstep: Any, show_field: Callable[[bool], None],
                  after_reset: Callable[[Any], None], framing: Framing,
-                 after_skip: Callable[[int, Any], None] = lambda step, client: None):
+                 after_skip: Callable[[Arrival, Any], None] = lambda arrival, client: None):
         """Play, pause, step, reset, speed and *Run to the end* act on ``lockstep`` (the running world and,
-        in compare mode, the second one); the rest reads ``runner``. ``after_skip(step, client)``: a run to
-        the end arrived at ``step`` (the panel explains the result once a frame shows it)."""
+        in compare mode, the second one); the rest reads ``runner``. ``after_skip(arrival, client)``: a run
+        to the end arrived (the panel explains the result once a frame shows it)."""
         self.gui, self.runner, self.lockstep, self.framing = gui, runner, lockstep, framing
         self._show_field, self._after_reset, self._after_skip = show_field, after_reset, after_skip
         #: A run to the end under way: (its target step, when it started), else None.
@@ -120,13 +121,12 @@ class RunFolder:
         self.run_to_end.disabled = True
         self._building(0.0)
 
-        def arrived(result: tuple[int, bool]) -> None:
+        def arrived(arrival: Arrival) -> None:
             self._skipping = None
             self.run_to_end.disabled = False
-            reached, cancelled = result
-            if cancelled:
-                notify(client, "Stopped", f"Stopped at step {reached:,}, as asked.")
-            self._after_skip(reached, client)
+            if arrival.cancelled:
+                notify(client, "Stopped", f"Stopped at step {arrival.step:,}, as asked.")
+            self._after_skip(arrival, client)
 
         def failed(exc: BaseException) -> None:
             self._skipping = None
