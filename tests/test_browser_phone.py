@@ -169,7 +169,9 @@ def test_the_challenge_is_one_tap_away_and_hints_on_a_phone(app, phone, tmp_path
     start.tap()
     wait_until(lambda: folder.round is not None and folder.round.world is not None, what="the round's world")
     r = folder.round
-    wait_until(lambda: app.runner.latest.program == LAMP_PROGRAM, what="the round's lamp")
+    # the lamp is aimed at once and lights the floor at the controller's next update (CI read the frame between)
+    wait_until(lambda: app.runner.latest.program == LAMP_PROGRAM and app.runner.latest.intensities.any(),
+               what="the round's lamp, lit")
     robots = app.runner.latest.robot_positions
     lit = (np.argwhere(app.runner.latest.intensities > 0) + 0.5) * app.runner.latest.world_config.light_pitch
     centre = lit.mean(axis=0)
