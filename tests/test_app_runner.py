@@ -415,7 +415,7 @@ def test_a_crashed_simulation_process_is_reported_and_restarted(process_runner):
     r.follow([2])
     r.reset(9)
     wait_until(lambda: r.latest.seed == 9 and r.latest.robot(2) is not None)
-    old = r.process.pid
+    old, world = r.process.pid, r.latest.world_key
     os.kill(old, signal.SIGKILL)  # as a crash in the engine would end it
     wait_until(lambda: crashes, timeout=30)
     assert "exit code" in crashes[0]
@@ -423,6 +423,7 @@ def test_a_crashed_simulation_process_is_reported_and_restarted(process_runner):
     step = r.latest.step
     wait_until(lambda: r.latest.step > step + 10 or r.latest.step < step, timeout=30)  # running again
     assert r.latest.seed == 9 and r.restarts == 1
+    assert r.latest.world_key > world  # the restarted world is a newer one (what waits on a world can tell)
     wait_until(lambda: r.latest.robot(2) is not None)  # what was followed came back
 
 

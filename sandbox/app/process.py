@@ -178,7 +178,8 @@ class ProcessRunner(SimulationRunner):
         light program back: whatever ran before a crash may have caused it."""
         settings = dict(config=config, shape=shape, seed=seed, fps=self.fps,
                         steps_per_frame=self.controls.steps_per_frame, playing=self.controls.playing,
-                        chart_every=self.chart_every, program_time_limit=self.program_time_limit)
+                        chart_every=self.chart_every, program_time_limit=self.program_time_limit,
+                        first_world_key=0 if self._latest is None else self._latest.world_key + 1)
         self._child = Child(self._context, settings)
         for setting in self.controls.settings():  # the robots followed, the heat map, the hold
             self._child.send((None, setting))

@@ -109,7 +109,11 @@ class Runner(SimulationRunner):
 
     def __init__(self, config: Config, *, shape: Any = "from-config", seed: int | None = None,
                  fps: float = 30.0, steps_per_frame: int = 10, playing: bool = True, chart_every: int = 100,
-                 program_time_limit: float = watchdog.DEFAULT_LIMIT, deliver: Deliver | None = None):
+                 program_time_limit: float = watchdog.DEFAULT_LIMIT, deliver: Deliver | None = None,
+                 first_world_key: int = 0):
+        """``first_world_key``: the key of the first world's frames (a simulation process restarted after
+        a crash goes on from its predecessor's keys: a key names one world, and later worlds have
+        larger keys)."""
         #: Seconds a light program's import, reset or update may take (then the paper's controller takes over).
         self.program_time_limit = float(program_time_limit)
         from sandbox.model.simulation import Simulation  # with numba's compiled kernels: see the top
@@ -138,7 +142,7 @@ class Runner(SimulationRunner):
         self._published = -1
         self._frame = 0
         self._goal_key = 0
-        self._world_key = 0
+        self._world_key = int(first_world_key)
         self._step_times: deque = deque(maxlen=120)  # (wall time, steps_done), of the simulation thread only
         self._series_lock = threading.Lock()
         self._series: list[Sample] = []
