@@ -73,16 +73,23 @@ def frame(step, in_goal, world=2, program=LAMP_PROGRAM, robots=((10.0, 10.0), (1
                            robot_positions=np.array(robots))
 
 
-def a_round(hint_seconds=10.0):
-    """A challenge folder over stand-ins for the runner and the lockstep, a round begun in world 2."""
-    timers, lamps, playing = Timers(), [], []
+def challenge_folder(reset, playing, timers, lamps):
+    """A challenge folder over stand-ins: a runner whose last frame is world 1's (the lamp lit at once,
+    each centre kept in ``lamps``) and a lockstep whose ``reset`` is given (``playing`` hears play and pause)."""
     runner = SimpleNamespace(latest=frame(500, 0, world=1, program=PAPER_PROGRAM),
                              set_lamp=lambda centre, radius, mode, on_done, on_error: (lamps.append(centre),
                                                                                        on_done(None)))
-    lockstep = SimpleNamespace(set_playing=playing.append, reset=lambda seed, on_done, on_error: on_done(2))
+    lockstep = SimpleNamespace(set_playing=playing, reset=reset)
     lamp = SimpleNamespace(radius=SimpleNamespace(value=1.0))
     folder = ChallengeFolder(None, runner, lockstep, lamp, on_change=lambda what: None, after=timers.after)
     folder.status, folder.hint, folder.scores = Markdown(), Markdown(), Markdown()
+    return folder
+
+
+def a_round(hint_seconds=10.0):
+    """A challenge folder over stand-ins for the runner and the lockstep, a round begun in world 2."""
+    timers, lamps, playing = Timers(), [], []
+    folder = challenge_folder(lambda seed, on_done, on_error: on_done(2), playing.append, timers, lamps)
     folder.round_steps, folder.hint_seconds = 10_000, hint_seconds
     folder.start("Ada", None)
     assert lamps == [] and playing == [False]  # the old world's frame: nothing begins on it
@@ -121,19 +128,13 @@ def test_a_round_begins_on_its_own_world_not_on_one_an_earlier_reset_built():
     """CI failed once here (compare mode, a challenge started while the pairing's reset was still in
     flight): the round began on the pairing's world, published between the round's start and its
     reset's answer, and was abandoned at the round world's first frame: no score, ever."""
-    timers, lamps = Timers(), []
-    runner = SimpleNamespace(latest=frame(500, 0, world=1, program=PAPER_PROGRAM),
-                             set_lamp=lambda centre, radius, mode, on_done, on_error: (lamps.append(centre),
-                                                                                       on_done(None)))
+    lamps = []
 
     def reset(seed, on_done, on_error):
-        runner.latest = frame(0, 1, world=2, program=PAPER_PROGRAM)  # the earlier reset's world, meanwhile
+        folder.runner.latest = frame(0, 1, world=2, program=PAPER_PROGRAM)  # the earlier reset's world, meanwhile
         on_done(3)  # the round's world: 3
 
-    lockstep = SimpleNamespace(set_playing=lambda playing: None, reset=reset)
-    lamp = SimpleNamespace(radius=SimpleNamespace(value=1.0))
-    folder = ChallengeFolder(None, runner, lockstep, lamp, on_change=lambda what: None, after=timers.after)
-    folder.status, folder.hint, folder.scores = Markdown(), Markdown(), Markdown()
+    folder = challenge_folder(reset, lambda playing: None, Timers(), lamps)
     folder.start("Ada", None)
     assert lamps == [] and folder.round.world is None  # not on world 2
     folder.update(frame(0, 4, world=3, program=PAPER_PROGRAM))

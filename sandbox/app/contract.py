@@ -168,8 +168,8 @@ class SimulationRunner(FramePublisher):
               on_error: Callable[[BaseException], None] | None = None) -> Future:
         """Rebuild the world with the waiting changes; ``seed`` None keeps the current seed. ``on_done``
         gets the new world's key (its frames' ``world_key``: a frame of an older world may still come
-        after the answer, from a reset asked for earlier). Building reports to the :meth:`on_progress` listeners and stops at :meth:`cancel_build`
-        (BuildCancelled; the old world goes on)."""
+        after the answer, from a reset asked for earlier). Building reports to the :meth:`on_progress`
+        listeners and stops at :meth:`cancel_build` (BuildCancelled; the old world goes on)."""
         return self.ask(Reset(seed), on_done, on_error)
 
     def update_config(self, changes: dict[str, Any], *, on_done: Callable[[Any], None] | None = None,

@@ -132,7 +132,7 @@ LAYOUT_JS = """(() => {
   // A dropdown's list on a narrow page: a sheet along the bottom of the screen (it wins over the inline
   // place viser's page computes, which is off the screen in the drawer).
   const lists = document.createElement("style");
-  lists.textContent = "@media " + %(narrow_css)s + " { .mantine-Combobox-dropdown, .mantine-Select-dropdown {" +
+  lists.textContent = "@media " + NARROW.media + " { .mantine-Combobox-dropdown, .mantine-Select-dropdown {" +
     " position: fixed !important; left: 8px !important; right: 8px !important; top: auto !important;" +
     " bottom: 8px !important; width: auto !important; max-height: 50vh !important; overflow-y: auto !important; } }";
   document.head.appendChild(lists);
@@ -153,5 +153,4 @@ LAYOUT_JS = """(() => {
   look();
 })();""" % {"narrow": json.dumps(NARROW), "notice": json.dumps(SOFTWARE_NOTICE),
             "notice_ms": round(1000 * NOTICE_SECONDS), "lamp": json.dumps(list(LAMP_LABELS)),
-            "challenge": json.dumps(CHALLENGE), "start": json.dumps(START_ROUND), "bar": json.dumps(SHORTCUTS_ID),
-            "narrow_css": json.dumps(NARROW)}
+            "challenge": json.dumps(CHALLENGE), "start": json.dumps(START_ROUND), "bar": json.dumps(SHORTCUTS_ID)}

@@ -22,8 +22,8 @@ from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
-from sandbox.app.commands import (Apply, Arrival, CancelBuild, Command, Controls, Reset, RunnerStopped, RunTo, SetLamp,
-                                  SetOutline, SetProgram, SetShape, Setting, SkipAhead, Start, StepOnce,
+from sandbox.app.commands import (Apply, Arrival, CancelBuild, Command, Controls, Reset, RunnerStopped, RunTo,
+                                  SetLamp, SetOutline, SetProgram, SetShape, Setting, SkipAhead, Start, StepOnce,
                                   UpdateConfig, WorldSpec, DesignOf, PlayDesign)
 from sandbox.app.contract import Deliver, SimulationRunner, answer
 from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM, RobotView, Snapshot
