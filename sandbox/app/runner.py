@@ -43,12 +43,19 @@ if TYPE_CHECKING:  # imported where a Runner is built: the web server itself nev
 FASTEST = 100
 FASTEST_CHUNK = 10
 
-#: How far (s) the loop may fall behind its frames' schedule and still catch up. A frame that is
-#: late (the machine busy with a browser, a garbage collection) takes the steps of the frames it
-#: missed too, and one snapshot: so a speed setting is the rate the world runs at, and a loop short
-#: of time spends it on steps, not on pictures nobody sees. Further behind (the machine stalled) the
-#: rest is let go, as a game's fixed-step loop caps the time it catches up on, rather than racing.
-CATCH_UP = 0.25
+#: How far (s) the world may fall behind its speed setting and still catch up. A frame that is late
+#: (the machine busy with a browser, a garbage collection, steps that cost more) takes the steps of the
+#: frames it missed too, and one snapshot: so a speed setting is the rate the world runs at, and a
+#: loop short of time spends it on steps, not on pictures nobody sees. The default world's dense
+#: phases (robots and boxes packed where the band closes) step at 620-840 steps/s on one core of the
+#: test machine (seed 0, headless), under the default speed's 750: the world falls behind there for
+#: 2-4 s at a time, and makes it up in the open phases that follow (4,000-11,000 steps/s). Further
+#: behind (a machine that cannot keep up at all) the rest is let go, as a game's fixed-step loop caps
+#: the time it catches up on, rather than racing.
+BEHIND_AT_MOST = 2.0
+#: How much (s) one frame catches up beyond its own steps: 3 frames' more at 30 frames/s, so that
+#: catching up shows as a brief fast-forward, never as one long frame with no picture.
+CATCH_UP_PER_FRAME = 0.1
 
 log = logging.getLogger("sandbox.app.runner")
 
@@ -62,10 +69,8 @@ def frames_owed(due: float, now: float, interval: float, most_behind: float) -> 
 
 def next_frame_due(due: float, now: float, interval: float, most_behind: float) -> float:
     """When the frame after the one that was ``due`` is due, at ``now``: one ``interval`` after it,
-    unless that lies more than ``most_behind`` seconds in the past; then ``now`` (the lost time is
-    let go)."""
-    following = due + interval
-    return now if following < now - most_behind else following
+    but never more than ``most_behind`` seconds in the past (the rest of a longer delay is let go)."""
+    return max(due + interval, now - most_behind)
 
 
 def wait_for(post: Callable, command: Any, timeout: float) -> Any:
@@ -144,6 +149,7 @@ class Runner(SimulationRunner):
         self._goal_key = 0
         self._world_key = int(first_world_key)
         self._step_times: deque = deque(maxlen=120)  # (wall time, steps_done), of the simulation thread only
+        self._restart_schedule = False  # set by a command whose time the world does not owe (the loop's)
         self._series_lock = threading.Lock()
         self._series: list[Sample] = []
         self._threads: list[threading.Thread] = []
@@ -269,12 +275,15 @@ class Runner(SimulationRunner):
         return (s1 - s0) / (t1 - t0) if t1 > t0 else 0.0
 
     # ------------------------------------------------------------ commands
-    def _run_commands(self) -> None:
+    def _run_commands(self) -> int:
+        """Carry out the waiting commands; how many there were."""
+        count = 0
         while True:
             try:
                 command, future = self._commands.get_nowait()
             except queue.Empty:
-                return
+                return count
+            count += 1
             if future.set_running_or_notify_cancel():  # not cancelled by whoever submitted it
                 self._carry_out(command, future)
 
@@ -348,6 +357,7 @@ class Runner(SimulationRunner):
             self._cancel.clear()
             self._report_progress(None)
         self._record_series(force=True)
+        self._restart_schedule = True  # it ran ahead: its time is not owed
         return Arrival(self.sim.steps_done, cancelled, self._world_key)
 
     @handles(UpdateConfig)
@@ -373,6 +383,7 @@ class Runner(SimulationRunner):
     def _new_world(self) -> None:
         """The simulation was rebuilt: a new goal, new speeds, a new world and its new series."""
         self._goal_key += 1
+        self._restart_schedule = True  # the new world starts on the clock: the build's time is not owed
         self._step_times.clear()  # speeds are measured within one world
         with self._series_lock:  # a new world and its new series, together (see series_of_world)
             self._world_key += 1
@@ -469,25 +480,52 @@ class Runner(SimulationRunner):
         interval = 1.0 / self.fps
         due = time.perf_counter()  # when the next frame's steps are due
         while not self._stop.is_set():
-            fastest = self.controls.steps_per_frame >= FASTEST
-            frames = 1 if fastest else frames_owed(due, time.perf_counter(), interval, CATCH_UP)
-            try:
-                self._frame_of_steps(due + interval, frames)
-            except Exception as exc:  # noqa: BLE001 - a bug: pause and say so rather than freeze the page
-                self.errors.append(exc)
-                log.exception("the simulation loop failed; paused")
-                self.controls.playing = False
-            now = time.perf_counter()
-            due = next_frame_due(due + (frames - 1) * interval, now, interval,
-                                 most_behind=interval if fastest else CATCH_UP)
-            delay = due - now
+            if time.perf_counter() < due:
+                due = self._commands_between_frames(due)
+            else:
+                due = self._frame_on_schedule(due, interval)
+            delay = due - time.perf_counter()
             if delay > 0:  # sleep until the next frame is due, or a command arrives
                 self._wake.wait(delay)
                 self._wake.clear()
 
-    def _frame_of_steps(self, deadline: float, frames: int = 1) -> None:
+    def _commands_between_frames(self, due: float) -> float:
+        """Woken before a frame is due (a command came): carry the commands out and show their effect,
+        but step on the schedule only (a page sending commands faster than frames, as a drag does,
+        made the world run faster). The next frame's time: still ``due``, or now if a command started
+        a new world or ran ahead."""
+        self._restart_schedule = False
+        if self._run_commands():
+            self._snapshot()
+        return max(due, time.perf_counter()) if self._restart_schedule else due
+
+    def _frame_on_schedule(self, due: float, interval: float) -> float:
+        """The frame that was ``due``, with the steps of those it missed; the next frame's time."""
+        fastest = self.controls.steps_per_frame >= FASTEST
+        frames = 1 if fastest else frames_owed(due, time.perf_counter(), interval, CATCH_UP_PER_FRAME)
+        self._restart_schedule = False
+        try:
+            playing = self._frame_of_steps(due + interval, frames)
+        except Exception as exc:  # noqa: BLE001 - a bug: pause and say so rather than freeze the page
+            self.errors.append(exc)
+            log.exception("the simulation loop failed; paused")
+            self.controls.playing = playing = False
+        return next_frame_due(due + (frames - 1) * interval, time.perf_counter(), interval,
+                              most_behind=self._may_fall_behind(fastest, playing, interval))
+
+    def _may_fall_behind(self, fastest: bool, playing: bool, interval: float) -> float:
+        """How far behind its schedule the next frame may be due (s). Nothing is owed for time the world
+        was paused, or spent on a command that built a new world or ran ahead (a new world starts on the
+        clock). A world held by compare mode's lockstep owes its time: when its partner has caught up,
+        both catch up together. The fastest setting catches up one frame only (its frames fill their
+        time)."""
+        if self._restart_schedule or not playing:
+            return 0.0
+        return interval if fastest else BEHIND_AT_MOST
+
+    def _frame_of_steps(self, deadline: float, frames: int = 1) -> bool:
         """One frame: the waiting commands, ``frames`` frames' steps (if playing), the series and a
-        snapshot. ``deadline``: when the fastest setting stops stepping."""
+        snapshot. ``deadline``: when the fastest setting stops stepping. True if the world was playing."""
         self._run_commands()
         controls = self.controls
         allowed = self._steps_allowed(controls.steps_per_frame * frames)
@@ -499,6 +537,7 @@ class Runner(SimulationRunner):
             self._record_series()
         self._step_times.append((time.perf_counter(), self.sim.steps_done))
         self._snapshot()
+        return controls.playing
 
     def _step_for(self, deadline: float) -> None:
         """Step in small chunks until ``deadline`` (at least one chunk) or the held step."""
