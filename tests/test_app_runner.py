@@ -743,6 +743,18 @@ def test_run_to_the_end_skips_without_frames_then_explains(app):
     assert any(note[0] == "Stopped" for note in client.notes)
 
 
+def test_run_to_the_end_pauses_so_the_floor_stays_on_the_explained_state(app):
+    folder = app.panel.run
+    client = FakeClient()
+    app.events.call(app.lockstep.set_playing, True)
+    wait_until(lambda: app.runner.playing, what="playing")
+    start = app.runner.latest.step
+    app.events.call(folder.skip_ahead, start + 2000, client)
+    wait_until(lambda: any(note[0] == "Run to the end" for note in client.notes), what="the notice")
+    assert not app.runner.playing and folder.play.label == "Play"
+    assert app.runner.latest.step == start + 2000  # where it was sent, and no further
+
+
 def test_run_to_the_end_right_after_a_reset_explains_the_new_world(app):
     """*Use and run to the end* asks for a reset, then a run to the end: the runner takes both in one turn
     and takes a frame only after them, so the page may hear the run's answer while the last frame is still

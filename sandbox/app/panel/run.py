@@ -57,8 +57,8 @@ class RunFolder:
             self.end_step = gui.add_number("Run to step", DEFAULT_END, min=1, max=MOST_END, step=1000,
                                            hint="Where Run to the end stops (100,000: the paper's runs)")
             self.run_to_end = gui.add_button("Run to the end", icon=viser.Icon.PLAYER_SKIP_FORWARD,
-                                             hint="Run to that step without drawing, as fast as the machine "
-                                                  "steps, then show the result")
+                                             hint="Pause, run to that step without drawing, as fast as the "
+                                                  "machine steps, then show the result")
             self.status = gui.add_markdown(self._status_text(snap))
             self.cancel = gui.add_button("Cancel building", icon=viser.Icon.X, visible=False,
                                          hint="Stop building the new world (the current one goes on), or stop "
@@ -119,6 +119,10 @@ class RunFolder:
             return
         self._skipping = (int(step), time.monotonic())
         self.run_to_end.disabled = True
+        # Paused first, as Step is: the floor then stays on the state the Result folder explains (a playing
+        # world went on past it, the rings and the text soon about another state).
+        self.lockstep.set_playing(False)
+        self.sync_play_button()
         self._building(0.0)
 
         def arrived(arrival: Arrival) -> None:
