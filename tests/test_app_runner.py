@@ -783,6 +783,29 @@ def test_run_to_the_end_right_after_a_reset_explains_the_new_world(app):
     wait_until(lambda: any(note[0] == "Run to the end" for note in client.notes), what="the notice")
 
 
+def test_a_run_to_the_end_shows_the_world_it_starts_from(app):
+    """A reset and a run to the end taken in one turn publish no frame between them: the run shows its
+    starting state first, so the pages show the new goal while it runs, not the old world."""
+    folder = app.panel.run
+    app.events.call(app.lockstep.set_playing, False)
+    old = paused_step(app.runner)
+    old_world = app.runner.latest.world_key
+    release = threading.Event()
+
+    def reset_then_run() -> None:
+        app.runner.reset(None)
+        folder.skip_ahead(old + 1000, FakeClient())
+        app.runner.post(lambda sim: release.wait(30))  # no frame after the run until released
+
+    try:
+        app.events.call(reset_then_run)
+        wait_until(lambda: app.runner.latest.world_key != old_world, what="a frame of the new world")
+        assert app.runner.latest.step < old + 1000
+    finally:
+        release.set()
+    wait_until(lambda: folder._skipping is None, what="the end of the run")
+
+
 def test_a_live_worlds_design_downloads_and_plays_back_bit_for_bit():
     """Issue 40, item 6: the page's design of a live world (its light program as it ran) replays it
     exactly: the same state at the same step (serve --design plays it the same way)."""

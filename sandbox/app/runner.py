@@ -343,6 +343,9 @@ class Runner(SimulationRunner):
         it waited its turn counts: the page's Cancel shows from the moment it is asked)."""
         start, target = self.sim.steps_done, int(command.step)
         cancelled = False
+        # The state it starts from, shown while it runs: after a reset taken in the same turn (Use and run to
+        # the end), the pages would otherwise show the old world until the end.
+        self._snapshot()
         try:
             while self.sim.steps_done < target:
                 if self._cancel.is_set():
