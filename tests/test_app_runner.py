@@ -168,6 +168,32 @@ def test_a_new_world_starts_on_the_clock_and_owes_nothing_for_its_build():
         r.stop()
 
 
+def test_a_world_shown_every_third_frame_keeps_its_speed():
+    # sandbox.app.pacing: when every page draws fewer frames than are sent, the world takes a snapshot
+    # at every k-th frame only; it steps on the same schedule.
+    r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2).start()  # 60 steps/s
+    try:
+        wait_until(lambda: r.latest.step > 10)
+        r.show_every(3).result(10)
+        frames_pass(r, 2)
+        steps: list[int] = []
+        r.subscribe(lambda snap: steps.append(snap.step))
+        t0, s0 = r.call(_clock_and_step)
+        wait_until(lambda: len(steps) >= 12, what="twelve snapshots")
+        t1, s1 = r.call(_clock_and_step)
+        gaps = np.diff(steps)
+        assert gaps.min() >= 6, f"a snapshot more often than every third frame: {gaps}"  # 3 frames x 2 steps
+        assert s1 - s0 <= 60 * (t1 - t0) + 8  # not faster ...
+        assert s1 - s0 >= 0.5 * 60 * (t1 - t0)  # ... nor thinned with its snapshots (a third of 60 steps/s)
+        r.show_every(1).result(10)
+        frames_pass(r, 1)
+        since = len(steps)
+        wait_until(lambda: len(steps) >= since + 6, what="six snapshots")
+        assert min(np.diff(steps[since:])) <= 4, "every frame shown again"
+    finally:
+        r.stop()
+
+
 def test_headless_advance_without_threads():
     r = Runner(SMALL, shape=None, playing=False)
     snap = r.advance(25)

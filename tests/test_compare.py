@@ -160,6 +160,24 @@ def test_playing_worlds_stay_within_the_lead_and_pause_on_the_same_step(pair):
     wait_until(lambda: main.latest.step == partner.latest.step == paused_at + 10, what="both stepped 10")
 
 
+def test_worlds_shown_every_third_frame_go_on_in_step(pair):
+    # Both worlds' snapshots thinned (sandbox.app.pacing: every page draws slowly): each frame of either
+    # still raises the target, so neither stalls for the other's rarer frames, and a pause lands both on
+    # one step.
+    lockstep, main, partner = pair
+    _reset(lockstep)
+    lockstep.show_every(3)
+    assert main.controls.show_every == partner.controls.show_every == 3
+    lockstep.set_playing(True)
+    wait_until(lambda: min(main.latest.step, partner.latest.step) >= 20 * main.steps_per_frame,
+               what="both worlds twenty frames on")
+    lockstep.set_playing(False)
+    wait_until(lambda: main.latest.step == partner.latest.step == lockstep.target and not main.latest.playing,
+               what="both paused on the target step")
+    lockstep.show_every(1)
+    assert main.controls.show_every == partner.controls.show_every == 1
+
+
 def test_a_slow_world_sets_the_pace(pair):
     lockstep, main, partner = pair
     _reset(lockstep)

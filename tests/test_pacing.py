@@ -4,8 +4,11 @@ and the address a page reports at is behind the gate like the page itself."""
 from __future__ import annotations
 
 import re
+import time
 
-from sandbox.app.pacing import CALM, MOST_WAIT, PATH
+import pytest
+
+from sandbox.app.pacing import CALM, MOST_WAIT, PATH, Pacer, drawing_rate, frames_per_snapshot
 from tests.test_security import app, connected, http_status, own_page, shared_app  # noqa: F401 - fixtures
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until
@@ -76,3 +79,53 @@ def test_a_watching_page_on_a_shared_server_is_paced_too(shared_app):
     assert shared_app.gate.grant(wid).controls is False
     assert report(shared_app, token) == 204 and wid in shared_app.gate.pacer.paced
     watcher.close()
+
+
+# ---------------------------------------------------------------- snapshots as often as pages draw
+def test_the_worlds_snapshot_rate_follows_the_fastest_page():
+    # fps 30; the fastest page's rate x 1.5, at least 10 a second: every floor(30 / that) frames
+    assert frames_per_snapshot(30, [7.0]) == 2  # 10.5 wanted: 15 a second
+    assert frames_per_snapshot(30, [7.0, 3.0]) == 2  # the fastest page counts
+    assert frames_per_snapshot(30, [10.0]) == 2  # 15 wanted: 15 a second
+    assert frames_per_snapshot(30, [11.0]) == 1  # 16.5 wanted: every frame
+    assert frames_per_snapshot(30, [4.0]) == 3  # 6 wanted, 10 at least: 10 a second
+    assert frames_per_snapshot(30, [0.5]) == 3
+    assert frames_per_snapshot(30, [7.0, None]) == 1  # a page that keeps up (or has not said) sees them all
+    assert frames_per_snapshot(30, []) == 1  # nobody looking: as before
+    assert frames_per_snapshot(60, [7.0]) == 5  # 60 / 10.5
+
+
+def test_a_pages_drawing_rate_from_its_reports():
+    assert drawing_rate([10.0, 10.1, 10.2, 10.3, 10.4], now=10.4) == pytest.approx(10.0)  # 4 gaps in 0.4 s
+    assert drawing_rate([5.0, 10.0, 10.25, 10.5], now=10.5) == pytest.approx(4.0)  # the one at 5 s is old
+    assert drawing_rate([10.0, 10.1], now=10.1) is None  # too few to say
+    assert drawing_rate([1.0, 1.1, 1.2], now=10.0) is None  # it stopped reporting (a hidden tab)
+
+
+def test_the_pacer_reads_each_pages_rate_and_a_calm_page_keeps_every_frame():
+    pacer = Pacer()
+    tokens = [pacer.script_for(cid).split(PATH)[1].split('"')[0] for cid in (1, 2)]
+    now = 100.0
+    for k in range(8):  # page 1 draws 7 frames a second
+        assert pacer.drawn(tokens[0], now=now - 1.0 + k / 7)
+    rates = pacer.drawing_rates(now)
+    assert sorted(rates, key=lambda r: r is None)[0] == pytest.approx(7.0) and None in rates  # page 2: silent
+    pacer.forget(2)
+    assert pacer.drawing_rates(now) == [pytest.approx(7.0)]
+    pacer.drawn(tokens[0] + CALM, now=now)  # it keeps up again
+    assert pacer.drawing_rates(now) == [None]
+
+
+def test_the_app_takes_fewer_snapshots_while_its_only_page_draws_slowly(app):
+    paced, cid, token = page_with_token(app)
+    wait_until(lambda: set(app.server.get_clients()) == {cid}, what="this page alone")
+    pacer = app.gate.pacer
+    now = time.monotonic()
+    for k in range(8):  # 7 frames a second over the last second
+        assert pacer.drawn(token, now=now - 1.0 + k / 7)
+    app.events.call(app._pace_snapshots)
+    assert app.show_every == 2 and app.runner.controls.show_every == 2
+    assert report(app, token + CALM) == 204  # it keeps up again: every frame
+    app.events.call(app._pace_snapshots)
+    assert app.show_every == 1 and app.runner.controls.show_every == 1
+    paced.close()

@@ -42,11 +42,13 @@ class Controls:
     #: Playing, the world steps no further than this step (None: no limit); compare mode holds two worlds
     #: in lockstep with it (sandbox.app.compare).
     hold_at: int | None = None
+    #: A snapshot every this many frames (1: every frame): no page draws more (sandbox.app.pacing).
+    show_every: int = 1
 
     def settings(self) -> list["Setting"]:
         """The settings that bring a fresh runner's controls to these (a restarted child's)."""
         return [SetPlaying(self.playing), SetSpeed(self.steps_per_frame), Follow(self.followed),
-                WantField(self.want_field), Hold(self.hold_at)]
+                WantField(self.want_field), Hold(self.hold_at), ShowEvery(self.show_every)]
 
 
 @dataclass(frozen=True)
@@ -227,6 +229,19 @@ class WantField(Setting):
 
     def settle(self, controls: Controls) -> None:
         controls.want_field = bool(self.on)
+
+
+@dataclass(frozen=True)
+class ShowEvery(Setting):
+    """Take a snapshot at every ``frames``-th frame only; the world steps on the same schedule. The
+    pages decide it: when every one draws fewer frames than are sent, the rest are not worth taking
+    (sandbox.app.pacing.frames_per_snapshot)."""
+
+    frames: int
+    wakes: ClassVar[bool] = False
+
+    def settle(self, controls: Controls) -> None:
+        controls.show_every = max(1, int(self.frames))
 
 
 @dataclass(frozen=True)

@@ -85,6 +85,7 @@ class Lockstep:
         self.main = main
         self.partner: Any = None
         self._target = 0
+        self._show_every = 1  # (sandbox.app.pacing.frames_per_snapshot)
         #: World keys of the worlds being replaced by a reset: their frames do not raise the target.
         self._stale: dict[int, int] = {}
         self._lock = threading.RLock()
@@ -97,6 +98,7 @@ class Lockstep:
         with self._lock:
             self.partner = partner
             partner.set_speed(self.main.steps_per_frame)
+            partner.show_every(self._show_every)
             partner.subscribe(lambda snap: self._advance())
 
     def unpair(self) -> Any:
@@ -146,6 +148,13 @@ class Lockstep:
     def set_speed(self, steps_per_frame: int) -> None:
         for side in self.sides:
             side.set_speed(steps_per_frame)
+
+    def show_every(self, frames: int) -> None:
+        """A snapshot of each world at every ``frames``-th frame only (the pages draw no more)."""
+        with self._lock:
+            self._show_every = frames
+            for side in self.sides:
+                side.show_every(frames)
 
     def skip_ahead(self, step: int, *, on_done: Callable[[Any], None] | None = None,
                    on_error: Callable[[BaseException], None] | None = None) -> None:

@@ -25,7 +25,8 @@ from typing import Any, Callable, Iterable
 
 from sandbox.app.commands import (Apply, CancelBuild, Command, Controls, Follow, Hold, Reset, RunnerStopped,
                                   RunTo, SetLamp, SetOutline, SetPlaying, SetProgram, SetShape, SetSpeed,
-                                  SkipAhead, StepOnce, UpdateConfig, WantField, WorldSpec, DesignOf, PlayDesign)
+                                  ShowEvery, SkipAhead, StepOnce, UpdateConfig, WantField, WorldSpec, DesignOf,
+                                  PlayDesign)
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.metrics import Sample
 
@@ -228,6 +229,10 @@ class SimulationRunner(FramePublisher):
     def follow(self, indices: Iterable[int]) -> Future:
         """Carry these robots' photocells, commands and charge in the snapshots (the inspectors' robots)."""
         return self.submit(Follow(tuple(int(i) for i in indices)))
+
+    def show_every(self, frames: int) -> Future:
+        """A snapshot at every ``frames``-th frame only (1: every frame); the speed is unchanged."""
+        return self.submit(ShowEvery(max(1, int(frames))))
 
     def hold(self, step: int | None) -> Future:
         """Playing, step no further than ``step`` (None: no limit)."""

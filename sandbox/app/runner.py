@@ -145,7 +145,8 @@ class Runner(SimulationRunner):
         self._new_frame = threading.Condition()
         self._latest: Snapshot | None = None
         self._published = -1
-        self._frame = 0
+        self._frame = 0  # snapshots taken
+        self._frames_run = 0  # frames of the schedule run, snapshot or not
         self._goal_key = 0
         self._world_key = int(first_world_key)
         self._step_times: deque = deque(maxlen=120)  # (wall time, steps_done), of the simulation thread only
@@ -539,7 +540,9 @@ class Runner(SimulationRunner):
                 self._step(allowed)
             self._record_series()
         self._step_times.append((time.perf_counter(), self.sim.steps_done))
-        self._snapshot()
+        self._frames_run += 1
+        if self._frames_run % controls.show_every == 0:  # (a command that wakes the loop shows at once)
+            self._snapshot()
         return controls.playing
 
     def _step_for(self, deadline: float) -> None:

@@ -24,6 +24,7 @@ from sandbox.app.events import EventQueue
 from sandbox.app.gate import start_server
 from sandbox.app.icons import read_icons_once
 from sandbox.app.memory import return_memory_after_pages_leave
+from sandbox.app.pacing import frames_per_snapshot
 from sandbox.app.panel import Panel
 from sandbox.app.panel.framing import PRESENTER, WHOLE_ARENA
 from sandbox.app.process import ProcessRunner
@@ -43,6 +44,8 @@ from sandbox.shapes import shape_vertices
 TITLE = "Phototaxis sandbox"
 #: With no browser connected for this long, the app stops stepping (unless --keep-running).
 IDLE_PAUSE_SECONDS = 60.0
+#: How often (s) the worlds' snapshot rate follows the pages' drawing (sandbox.app.pacing).
+PACE_SNAPSHOTS_EVERY = 0.5
 #: For this long after a page connects, each change of its window's shape fits its camera to the
 #: arena again (s): the page lays itself out, slowly on a loaded machine.
 FIT_SECONDS = 30.0
@@ -117,6 +120,7 @@ class App:
         self.keep_running, self.idle_pause_seconds = keep_running, idle_pause_seconds
         self.auto_paused = False  # owned by the event thread, as everything below
         self._last_viewer = time.monotonic()
+        self.show_every = 1  # the worlds' snapshot at every this many frames (_pace_snapshots)
         #: Each page's camera is fitted to the arena as the page tells its shape, until this (monotonic) time.
         self._fitting: dict[int, tuple[float, float | None]] = {}
         # viser replays these for pages that came while the app was built: through the queue, once each.
@@ -206,6 +210,14 @@ class App:
             self.auto_paused = True
             self.lockstep.set_playing(False)
 
+    def _pace_snapshots(self) -> None:
+        """Twice a second: the worlds take a snapshot only as often as the fastest page draws (with
+        headroom; every frame while any page keeps up)."""
+        every = frames_per_snapshot(self.runner.fps, self.gate.pacer.drawing_rates())
+        if every != self.show_every:
+            self.show_every = every
+            self.lockstep.show_every(every)
+
     def _reframe_all(self, offset: tuple[float, float] | None) -> None:
         """Compare mode began or ended: every page frames both worlds, or the one."""
         self.panel.framing.offset = offset
@@ -264,6 +276,7 @@ class App:
                 self.stop()
                 raise UserError(f"the compared world cannot start: {exc}") from None
         self.events.every(1.0, self._check_viewers)
+        self.events.every(PACE_SNAPSHOTS_EVERY, self._pace_snapshots)
         return self
 
     def stop(self) -> None:
