@@ -108,17 +108,19 @@ def test_the_pacer_reads_each_pages_rate_and_a_calm_page_keeps_every_frame():
     now = 100.0
     for k in range(8):  # page 1 draws 7 frames a second
         assert pacer.drawn(tokens[0], now=now - 1.0 + k / 7)
-    rates = pacer.drawing_rates(now)
-    assert sorted(rates, key=lambda r: r is None)[0] == pytest.approx(7.0) and None in rates  # page 2: silent
+    assert pacer.drawing_rates(now) == [pytest.approx(7.0)]  # page 2 has not said how it draws: not counted
+    assert pacer.drawn(tokens[1] + CALM, now=now)  # it keeps up (its first second)
+    assert sorted(pacer.drawing_rates(now), key=lambda r: r is None) == [pytest.approx(7.0), None]
     pacer.forget(2)
     assert pacer.drawing_rates(now) == [pytest.approx(7.0)]
-    pacer.drawn(tokens[0] + CALM, now=now)  # it keeps up again
+    pacer.drawn(tokens[0] + CALM, now=now)  # page 1 keeps up again
     assert pacer.drawing_rates(now) == [None]
 
 
 def test_the_app_takes_fewer_snapshots_while_its_only_page_draws_slowly(app):
     paced, cid, token = page_with_token(app)
-    wait_until(lambda: set(app.server.get_clients()) == {cid}, what="this page alone")
+    silent = RawClient(app.port, own_page(app))  # runs no script, draws nothing: not counted
+    connected(app, silent)
     pacer = app.gate.pacer
     now = time.monotonic()
     for k in range(8):  # 7 frames a second over the last second
@@ -129,3 +131,4 @@ def test_the_app_takes_fewer_snapshots_while_its_only_page_draws_slowly(app):
     app.events.call(app._pace_snapshots)
     assert app.show_every == 1 and app.runner.controls.show_every == 1
     paced.close()
+    silent.close()

@@ -13,9 +13,13 @@ own. The script marks the page's WebGL draw calls. While the page is busy
 asks ``/__drawn/<token>`` at the first animation frame after a draw (one
 request at a time): "I drew". After a second with no such gap it says
 ``/__drawn/<token>?calm`` once, and reports no more until it is busy again:
-a page that keeps up (a laptop with a graphics card) costs the server no
-requests (a report cost it 0.6 ms of CPU, measured under load). The gate answers
-that address (:meth:`Pacer.drawn`).
+a page that keeps up (a laptop with a graphics card) costs the server one
+request, its calm after its first second (a report cost it 0.6 ms of CPU,
+measured under load). The gate answers that address (:meth:`Pacer.drawn`).
+
+The worlds themselves take a snapshot only as often as the fastest drawing
+page needs (:func:`frames_per_snapshot`, applied by the app twice a second):
+every frame while any page keeps up or is paced without a rate yet.
 
 The shared scene leaves the server in windows, one connection at a time
 (viser's window generator over the broadcast buffer, reached through
@@ -69,6 +73,7 @@ def frames_per_snapshot(fps: float, rates: Iterable[float | None]) -> int:
 
 REPORT_JS = """(() => {
   window.__phototaxisDrawn = "%(path)s%(token)s";  // a reconnected page reports under its new token
+  window.__phototaxisSpoke = false;  // ... and says once how it draws under it
   if (window.__phototaxisReporting) return;
   window.__phototaxisReporting = true;
   let drew = false, asking = false, busy = false, last = null, calmSince = null;
@@ -82,6 +87,7 @@ REPORT_JS = """(() => {
   }
   const ask = (suffix) => {
     asking = true;
+    window.__phototaxisSpoke = true;
     fetch(window.__phototaxisDrawn + suffix, {cache: "no-store", credentials: "same-origin"})
       .catch(() => {}).finally(() => { asking = false; });
   };
@@ -89,7 +95,7 @@ REPORT_JS = """(() => {
     if (last !== null && now - last > %(busy_gap)d) {
       busy = true;
       calmSince = null;
-    } else if (busy) {
+    } else if (busy || !window.__phototaxisSpoke) {  // (a page that keeps up from the start says so once)
       calmSince = calmSince === null ? now : calmSince;
       if (now - calmSince > 1000 && !asking) {
         busy = false;
@@ -127,6 +133,8 @@ class Pacer:
         self._token_of: dict[int, str] = {}
         self._drawn: dict[int, asyncio.Event] = {}
         self.paced: set[int] = set()  # pages that reported a drawn frame and have not said calm since
+        #: pages that ran the script and said how they draw (busy or calm): a websocket client never does
+        self.spoken: set[int] = set()
         #: per page: when it reported its last drawn frames (read from another thread: under the lock)
         self._report_times: dict[int, deque] = {}
         self._rates_lock = threading.Lock()
@@ -157,6 +165,7 @@ class Pacer:
             self.reports[client_id] += 1
             self.paced.add(client_id)
         with self._rates_lock:
+            self.spoken.add(client_id)
             times = self._report_times.setdefault(client_id, deque(maxlen=64))
             if calm:
                 times.clear()
@@ -170,6 +179,7 @@ class Pacer:
             token = self._token_of.pop(client_id, None)
             self._client_of.pop(token, None)
             self._report_times.pop(client_id, None)
+            self.spoken.discard(client_id)
         self.paced.discard(client_id)
         self.reports.pop(client_id, None)
         self.windows.pop(client_id, None)
@@ -178,12 +188,13 @@ class Pacer:
             event.set()  # a window held for the page goes (and its connection ends)
 
     def drawing_rates(self, now: float | None = None) -> list[float | None]:
-        """Each page's drawing rate (frames a second) over the last :data:`RATE_WINDOW` s, or None for a
-        page that keeps up or has not reported enough lately (any thread)."""
+        """Each drawing page's rate (frames a second) over the last :data:`RATE_WINDOW` s, or None for a
+        page that keeps up or has not reported enough lately (any thread). A client that never said how
+        it draws draws nothing (a websocket client of our own, a page that has not drawn for a second
+        yet): it is not counted."""
         now = time.monotonic() if now is None else now
         with self._rates_lock:
-            pages = set(self._token_of) | set(self._report_times)
-            return [drawing_rate(self._report_times.get(page, ()), now) for page in pages]
+            return [drawing_rate(self._report_times.get(page, ()), now) for page in self.spoken]
 
     # ---------------------------------------------------------- windows
     async def hold_windows(self, windows: AsyncGenerator, client_id: int, full: int) -> AsyncGenerator:
