@@ -19,7 +19,7 @@ class World:
         config = Config()
         self.playing = playing
         self.latest = SimpleNamespace(step=step, playing=playing, world_config=config, shape_name="star",
-                                      strategies={})
+                                      strategies={}, world_key=0)
 
     def set_playing(self, playing: bool) -> None:
         self.playing = self.latest.playing = playing
@@ -78,6 +78,20 @@ def test_a_controlling_page_that_arrives_mid_run_is_offered_start_over_a_watcher
     start(None)
     run.reset.assert_called_once_with(teacher)  # the same seed: reset(client) with no seed
     assert presenter.offers == {}  # answered: gone
+
+
+def test_an_offer_to_start_over_goes_when_a_new_world_starts():
+    # A designer arriving mid-run who uses a drawn goal instead: the new world is at step 0, and the offer
+    # about the old run (in the designer's loop, over the arena's lower right for the whole minute) goes.
+    presenter, world, run = screen(2_450, playing=True)
+    designer = page(1)
+    presenter.arrive(designer, controls=True)
+    presenter.update(world.latest)  # the same world's next frame: it stays
+    assert 1 in presenter.offers
+    world.latest = SimpleNamespace(**{**vars(world.latest), "step": 0, "world_key": 1})
+    presenter.update(world.latest)
+    assert presenter.offers == {}
+    designer.gui.add_panel.return_value.remove.assert_called_once()
 
 
 def test_the_bar_is_on_a_controlling_presenter_page_only():

@@ -70,15 +70,20 @@ class PresenterScreen:
         self.cards: dict[int, Any] = {}
         self.bars: dict[int, Any] = {}
         self.offers: dict[int, Any] = {}
+        self._offered_on: dict[int, Any] = {}  # per offer: the world it offers to start over
 
     # The panel builds and refreshes every folder; this one has nothing in the shared panel.
     def build(self, snap: Snapshot) -> None:
         """Nothing in the shared panel: everything here is a page's own."""
 
     def update(self, snap: Snapshot) -> None:
-        """Playing: no title card is left (Play may have come from any page, or a key)."""
+        """Playing: no title card is left (Play may have come from any page, or a key). A new world: no
+        offer to start the old one over is left (a designer's goal used, a reset from any page)."""
         if snap.playing and self.cards:
             self.close_cards()
+        for client_id, world in list(self._offered_on.items()):
+            if world != snap.world_key:
+                self._withdraw(client_id)
 
     # ------------------------------------------------------------ pages
     def arrive(self, client: Any, controls: bool) -> None:
@@ -91,7 +96,7 @@ class PresenterScreen:
             self.offer_start_over(client)
 
     def forget(self, client_id: int) -> None:
-        for table in (self.controls, self.cards, self.bars, self.offers):
+        for table in (self.controls, self.cards, self.bars, self.offers, self._offered_on):
             table.pop(client_id, None)
 
     # ------------------------------------------------------------ the title card
@@ -150,10 +155,12 @@ class PresenterScreen:
         keep.on_click(lambda event: self._withdraw(client.client_id))
         panel.float(x=-EDGE, y=-EDGE, width=OFFER_WIDTH)
         self.offers[client.client_id] = panel
+        self._offered_on[client.client_id] = self.runner.latest.world_key
         if self._events is not None:
             self._events.after(OFFER_SECONDS, self._withdraw, client.client_id)
 
     def _withdraw(self, client_id: int) -> None:
+        self._offered_on.pop(client_id, None)
         panel = self.offers.pop(client_id, None)
         if panel is not None:
             panel.remove()
