@@ -126,9 +126,9 @@ def test_the_app_takes_fewer_snapshots_while_its_only_page_draws_slowly(app):
     for k in range(8):  # 7 frames a second over the last second
         assert pacer.drawn(token, now=now - 1.0 + k / 7)
     app.events.call(app._pace_snapshots)
-    assert app.show_every == 2 and app.runner.controls.show_every == 2
+    assert app.lockstep.shown_every == 2 and app.runner.controls.show_every == 2
     assert report(app, token + CALM) == 204  # it keeps up again: every frame
     app.events.call(app._pace_snapshots)
-    assert app.show_every == 1 and app.runner.controls.show_every == 1
+    assert app.lockstep.shown_every == 1 and app.runner.controls.show_every == 1
     paced.close()
     silent.close()

@@ -85,7 +85,8 @@ class Lockstep:
         self.main = main
         self.partner: Any = None
         self._target = 0
-        self._show_every = 1  # (sandbox.app.pacing.frames_per_snapshot)
+        #: Each world's snapshot at every this many frames (sandbox.app.pacing.frames_per_snapshot).
+        self.shown_every = 1
         #: World keys of the worlds being replaced by a reset: their frames do not raise the target.
         self._stale: dict[int, int] = {}
         self._lock = threading.RLock()
@@ -98,7 +99,7 @@ class Lockstep:
         with self._lock:
             self.partner = partner
             partner.set_speed(self.main.steps_per_frame)
-            partner.show_every(self._show_every)
+            partner.show_every(self.shown_every)
             partner.subscribe(lambda snap: self._advance())
 
     def unpair(self) -> Any:
@@ -150,9 +151,12 @@ class Lockstep:
             side.set_speed(steps_per_frame)
 
     def show_every(self, frames: int) -> None:
-        """A snapshot of each world at every ``frames``-th frame only (the pages draw no more)."""
+        """A snapshot of each world at every ``frames``-th frame only (the pages draw no more); sent to
+        the worlds when it changes."""
         with self._lock:
-            self._show_every = frames
+            if frames == self.shown_every:
+                return
+            self.shown_every = frames
             for side in self.sides:
                 side.show_every(frames)
 

@@ -133,9 +133,8 @@ class Pacer:
         self._token_of: dict[int, str] = {}
         self._drawn: dict[int, asyncio.Event] = {}
         self.paced: set[int] = set()  # pages that reported a drawn frame and have not said calm since
-        #: pages that ran the script and said how they draw (busy or calm): a websocket client never does
-        self.spoken: set[int] = set()
-        #: per page: when it reported its last drawn frames (read from another thread: under the lock)
+        #: per page that said how it draws (busy or calm; a websocket client never does): when it reported
+        #: its last drawn frames, emptied by its calm (read from another thread: under the lock)
         self._report_times: dict[int, deque] = {}
         self._rates_lock = threading.Lock()
         #: per page: reports heard, and windows of the shared scene sent
@@ -146,8 +145,7 @@ class Pacer:
     def script_for(self, client_id: int) -> str:
         """The reporting script for a page that just connected (on the event loop)."""
         token = secrets.token_urlsafe(16)
-        with self._rates_lock:  # (drawing_rates reads the pages from another thread)
-            self._client_of[token], self._token_of[client_id] = client_id, token
+        self._client_of[token], self._token_of[client_id] = client_id, token
         self._drawn[client_id] = asyncio.Event()
         return REPORT_JS % {"path": PATH, "token": token, "busy_gap": BUSY_GAP_MS, "calm": CALM}
 
@@ -165,7 +163,6 @@ class Pacer:
             self.reports[client_id] += 1
             self.paced.add(client_id)
         with self._rates_lock:
-            self.spoken.add(client_id)
             times = self._report_times.setdefault(client_id, deque(maxlen=64))
             if calm:
                 times.clear()
@@ -175,11 +172,10 @@ class Pacer:
         return True
 
     def forget(self, client_id: int) -> None:
+        token = self._token_of.pop(client_id, None)
+        self._client_of.pop(token, None)
         with self._rates_lock:
-            token = self._token_of.pop(client_id, None)
-            self._client_of.pop(token, None)
             self._report_times.pop(client_id, None)
-            self.spoken.discard(client_id)
         self.paced.discard(client_id)
         self.reports.pop(client_id, None)
         self.windows.pop(client_id, None)
@@ -194,7 +190,7 @@ class Pacer:
         yet): it is not counted."""
         now = time.monotonic() if now is None else now
         with self._rates_lock:
-            return [drawing_rate(self._report_times.get(page, ()), now) for page in self.spoken]
+            return [drawing_rate(times, now) for times in self._report_times.values()]
 
     # ---------------------------------------------------------- windows
     async def hold_windows(self, windows: AsyncGenerator, client_id: int, full: int) -> AsyncGenerator:

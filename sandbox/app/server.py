@@ -120,7 +120,6 @@ class App:
         self.keep_running, self.idle_pause_seconds = keep_running, idle_pause_seconds
         self.auto_paused = False  # owned by the event thread, as everything below
         self._last_viewer = time.monotonic()
-        self.show_every = 1  # the worlds' snapshot at every this many frames (_pace_snapshots)
         #: Each page's camera is fitted to the arena as the page tells its shape, until this (monotonic) time.
         self._fitting: dict[int, tuple[float, float | None]] = {}
         # viser replays these for pages that came while the app was built: through the queue, once each.
@@ -213,10 +212,7 @@ class App:
     def _pace_snapshots(self) -> None:
         """Twice a second: the worlds take a snapshot only as often as the fastest page draws (with
         headroom; every frame while any page keeps up)."""
-        every = frames_per_snapshot(self.runner.fps, self.gate.pacer.drawing_rates())
-        if every != self.show_every:
-            self.show_every = every
-            self.lockstep.show_every(every)
+        self.lockstep.show_every(frames_per_snapshot(self.runner.fps, self.gate.pacer.drawing_rates()))
 
     def _reframe_all(self, offset: tuple[float, float] | None) -> None:
         """Compare mode began or ended: every page frames both worlds, or the one."""

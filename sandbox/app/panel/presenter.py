@@ -69,8 +69,8 @@ class PresenterScreen:
         self.controls: dict[int, bool] = {}
         self.cards: dict[int, Any] = {}
         self.bars: dict[int, Any] = {}
-        self.offers: dict[int, Any] = {}
-        self._offered_on: dict[int, Any] = {}  # per offer: the world it offers to start over
+        #: per page offered Start over: the offer's panel, and the world it offers to start over
+        self.offers: dict[int, tuple[Any, int]] = {}
 
     # The panel builds and refreshes every folder; this one has nothing in the shared panel.
     def build(self, snap: Snapshot) -> None:
@@ -81,7 +81,7 @@ class PresenterScreen:
         offer to start the old one over is left (a designer's goal used, a reset from any page)."""
         if snap.playing and self.cards:
             self.close_cards()
-        for client_id, world in list(self._offered_on.items()):
+        for client_id, (_, world) in list(self.offers.items()):
             if world != snap.world_key:
                 self._withdraw(client_id)
 
@@ -96,7 +96,7 @@ class PresenterScreen:
             self.offer_start_over(client)
 
     def forget(self, client_id: int) -> None:
-        for table in (self.controls, self.cards, self.bars, self.offers, self._offered_on):
+        for table in (self.controls, self.cards, self.bars, self.offers):
             table.pop(client_id, None)
 
     # ------------------------------------------------------------ the title card
@@ -154,16 +154,14 @@ class PresenterScreen:
         start.on_click(lambda event: (self._withdraw(client.client_id), self.run.reset(client)))
         keep.on_click(lambda event: self._withdraw(client.client_id))
         panel.float(x=-EDGE, y=-EDGE, width=OFFER_WIDTH)
-        self.offers[client.client_id] = panel
-        self._offered_on[client.client_id] = self.runner.latest.world_key
+        self.offers[client.client_id] = (panel, self.runner.latest.world_key)
         if self._events is not None:
             self._events.after(OFFER_SECONDS, self._withdraw, client.client_id)
 
     def _withdraw(self, client_id: int) -> None:
-        self._offered_on.pop(client_id, None)
-        panel = self.offers.pop(client_id, None)
-        if panel is not None:
-            panel.remove()
+        offer = self.offers.pop(client_id, None)
+        if offer is not None:
+            offer[0].remove()
 
     # ------------------------------------------------------------ actions
     def play(self) -> None:

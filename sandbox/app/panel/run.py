@@ -103,10 +103,13 @@ class RunFolder:
         self.lockstep.set_playing(not self.lockstep.playing)
         self.sync_play_button()
 
-    def step(self) -> None:
-        """One controller update, paused first."""
+    def pause(self) -> None:
         self.lockstep.set_playing(False)
         self.sync_play_button()
+
+    def step(self) -> None:
+        """One controller update, paused first."""
+        self.pause()
         self.lockstep.step_once(self.runner.latest.world_config.update_every)
 
     def skip_ahead(self, step: int, client: Any) -> None:
@@ -121,8 +124,7 @@ class RunFolder:
         self.run_to_end.disabled = True
         # Paused first, as Step is: the floor then stays on the state the Result folder explains (a playing
         # world went on past it, the rings and the text soon about another state).
-        self.lockstep.set_playing(False)
-        self.sync_play_button()
+        self.pause()
         self._building(0.0)
 
         def arrived(arrival: Arrival) -> None:
