@@ -110,14 +110,14 @@ def _write_final_csv(by_case: dict[str, list[dict]], path: Path) -> None:
     with path.open("w", newline="") as fh:
         writer = csv.writer(fh)
         writer.writerow(["case", "seed", "final_step", *METRICS, "boxes_escaped", "seconds", "cpu_seconds", "host",
-                         "controller", "senses", "light_energy", "outline_family", *names])
+                         "controller", "senses", "light_energy", "outline_family", "outline_reason", *names])
         for case, trials in by_case.items():
             for t in trials:
                 s = t["samples"]
                 writer.writerow([case, t["seed"], int(s["step"][-1]), *(plain(s[m][-1]) for m in METRICS),
                                  int(s["boxes_escaped"][-1]), t.get("seconds", ""), t.get("cpu_seconds", ""),
                                  t.get("host", ""), t.get("controller", ""), "+".join(t.get("senses", ())),
-                                 t.get("light_energy", ""), t.get("outline", ""),
+                                 t.get("light_energy", ""), t.get("outline", ""), t.get("outline_reason", ""),
                                  *(t["config"].get(n, "") for n in names)])
 
 

@@ -54,6 +54,7 @@ def run_sweep_trial(config: dict, seed: int, steps: int, shape: list | None, con
         "host": socket.gethostname(),
         "controller": controller or paper_controller_name(cfg),
         "outline": sim.goal.family,  # the family the goal took (config's outline may say 'auto')
+        "outline_reason": sim.goal.family_reason,  # why, and what it does with the goal's notches
         "senses": sorted(sim.senses),  # what the light program looked at
         "light_energy": round(sim.light_energy, 3),  # sum of all intensities over all steps
         "samples": samples,

@@ -284,6 +284,11 @@ class Config:
         "'auto', scaled when the centre lies deep inside the goal (its distance to the edge at least a third "
         "of its distance to the farthest vertex) and the smallest scaled outline fits, else offset",
         group="strategies", choices=("auto", "scaled", "offset"), rebuild=False)
+    notches: str = _param(
+        "lit", "the offset outline on a goal with notches (gaps narrower than 3 m): 'lit', every light in a "
+        "notch lit while the band contracts within 2 m of it, and the band at 0.4 of its pace, so the robots "
+        "clear the notch before the band presses (issue 42); 'plain', the band alone",
+        group="strategies", choices=("lit", "plain"), rebuild=False)
     no_corners_count: str = _param(
         "at-least", "how many lights no_corners c turns off of n lit: 'round', round(c n), equally near lights "
         "taken column by column (paper text), or 'at-least', the fewest k with k / n >= c, row by row (the "

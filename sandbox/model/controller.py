@@ -278,7 +278,7 @@ class Controller(Cycle):
             on = band.around(self._centres, self.goal.centre, radius, self.config.band)
         else:
             self.outline, self.corners = s.sizing.polygon(s.scale), s.sizing.corners(s.scale)
-            on = s.sizing.lit(self._centres, s.scale, self.config.band)
+            on = s.sizing.lit(self._centres, s.scale, self.config.band, dilating=s.phase == DILATING)
             if s.strategies["no_corners"] > 0 and len(self.corners):
                 on = self._darken_corners(on)
         self._light(on)

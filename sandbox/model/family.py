@@ -13,7 +13,9 @@
   house 0.64), and the smallest scaled outline fits the arena; offset
   otherwise (the T 0.31, the arrow 0.29, the L 0.02, the crescent 0). So the
   paper's cases, and every shape the authors' program builds well, run as
-  the program does.
+  the program does. An offset goal with notches lights them while the band
+  closes in (``Config.notches``, :mod:`sandbox.model.notches`), and the
+  reason says so.
 
 An explicit ``scaled`` that cannot fit a goal does not refuse it: the offset
 outline runs it, and the reason says so.
@@ -25,7 +27,7 @@ import dataclasses
 
 import numpy as np
 
-from sandbox.model import geometry, outlines
+from sandbox.model import geometry, notches, outlines
 from sandbox.model.config import Config
 from sandbox.model.goal import Goal, inside_construction
 
@@ -92,4 +94,18 @@ def settle(config: Config, goal: Goal) -> Goal:
         if shift.any():
             goal = dataclasses.replace(goal, vertices=goal.vertices + shift,
                                        moved=(float(shift[0]), float(shift[1])))
+        reason += notches_said(config, goal.vertices)
     return dataclasses.replace(goal, family=family, family_reason=reason)
+
+
+def notches_said(config: Config, vertices: np.ndarray) -> str:
+    """What the offset outline does with the goal's notches, in words ('' for none, or notches = plain)."""
+    if config.notches != "lit":
+        return ""
+    count = len(notches.notch_polygons(vertices))
+    if not count:
+        return ""
+    what = "a notch" if count == 1 else f"{count} notches"
+    return (f". The goal has {what} (gaps narrower than {2 * notches.CLOSING_RADIUS:g} m): each is lit while the "
+            f"band closes in, and the band moves at {notches.PACE:.1f} of its pace, so the robots clear them "
+            f"before the band presses the boxes into them (notches = lit)")

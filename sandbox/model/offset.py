@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
-from sandbox.model import geometry
+from sandbox.model import geometry, notches as notch_lights
 from sandbox.model.config import Config
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal
 
@@ -100,6 +100,10 @@ class OffsetSizing:
     turn: float  # where dilations turn
     unit_radius: float  # R: the radius of the circle of the goal's area
     circle_largest: float
+    #: The goal's notches (:mod:`sandbox.model.notches`), lit while the band closes in; none: the plain band.
+    notches: tuple = ()
+    #: Each step's factor is raised to this: 1 the paper's pace, slower on a notched goal.
+    pace: float = 1.0
     #: Flare and switch reshape a scaled outline; a grown goal has nothing for them to do.
     switchable = False
     shape = None
@@ -113,13 +117,17 @@ class OffsetSizing:
         smallest = 2.0 * config.robot_radius
         largest = max(min(covering_distance(goal, centre, config.robot_spawn_size / 2.0) + pitch, walls), smallest)
         turn = min(covering_distance(goal, centre, config.construction_size / 2.0) + pitch, largest)
-        return cls(goal, smallest, largest, max(turn, smallest), goal.radius, config.circle_max * config.arena_size / 2.0)
+        notches = ()
+        if config.notches == "lit" and goal.vertices is not None:
+            notches = tuple(notch_lights.notch_polygons(goal.vertices))
+        return cls(goal, smallest, largest, max(turn, smallest), goal.radius, config.circle_max * config.arena_size / 2.0,
+                   notches, notch_lights.PACE if notches else 1.0)
 
     def step(self, size: float, factor: float) -> float:
-        return (size + self.unit_radius) * factor - self.unit_radius
+        return (size + self.unit_radius) * factor**self.pace - self.unit_radius
 
     def step_back(self, size: float, factor: float) -> float:
-        return (size + self.unit_radius) / factor - self.unit_radius
+        return (size + self.unit_radius) / factor**self.pace - self.unit_radius
 
     def widen(self, size: float, metres: float) -> float:
         return size + metres
@@ -147,10 +155,16 @@ class OffsetSizing:
     def radius_beyond(self, distance: float) -> float:
         return self.unit_radius + distance
 
-    def lit(self, centres: np.ndarray, size: float, band: float) -> np.ndarray:
-        """The lights whose signed distance to the goal is within ``band`` of ``size`` (the
-        lights' distances are measured once per goal)."""
+    def lit(self, centres: np.ndarray, size: float, band: float, dilating: bool = False) -> np.ndarray:
+        """The lights whose signed distance to the goal is within ``band`` of ``size``, and unless the band
+        is dilating those of a notch it has come within reach of (the lights' distances are measured once
+        per goal)."""
         known = self._distances.get("centres")
         if known is None or known[0] is not centres:
-            self._distances["centres"] = known = (centres, signed_distance(centres, self.goal))
-        return np.abs(known[1] - size) <= band + _EDGE
+            distances = signed_distance(centres, self.goal)
+            reach = notch_lights.notch_reach(centres, list(self.notches), distances) if self.notches else None
+            self._distances["centres"] = known = (centres, distances, reach)
+        on = np.abs(known[1] - size) <= band + _EDGE
+        if known[2] is not None and not dilating:
+            on |= size <= known[2]
+        return on

@@ -110,8 +110,9 @@ class Sizing(Protocol):
     def radius_beyond(self, distance: float) -> float:
         """The inradius of the outline ``distance`` beyond the goal-sized one."""
 
-    def lit(self, centres: np.ndarray, size: float, width: float) -> np.ndarray:
-        """Which lights (centres, flat) the band at ``size`` lights: those within ``width`` of it."""
+    def lit(self, centres: np.ndarray, size: float, width: float, dilating: bool = False) -> np.ndarray:
+        """Which lights (centres, flat) the band at ``size`` lights: those within ``width`` of it (and, for
+        the offset family, a notch's while the band is not ``dilating``)."""
 
 
 @dataclass(frozen=True)
@@ -179,7 +180,7 @@ class ScaledSizing:
     def radius_beyond(self, distance: float) -> float:
         return self.unit_radius + distance
 
-    def lit(self, centres: np.ndarray, size: float, width: float) -> np.ndarray:
+    def lit(self, centres: np.ndarray, size: float, width: float, dilating: bool = False) -> np.ndarray:
         return band.along(centres, self.polygon(size), width)
 
 

@@ -91,6 +91,8 @@ TIPS = {
                    "while growing (the authors' program).",
     "outline": "The outline the light follows: the goal scaled ('scaled', the paper) or grown all round "
                "('offset', any shape); 'auto' scales roundish goals only.",
+    "notches": "On a shape with narrow notches, light them while the band closes in so the robots keep them "
+               "clear ('lit'), or leave the band alone ('plain').",
     "no_corners_count": "How No corners counts the lights it leaves dark: rounded (the paper) or at least "
                         "that share (the authors' program).",
     # Run
