@@ -30,6 +30,10 @@ rounds every convex corner at the same distance as the edges (the star's
 tips fill), and at a large distance it is nearly a circle. The band has no
 convex corners for no corners to darken. Chase grows the goal by a distance
 already, and works unchanged.
+
+A goal with notches (gaps narrower than 3 m) has them lit while the band
+closes in, and the band moves slower: :mod:`sandbox.model.notches`. Chase
+lights its own band and no notch, but steps at the same slower pace.
 """
 
 from __future__ import annotations
