@@ -11,6 +11,7 @@ import pytest
 
 from sandbox.model import notches
 from sandbox.model.config import Config
+from sandbox.model.controller import Controller
 from sandbox.model.family import settle
 from sandbox.model.goal import Goal, make_goal
 from sandbox.model.offset import OffsetSizing, signed_distance
@@ -102,3 +103,22 @@ def test_no_shape_in_shapes_has_a_notch_so_their_default_is_as_before(name):
     """The shapes in shapes/ (and the paper's) have no gap under 3 m: `notches` changes none of them."""
     goal = make_goal(Config(), shape_vertices(name))
     assert notches.notch_polygons(goal.vertices) == []
+
+
+def test_chase_lights_its_own_band_at_the_papers_pace_and_no_notch():
+    h = shape_vertices(str(LETTER_H))
+    chasing = Config(chase=2.0)
+    goal = make_goal(chasing, h)
+    sizing = OffsetSizing.of(chasing, goal, chase=2.0)
+    assert sizing.notches == () and sizing.pace == 1.0
+    assert "notch" not in goal.family_reason
+
+
+def test_turning_chase_on_and_off_live_drops_and_restores_the_notches():
+    controller = Controller(Config(), make_goal(Config(), shape_vertices(str(LETTER_H))))
+    assert controller.sizing.pace == notches.PACE
+    for chase, pace in ((2.0, 1.0), (0.0, notches.PACE)):
+        controller.set_strategies(chase=chase)
+        while controller.state.pending:  # taken at the next controller update
+            controller.advance()
+        assert controller.sizing.pace == pace and bool(controller.sizing.notches) == (pace != 1.0)

@@ -99,8 +99,9 @@ def settle(config: Config, goal: Goal) -> Goal:
 
 
 def notches_said(config: Config, vertices: np.ndarray) -> str:
-    """What the offset outline does with the goal's notches, in words ('' for none, or notches = plain)."""
-    if config.notches != "lit":
+    """What the offset outline does with the goal's notches, in words ('' for none, notches = plain or
+    chase on)."""
+    if config.notches != "lit" or config.chase > 0:
         return ""
     count = len(notches.notch_polygons(vertices))
     if not count:
@@ -108,4 +109,4 @@ def notches_said(config: Config, vertices: np.ndarray) -> str:
     what = "a notch" if count == 1 else f"{count} notches"
     return (f". The goal has {what} (gaps narrower than {2 * notches.CLOSING_RADIUS:g} m): each is lit while the "
             f"band closes in, and the band moves at {notches.PACE:.1f} of its pace, so the robots clear them "
-            f"before the band presses the boxes into them (notches = lit)")
+            f"before the band presses the boxes into them (notches = lit; chase, when on, lights its own band)")

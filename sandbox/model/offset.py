@@ -33,7 +33,7 @@ already, and works unchanged.
 
 A goal with notches (gaps narrower than 3 m) has them lit while the band
 closes in, and the band moves slower: :mod:`sandbox.model.notches`. Chase
-lights its own band and no notch, but steps at the same slower pace.
+lights its own band, at the paper's pace, and no notch.
 """
 
 from __future__ import annotations
@@ -114,15 +114,16 @@ class OffsetSizing:
     _distances: dict = field(default_factory=dict, compare=False, repr=False)
 
     @classmethod
-    def of(cls, config: Config, goal: Goal) -> "OffsetSizing":
-        """The smallest, largest and turning distances for this goal (see the module docstring)."""
+    def of(cls, config: Config, goal: Goal, chase: float = 0.0) -> "OffsetSizing":
+        """The smallest, largest and turning distances for this goal (see the module docstring), and its
+        notches unless ``chase`` is on (it lights its own band)."""
         pitch, centre = config.light_pitch, np.full(2, config.centre)
         walls = wall_distance(goal, config.arena_size, pitch)
         smallest = 2.0 * config.robot_radius
         largest = max(min(covering_distance(goal, centre, config.robot_spawn_size / 2.0) + pitch, walls), smallest)
         turn = min(covering_distance(goal, centre, config.construction_size / 2.0) + pitch, largest)
         notches = ()
-        if config.notches == "lit" and goal.vertices is not None:
+        if config.notches == "lit" and chase <= 0 and goal.vertices is not None:
             notches = tuple(notch_lights.notch_polygons(goal.vertices))
         return cls(goal, smallest, largest, max(turn, smallest), goal.radius, config.circle_max * config.arena_size / 2.0,
                    notches, notch_lights.PACE if notches else 1.0)

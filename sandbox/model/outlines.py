@@ -184,10 +184,11 @@ class ScaledSizing:
         return band.along(centres, self.polygon(size), width)
 
 
-def sizing_for(config: Config, goal: Goal, flare: float) -> Sizing:
-    """The outline family the goal takes (see :mod:`sandbox.model.family`), for this flare."""
+def sizing_for(config: Config, goal: Goal, flare: float, chase: float = 0.0) -> Sizing:
+    """The outline family the goal takes (see :mod:`sandbox.model.family`), for this flare and chase
+    (chase lights its own band: an offset goal's notches are lit, and paced, in the open loop only)."""
     if goal.family == "offset":
-        return OffsetSizing.of(config, goal)
+        return OffsetSizing.of(config, goal, chase)
     return ScaledSizing.of(config, goal, flare)
 
 

@@ -38,7 +38,7 @@ class Schedule:
     def start(cls, config: Config, goal: Goal) -> Schedule:
         """A new cycle's: contracting from the largest size, the strategies as configured."""
         strategies = {name: getattr(config, name) for name in STRATEGY_NAMES}
-        sizing = sizing_for(config, goal, strategies["flare"])
+        sizing = sizing_for(config, goal, strategies["flare"], strategies["chase"])
         return cls(sizing, MappingProxyType(strategies), _NOTHING_PENDING, sizing.largest,
                    until_update=config.update_every)
 
@@ -61,16 +61,17 @@ class Schedule:
         """Apply the pending strategies (at an update)."""
         if not self.pending:
             return
-        flare_changed = self.pending.get("flare", self.strategies["flare"]) != self.strategies["flare"]
+        old = self.strategies
         self.strategies, self.pending = MappingProxyType({**self.strategies, **self.pending}), _NOTHING_PENDING
-        if flare_changed:
+        # The sizing depends on flare, and on whether chase is on (an offset goal's notches are the open loop's).
+        if self.strategies["flare"] != old["flare"] or (self.strategies["chase"] > 0) != (old["chase"] > 0):
             self.resize(config, goal)
         if self.strategies["switch"] <= 0:
             self.circle_radius = None
 
     def resize(self, config: Config, goal: Goal) -> None:
         """The outline family for the configuration and strategies now, the scale kept within it."""
-        self.sizing = sizing_for(config, goal, self.strategies["flare"])
+        self.sizing = sizing_for(config, goal, self.strategies["flare"], self.strategies["chase"])
         self.scale = min(max(self.scale, self.sizing.smallest), self.sizing.largest)
 
     # -- sizes ------------------------------------------------------------
