@@ -58,9 +58,8 @@ def notch_reach(centres: np.ndarray, notches: list[shapely.Polygon], distances: 
     size at or below which it is lit as part of a notch, ``k +`` :data:`REACH` with ``k`` the largest
     distance of the notch's lights to the goal; :data:`NEVER` outside every notch."""
     reach = np.full(len(centres), NEVER)
-    points = shapely.points(centres)
     for notch in notches:
-        inside = shapely.contains(notch, points) & (distances > 0.0)
+        inside = shapely.contains_xy(notch, centres[:, 0], centres[:, 1]) & (distances > 0.0)
         if inside.any():
             reach[inside] = float(distances[inside].max()) + REACH
     return reach
