@@ -26,7 +26,8 @@ LIGHTS = np.stack(np.meshgrid(np.arange(-2.5, 9.0), np.arange(-2.5, 9.0), indexi
 IN_NOTCH = {(x, y) for x in (2.5, 3.5) for y in (2.5, 3.5, 4.5, 5.5)}
 ROOT = Path(__file__).resolve().parent.parent
 SHAPES = ROOT / "shapes"
-LETTER_H = ROOT / "static" / "shapes" / "notched" / "shapes" / "letter-H.txt"
+#: The letter H of the notched set, as its file draws it.
+LETTER_H = shape_vertices(str(ROOT / "static" / "shapes" / "notched" / "shapes" / "letter-H.txt"))
 
 
 def lit_set(on: np.ndarray) -> set[tuple[float, float]]:
@@ -85,14 +86,13 @@ def test_a_notched_goals_band_moves_at_its_pace():
 
 def test_the_default_lights_a_notched_goals_notches_and_says_so():
     # The letter H at the boxes' area: its two notches are 2.5 m wide.
-    h = shape_vertices(str(LETTER_H))
     cfg = Config()
-    goal = make_goal(cfg, h)
+    goal = make_goal(cfg, LETTER_H)
     sizing = OffsetSizing.of(cfg, goal)
     assert len(sizing.notches) == 2 and sizing.pace == notches.PACE
     assert "The goal has 2 notches (gaps narrower than 3 m)" in goal.family_reason
     plain_cfg = Config(notches="plain")
-    plain = make_goal(plain_cfg, h)
+    plain = make_goal(plain_cfg, LETTER_H)
     assert OffsetSizing.of(plain_cfg, plain).notches == () and OffsetSizing.of(plain_cfg, plain).pace == 1.0
     assert "notch" not in plain.family_reason
     assert settle(plain_cfg, plain).family_reason == plain.family_reason
@@ -106,16 +106,15 @@ def test_no_shape_in_shapes_has_a_notch_so_their_default_is_as_before(name):
 
 
 def test_chase_lights_its_own_band_at_the_papers_pace_and_no_notch():
-    h = shape_vertices(str(LETTER_H))
     chasing = Config(chase=2.0)
-    goal = make_goal(chasing, h)
+    goal = make_goal(chasing, LETTER_H)
     sizing = OffsetSizing.of(chasing, goal, chase=2.0)
     assert sizing.notches == () and sizing.pace == 1.0
     assert "notch" not in goal.family_reason
 
 
 def test_turning_chase_on_and_off_live_drops_and_restores_the_notches():
-    controller = Controller(Config(), make_goal(Config(), shape_vertices(str(LETTER_H))))
+    controller = Controller(Config(), make_goal(Config(), LETTER_H))
     assert controller.sizing.pace == notches.PACE
     for chase, pace in ((2.0, 1.0), (0.0, notches.PACE)):
         controller.set_strategies(chase=chase)

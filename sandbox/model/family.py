@@ -101,9 +101,7 @@ def settle(config: Config, goal: Goal) -> Goal:
 def notches_said(config: Config, vertices: np.ndarray) -> str:
     """What the offset outline does with the goal's notches, in words ('' for none, notches = plain or
     chase on)."""
-    if config.notches != "lit" or config.chase > 0:
-        return ""
-    count = len(notches.notch_polygons(vertices))
+    count = len(notches.lit_notches(config, vertices, config.chase))
     if not count:
         return ""
     what = "a notch" if count == 1 else f"{count} notches"

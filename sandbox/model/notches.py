@@ -27,6 +27,8 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
+from sandbox.model.config import Config
+
 #: Closing the goal by a disc this wide (m) fills gaps narrower than twice it: the notches.
 CLOSING_RADIUS = 1.5
 #: Pieces of the closing smaller than this (m^2) are a corner's sliver, not a notch.
@@ -53,7 +55,15 @@ def notch_polygons(vertices: np.ndarray) -> list[shapely.Polygon]:
     return [p for p in parts if isinstance(p, shapely.Polygon) and p.area >= SMALLEST_AREA]
 
 
-def notch_reach(centres: np.ndarray, notches: list[shapely.Polygon], distances: np.ndarray) -> np.ndarray:
+def lit_notches(config: Config, vertices: np.ndarray | None, chase: float) -> tuple[shapely.Polygon, ...]:
+    """The notches the open loop lights: none for a circle, with ``notches = plain``, or with ``chase`` on
+    (it lights its own band)."""
+    if config.notches != "lit" or chase > 0 or vertices is None:
+        return ()
+    return tuple(notch_polygons(vertices))
+
+
+def notch_reach(centres: np.ndarray, notches: tuple[shapely.Polygon, ...], distances: np.ndarray) -> np.ndarray:
     """For each light (``centres`` flat, ``distances`` their signed distances to the goal): the band's
     size at or below which it is lit as part of a notch, ``k +`` :data:`REACH` with ``k`` the largest
     distance of the notch's lights to the goal; :data:`NEVER` outside every notch."""

@@ -122,9 +122,7 @@ class OffsetSizing:
         smallest = 2.0 * config.robot_radius
         largest = max(min(covering_distance(goal, centre, config.robot_spawn_size / 2.0) + pitch, walls), smallest)
         turn = min(covering_distance(goal, centre, config.construction_size / 2.0) + pitch, largest)
-        notches = ()
-        if config.notches == "lit" and chase <= 0 and goal.vertices is not None:
-            notches = tuple(notch_lights.notch_polygons(goal.vertices))
+        notches = notch_lights.lit_notches(config, goal.vertices, chase)
         return cls(goal, smallest, largest, max(turn, smallest), goal.radius, config.circle_max * config.arena_size / 2.0,
                    notches, notch_lights.PACE if notches else 1.0)
 
@@ -167,7 +165,7 @@ class OffsetSizing:
         known = self._distances.get("centres")
         if known is None or known[0] is not centres:
             distances = signed_distance(centres, self.goal)
-            reach = notch_lights.notch_reach(centres, list(self.notches), distances) if self.notches else None
+            reach = notch_lights.notch_reach(centres, self.notches, distances) if self.notches else None
             self._distances["centres"] = known = (centres, distances, reach)
         on = np.abs(known[1] - size) <= band + _EDGE
         if known[2] is not None and not dilating:
