@@ -37,7 +37,7 @@ def lit_set(on: np.ndarray) -> set[tuple[float, float]]:
 def u_sizing(notched: bool = True) -> OffsetSizing:
     found = tuple(notches.notch_polygons(U_VERTICES)) if notched else ()
     return OffsetSizing(U_GOAL, 0.5, 12.0, 8.0, math.sqrt(28.0 / math.pi), 24.0, found,
-                        notches.PACE if notched else 1.0)
+                        notches.PACE if notched else 1.0, notches.SLOW_WITHIN)
 
 
 def test_the_notch_of_a_u_is_its_gap():
@@ -75,13 +75,19 @@ def test_the_notch_is_lit_while_the_band_closes_in_and_dark_while_it_dilates():
     assert plain == lit_set(np.abs(signed_distance(LIGHTS, U_GOAL) - 2.0) <= 0.5 + 1e-9)
 
 
-def test_a_notched_goals_band_moves_at_its_pace():
+def test_a_notched_goals_band_moves_at_its_pace_near_the_goal():
     r = math.sqrt(28.0 / math.pi)
     # 0.975 per update becomes 0.975^0.397 = 0.98999...: about 0.99.
     assert 0.975**notches.PACE == pytest.approx(0.99, abs=1e-4)
-    assert u_sizing().step(5.0, 0.975) == pytest.approx((5.0 + r) * 0.975**notches.PACE - r)
-    assert u_sizing().step_back(5.0, 0.975) == pytest.approx((5.0 + r) / 0.975**notches.PACE - r)
-    assert u_sizing(notched=False).step(5.0, 0.975) == pytest.approx((5.0 + r) * 0.975 - r)
+    # ... within 1.5 + 2.0 = 3.5 m of the goal (the farthest a notch's light can be lit), both ways:
+    assert notches.SLOW_WITHIN == 3.5
+    assert u_sizing().step(3.5, 0.975) == pytest.approx((3.5 + r) * 0.975**notches.PACE - r)
+    assert u_sizing().step(2.0, 1.025) == pytest.approx((2.0 + r) * 1.025**notches.PACE - r)
+    assert u_sizing().step_back(3.0, 0.975) == pytest.approx((3.0 + r) / 0.975**notches.PACE - r)
+    # ... and at the paper's pace farther out, and on a goal without notches.
+    assert u_sizing().step(3.6, 0.975) == pytest.approx((3.6 + r) * 0.975 - r)
+    assert u_sizing().step_back(5.0, 0.975) == pytest.approx((5.0 + r) / 0.975 - r)
+    assert u_sizing(notched=False).step(2.0, 0.975) == pytest.approx((2.0 + r) * 0.975 - r)
 
 
 def test_the_default_lights_a_notched_goals_notches_and_says_so():

@@ -32,8 +32,9 @@ convex corners for no corners to darken. Chase grows the goal by a distance
 already, and works unchanged.
 
 A goal with notches (gaps narrower than 3 m) has them lit while the band
-closes in, and the band moves slower: :mod:`sandbox.model.notches`. Chase
-lights its own band, at the paper's pace, and no notch.
+closes in, and the band moves slower near the goal:
+:mod:`sandbox.model.notches`. Chase lights its own band, at the paper's
+pace, and no notch.
 """
 
 from __future__ import annotations
@@ -106,8 +107,11 @@ class OffsetSizing:
     circle_largest: float
     #: The goal's notches (:mod:`sandbox.model.notches`), lit while the band closes in; none: the plain band.
     notches: tuple = ()
-    #: Each step's factor is raised to this: 1 the paper's pace, slower on a notched goal.
+    #: Each step's factor within ``slow_within`` of the goal is raised to this: 1 the paper's pace, slower
+    #: on a notched goal.
     pace: float = 1.0
+    #: The band's size at or below which it moves at ``pace`` (farther out at the paper's).
+    slow_within: float = math.inf
     #: Flare and switch reshape a scaled outline; a grown goal has nothing for them to do.
     switchable = False
     shape = None
@@ -124,13 +128,17 @@ class OffsetSizing:
         turn = min(covering_distance(goal, centre, config.construction_size / 2.0) + pitch, largest)
         notches = notch_lights.lit_notches(config, goal.vertices, chase)
         return cls(goal, smallest, largest, max(turn, smallest), goal.radius, config.circle_max * config.arena_size / 2.0,
-                   notches, notch_lights.PACE if notches else 1.0)
+                   notches, notch_lights.PACE if notches else 1.0, notch_lights.SLOW_WITHIN)
+
+    def pace_at(self, size: float) -> float:
+        """The power each step's factor is raised to at this size: ``pace`` within ``slow_within``."""
+        return self.pace if size <= self.slow_within else 1.0
 
     def step(self, size: float, factor: float) -> float:
-        return (size + self.unit_radius) * factor**self.pace - self.unit_radius
+        return (size + self.unit_radius) * factor**self.pace_at(size) - self.unit_radius
 
     def step_back(self, size: float, factor: float) -> float:
-        return (size + self.unit_radius) / factor**self.pace - self.unit_radius
+        return (size + self.unit_radius) / factor**self.pace_at(size) - self.unit_radius
 
     def widen(self, size: float, metres: float) -> float:
         return size + metres
