@@ -286,9 +286,9 @@ class Config:
         group="strategies", choices=("auto", "scaled", "offset"), rebuild=False)
     notches: str = _param(
         "lit", "the offset outline on a goal with notches (gaps narrower than 3 m): 'lit', every light in a "
-        "notch lit while the band contracts within 2 m of it, and the band at 0.4 of its pace, so the robots "
-        "clear the notch before the band presses (issue 42); 'plain', the band alone. Open loop only: chase "
-        "lights its own band",
+        "notch lit while the band contracts within 2 m of it, and the band at 0.4 of its pace within 3.5 m of "
+        "the goal, so the robots clear the notch before the band presses (issue 42); 'plain', the band alone. "
+        "Open loop only: chase lights its own band",
         group="strategies", choices=("lit", "plain"), rebuild=False)
     no_corners_count: str = _param(
         "at-least", "how many lights no_corners c turns off of n lit: 'round', round(c n), equally near lights "

@@ -106,5 +106,6 @@ def notches_said(config: Config, vertices: np.ndarray) -> str:
         return ""
     what = "a notch" if count == 1 else f"{count} notches"
     return (f". The goal has {what} (gaps narrower than {2 * notches.CLOSING_RADIUS:g} m): each is lit while the "
-            f"band closes in, and the band moves at {notches.PACE:.1f} of its pace, so the robots clear them "
-            f"before the band presses the boxes into them (notches = lit; chase, when on, lights its own band)")
+            f"band closes in, and the band moves at {notches.PACE:.1f} of its pace within "
+            f"{notches.SLOW_WITHIN:g} m of the goal, so the robots clear them before the band presses the boxes "
+            f"into them (notches = lit; chase, when on, lights its own band)")
