@@ -95,7 +95,8 @@ def test_the_default_lights_a_notched_goals_notches_and_says_so():
     cfg = Config()
     goal = make_goal(cfg, LETTER_H)
     sizing = OffsetSizing.of(cfg, goal)
-    assert len(sizing.notches) == 2 and sizing.pace == notches.PACE
+    assert len(sizing.notches) == 2 and sizing.pace == notches.PACE and sizing.slow_within == 3.5
+    assert sizing.pace_at(3.5) == notches.PACE and sizing.pace_at(3.51) == 1.0
     assert "The goal has 2 notches (gaps narrower than 3 m)" in goal.family_reason
     plain_cfg = Config(notches="plain")
     plain = make_goal(plain_cfg, LETTER_H)
