@@ -42,7 +42,8 @@ REACH = 2.0
 PACE = 0.397
 #: The band moves at :data:`PACE` only this close to the goal (m): no notch's light is farther from the
 #: goal than the closing radius, so no notch is lit farther out than this, and the robots are already
-#: slowed when one lights. Farther out it keeps the paper's pace, and a cycle takes 0.4 less time.
+#: slowed when one lights. Farther out it keeps the paper's pace: a cycle of the letter H (between 0.5 and
+#: 5.1 m) takes about a sixth less time than slowed everywhere.
 SLOW_WITHIN = CLOSING_RADIUS + REACH
 
 #: Never lit as part of a notch.
