@@ -343,6 +343,19 @@ def test_describe_by_hand():
     assert one.mean == 0.5 and math.isnan(one.std)
 
 
+def test_mean_over_the_last_whole_cycle_by_hand():
+    from sandbox.experiments.stats import over_last_whole_cycle
+
+    trials = [{"samples": {"cycle": [0, 0, 1, 1, 1, 2], "fraction_in_goal": [0.1, 0.2, 0.3, 0.5, 0.7, 0.9]}},
+              {"samples": {"cycle": [0, 0, 1], "fraction_in_goal": [0.1, 0.2, 0.6]}},
+              {"samples": {"cycle": [0, 0, 0], "fraction_in_goal": [0.1, 0.2, 0.6]}}]
+    # Two cycles finished: the second (0.3, 0.5, 0.7) is the last whole one. One finished: the first
+    # (0.1, 0.2). None finished: no whole cycle.
+    values = over_last_whole_cycle(trials, "fraction_in_goal")
+    assert values[:2] == pytest.approx([0.5, 0.15])
+    assert math.isnan(values[2])
+
+
 @pytest.mark.slow
 def test_sigterm_keeps_finished_trials_and_resume_runs_the_rest(tmp_path, capsys):
     import signal

@@ -56,6 +56,7 @@ def build_report(out: str | Path, dest: str | Path | None = None, against: str |
     pairs = stats.default_pairs(list(by_case), [tuple(p) for p in meta.get("compare", [])])
     tables = {m: stats.summaries(by_case, m) for m in METRICS}
     first = {m: stats.summaries(by_case, m, when="first-cycle") for m in METRICS}
+    last = stats.summaries(by_case, "fraction_in_goal", when="last-cycle")
     tests = {m: stats.ks_tests(by_case, pairs, m) for m in METRICS}
 
     _write_results_csv(by_case, dest / "results.csv")
@@ -64,7 +65,7 @@ def build_report(out: str | Path, dest: str | Path | None = None, against: str |
     _write_rows(dest / "ks_tests.csv", [dataclasses.asdict(r) for m in METRICS for r in tests[m]])
     figs = _draw_figures(by_case, dest / FIGURES_DIR) if figures else {}
 
-    text = _markdown(meta, by_case, tables, first, tests, figs, dest, store.load_failures())
+    text = _markdown(meta, by_case, tables, first, last, tests, figs, dest, store.load_failures())
     if against is not None:
         lines, rows = versus.versus_section(by_case, against, against_label)
         _write_rows(dest / "versus.csv", rows)
@@ -216,6 +217,21 @@ def _first_cycle_section(first: dict) -> list[str]:
                        for a, b in zip(first["fraction_in_goal"], first["mean_outside_distance"])])]
 
 
+def _last_cycle_section(final: list, last: list) -> list[str]:
+    """The fraction at the final step beside its mean over each trial's last whole cycle."""
+    if not any(r.n for r in last):
+        return []
+    rows = [[f"`{f.case}`", f"{stats.fmt(f.mean)} ± {stats.fmt(f.sem)}",
+             f"{stats.fmt(c.mean)} ± {stats.fmt(c.sem)}" if c.n else "no whole cycle", str(c.n)]
+            for f, c in zip(final, last)]
+    return ["", "### Over the last whole cycle", "",
+            "The fraction in the goal at the final step beside its mean over the samples of each trial's last "
+            "whole contract–hold–dilate cycle (mean ± standard error over trials). An open loop runs the same "
+            "schedule in every seed, so its final step falls at the same phase of a cycle in every trial: where "
+            "the fraction swings within a cycle, the cycle's mean is the fairer figure.", "",
+            _md_table(["case", "final step", "last whole cycle", "trials with one"], rows)]
+
+
 def _escape_lines(by_case: dict[str, list[dict]]) -> list[str]:
     """Every sample that found a box centre beyond the construction wall's inner face (should be none)."""
     hits = []
@@ -233,7 +249,7 @@ def _escape_lines(by_case: dict[str, list[dict]]) -> list[str]:
             + (" ..." if len(hits) > 10 else "")]
 
 
-def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: list[dict]) -> str:
+def _markdown(meta, by_case, tables, first, last, tests, figs, dest: Path, failures: list[dict]) -> str:
     trials = [t for ts in by_case.values() for t in ts]
     steps = sorted({int(t["steps"]) for t in trials})
     seeds = sorted({int(t["seed"]) for t in trials})
@@ -275,6 +291,7 @@ def _markdown(meta, by_case, tables, first, tests, figs, dest: Path, failures: l
             _summary_table(tables["mean_outside_distance"], 3),
             *_against_reference_section(by_case, tables),
             *_first_cycle_section(first),
+            *_last_cycle_section(tables["fraction_in_goal"], last),
             "", "## Table IV. Two-sample Kolmogorov–Smirnov tests: fraction in goal at the final step", "",
             "`scipy.stats.ks_2samp`, two-sided. A small p-value says the two cases' distributions differ.", "",
             _ks_table(tests["fraction_in_goal"], 3),

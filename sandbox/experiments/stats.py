@@ -57,6 +57,22 @@ def after_first_cycle(trials: list[dict], metric: str) -> np.ndarray:
     return np.array(out, dtype=float)
 
 
+def over_last_whole_cycle(trials: list[dict], metric: str) -> np.ndarray:
+    """Each trial's mean of the metric over the samples of its last whole cycle: those taken while
+    ``cycle`` (the cycles finished) was one less than at its last sample (NaN before a second cycle
+    starts). An open loop runs the same schedule in every seed, so every trial's last step falls at the
+    same phase of its cycle; a shape whose fraction swings within a cycle is better told by this mean."""
+    out = []
+    for t in trials:
+        s = t["samples"]
+        cycle = np.asarray(s["cycle"], dtype=float)
+        last = cycle[-1] - 1 if len(cycle) else -1
+        inside = cycle == last
+        out.append(float(np.mean(np.asarray(s[metric], dtype=float)[inside])) if last >= 0 and inside.any()
+                   else math.nan)
+    return np.array(out, dtype=float)
+
+
 def describe(case: str, metric: str, values: np.ndarray, step: int) -> Summary:
     values = values[np.isfinite(values)]
     n = len(values)
@@ -73,6 +89,9 @@ def summaries(by_case: dict[str, list[dict]], metric: str, *, when: str = "final
         if when == "final":
             values = final_values(trials, metric)
             step = int(max(t["samples"]["step"][-1] for t in trials))
+        elif when == "last-cycle":
+            values = over_last_whole_cycle(trials, metric)
+            step = -1
         else:
             values = after_first_cycle(trials, metric)
             step = -1
