@@ -286,8 +286,9 @@ class Config:
         group="strategies", choices=("auto", "scaled", "offset"), rebuild=False)
     notches: str = _param(
         "lit", "the offset outline on a goal with notches (gaps narrower than 3 m): 'lit', every light in a "
-        "notch lit while the band contracts within 2 m of it, and the band at 0.4 of its pace within 3.5 m of "
-        "the goal, so the robots clear the notch before the band presses (issue 42); 'plain', the band alone. "
+        "notch lit while the band contracts within 2 m of it, the band at 0.4 of its pace within 3.5 m of "
+        "the goal, so the robots clear the notch before the band presses, and the band held 0.65 m or more from "
+        "the goal, farther beside thin parts, tips and corners (issue 42); 'plain', the band alone. "
         "Open loop only: chase lights its own band",
         group="strategies", choices=("lit", "plain"), rebuild=False)
     no_corners_count: str = _param(

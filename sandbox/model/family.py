@@ -108,4 +108,5 @@ def notches_said(config: Config, vertices: np.ndarray) -> str:
     return (f". The goal has {what} (gaps narrower than {2 * notches.CLOSING_RADIUS:g} m): each is lit while the "
             f"band closes in, and the band moves at {notches.PACE:.1f} of its pace within "
             f"{notches.SLOW_WITHIN:g} m of the goal, so the robots clear them before the band presses the boxes "
-            f"into them (notches = lit; chase, when on, lights its own band)")
+            f"into them; beside thin parts, tips and corners the band holds farther out, so the robots do not ride "
+            f"onto them (notches = lit; chase, when on, lights its own band)")

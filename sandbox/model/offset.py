@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
-from sandbox.model import geometry, notches as notch_lights
+from sandbox.model import geometry, notches as notch_lights, thin
 from sandbox.model.config import Config
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal
 
@@ -112,6 +112,9 @@ class OffsetSizing:
     pace: float = 1.0
     #: The band's size at or below which it moves at ``pace`` (farther out at the paper's).
     slow_within: float = math.inf
+    #: The lights' glow on a notched goal, whose band holds farther out beside thin parts and tips
+    #: (:mod:`sandbox.model.thin`); None: it comes to ``smallest`` all round.
+    glow: thin.Glow | None = None
     #: Flare and switch reshape a scaled outline; a grown goal has nothing for them to do.
     switchable = False
     shape = None
@@ -128,7 +131,8 @@ class OffsetSizing:
         turn = min(covering_distance(goal, centre, config.construction_size / 2.0) + pitch, largest)
         notches = notch_lights.lit_notches(config, goal.vertices, chase)
         return cls(goal, smallest, largest, max(turn, smallest), goal.radius, config.circle_max * config.arena_size / 2.0,
-                   notches, notch_lights.PACE if notches else 1.0, notch_lights.SLOW_WITHIN)
+                   notches, notch_lights.PACE if notches else 1.0, notch_lights.SLOW_WITHIN,
+                   thin.Glow.of(config) if notches else None)
 
     def pace_at(self, size: float) -> float:
         """The power each step's factor is raised to at this size: ``pace`` within ``slow_within``."""
@@ -167,15 +171,25 @@ class OffsetSizing:
         return self.unit_radius + distance
 
     def lit(self, centres: np.ndarray, size: float, band: float, dilating: bool = False) -> np.ndarray:
-        """The lights whose signed distance to the goal is within ``band`` of ``size``, and unless the band
-        is dilating those of a notch it has come within reach of (the lights' distances are measured once
-        per goal)."""
+        """The lights whose signed distance to the goal is within ``band`` of ``size`` (or of their least
+        distance beside a thin part, when ``size`` is below it), and unless the band is dilating those of a
+        notch it has come within reach of (measured once per goal)."""
         known = self._distances.get("centres")
         if known is None or known[0] is not centres:
-            distances = signed_distance(centres, self.goal)
-            reach = notch_lights.notch_reach(centres, self.notches, distances) if self.notches else None
-            self._distances["centres"] = known = (centres, distances, reach)
-        on = np.abs(known[1] - size) <= band + _EDGE
-        if known[2] is not None and not dilating:
-            on |= size <= known[2]
+            known = self._distances["centres"] = (centres, *self._light_distances(centres))
+        _, distances, reach, least = known
+        level = size if least is None else np.maximum(size, least)
+        on = np.abs(distances - level) <= band + _EDGE
+        if reach is not None and not dilating:
+            on |= size <= reach
         return on
+
+    def _light_distances(self, centres: np.ndarray) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+        """Each light's signed distance to the goal, the band size within which it is lit as part of a
+        notch, and the least distance the band comes to it (None where the goal has no notch)."""
+        distances = signed_distance(centres, self.goal)
+        if not self.notches:
+            return distances, None, None
+        least = (thin.hold_distances(self.glow, centres, distances, self.goal.vertices, self.smallest)
+                 if self.glow is not None else None)
+        return distances, notch_lights.notch_reach(centres, self.notches, distances), least
