@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 
 from sandbox.experiments.advise import Candidate, Ranked, candidates, rank, table, time_left
 from sandbox.model.config import Config
@@ -38,6 +39,28 @@ def test_the_ranking_puts_most_in_the_goal_first_then_the_closest_rest():
     assert text.splitlines()[2] == "| 1 | offset | 0.800 | 0.50 |" and "1 seed(s) x 30,000 steps" in text
     assert text.splitlines()[0] == ("| rank | outline and strategies | boxes in the goal "
                                     "| stray boxes' mean distance to the goal (m) |")
+
+
+def test_an_open_loop_within_the_standard_error_of_chase_ranks_first():
+    chase = Candidate("offset", (("chase", 2.0),))
+    # The letter H at 30,000 steps: offset + chase 0.740 ± 0.002, offset 0.737 ± 0.009 (0.003 apart).
+    closed = Ranked(chase, [0.738, 0.742], [0.5, 0.4])
+    open_loop = Ranked(Candidate("offset"), [0.728, 0.746], [0.4, 0.5])
+    assert closed.fraction_se == pytest.approx(0.002) and open_loop.fraction_se == pytest.approx(0.009)
+    assert rank([closed, open_loop]) == [open_loop, closed]
+    text = table(rank([closed, open_loop]), 30_000)
+    assert text.splitlines()[2].startswith("| 1 | offset | 0.737 ± 0.009 |")
+    assert "offset ranks above offset + chase, within its standard error" in text
+    # 0.023 apart, more than either standard error: chase stays first, and nothing is said.
+    ahead = Ranked(chase, [0.758, 0.762], [0.5, 0.4])
+    assert rank([open_loop, ahead]) == [ahead, open_loop] and "ranks above" not in table(rank([open_loop, ahead]), 1)
+    # Never the other way, and never between two closed loops or two open loops.
+    scaled_chase = Ranked(Candidate("scaled", (("chase", 2.0),)), [0.736, 0.740], [1.0, 1.0])
+    assert rank([scaled_chase, closed]) == [closed, scaled_chase]
+    scaled = Ranked(Candidate("scaled"), [0.734, 0.738], [1.0, 1.0])
+    assert rank([scaled, open_loop]) == [open_loop, scaled]
+    # One trial each has no standard error: no tie.
+    assert rank([Ranked(chase, [0.74], [0.5]), Ranked(Candidate("offset"), [0.739], [0.5])])[0].candidate == chase
 
 
 def test_the_time_left_goes_by_the_pace_of_the_trials_done():
