@@ -32,8 +32,9 @@ convex corners for no corners to darken. Chase grows the goal by a distance
 already, and works unchanged.
 
 A goal with notches (gaps narrower than 3 m) has them lit while the band
-closes in, and the band moves slower near the goal:
-:mod:`sandbox.model.notches`. Chase lights its own band, at the paper's
+closes in, and the band moves slower near the goal
+(:mod:`sandbox.model.notches`) and holds farther out beside the goal's thin
+parts, tips and corners (:mod:`sandbox.model.thin`). Chase lights its own band, at the paper's
 pace, and no notch.
 """
 
