@@ -70,6 +70,15 @@ def test_the_local_width_is_twice_the_deepest_point_within_a_metre():
     assert thin.local_widths(np.array([[0.0, 0.0]]), square)[0] == pytest.approx(math.sqrt(2.0), abs=0.1)
 
 
+def test_the_nearest_edge_point_by_projection_agrees_with_geos():
+    square = np.array([[0, 0], [10, 0], [10, 10], [0, 10]], dtype=float)
+    points = np.array([[5.0, -2.0], [12.0, 12.0], [-1.0, 4.0], [5.0, 10.5]])
+    # Below the bottom edge, beyond the top right corner, left of the left edge, above the top edge.
+    expected = np.array([[5.0, 0.0], [10.0, 10.0], [0.0, 4.0], [5.0, 10.0]])
+    assert thin._project_onto_edges(points, square) == pytest.approx(expected)
+    assert thin.nearest_edge_points(points, square) == pytest.approx(expected)
+
+
 def w_sizing(notches: str) -> tuple[OffsetSizing, np.ndarray]:
     config = Config(shape=W_FILE, notches=notches)
     goal = settle(config, make_goal(config, shape_vertices(W_FILE)))

@@ -129,7 +129,29 @@ def hold_distances(glow: Glow, centres: np.ndarray, distances: np.ndarray, verti
     near = np.flatnonzero((distances > 0.0) & (distances < _NEAR_PRESS))
     if not len(near):
         return least
-    edge_points = shapely.get_coordinates(
-        shapely.shortest_line(shapely.Polygon(vertices).exterior, shapely.points(centres[near])))[0::2]
-    least[near] = least_distance(glow, local_widths(edge_points, vertices), smallest)
+    least[near] = least_distance(glow, local_widths(nearest_edge_points(centres[near], vertices), vertices), smallest)
     return least
+
+
+def nearest_edge_points(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """The point of the goal's edge nearest each point (GEOS's choice where two are equally near)."""
+    # GEOS divides by zero inside shortest_line on some inputs in some processes (seen once in CI, never
+    # alone); the result is checked, and any point it did not give is projected here instead.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        found = shapely.get_coordinates(
+            shapely.shortest_line(shapely.Polygon(vertices).exterior, shapely.points(points)))[0::2]
+    bad = ~np.all(np.isfinite(found), axis=1)
+    if bad.any():
+        found[bad] = _project_onto_edges(points[bad], vertices)
+    return found
+
+
+def _project_onto_edges(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """The nearest point on the closed polyline ``vertices`` to each point, by projection onto each edge."""
+    start = vertices
+    along = np.roll(vertices, -1, axis=0) - start
+    length2 = np.einsum("si,si->s", along, along)
+    t = np.einsum("psi,si->ps", points[:, None, :] - start[None], along) / np.where(length2 > 0, length2, 1.0)
+    foot = start[None] + np.clip(t, 0.0, 1.0)[..., None] * along[None]
+    gap = np.einsum("psi,psi->ps", points[:, None, :] - foot, points[:, None, :] - foot)
+    return foot[np.arange(len(points)), gap.argmin(axis=1)]
