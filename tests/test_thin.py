@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sandbox.model import thin
+from sandbox.model import geometry, thin
 from sandbox.model.config import Config
 from sandbox.model.family import settle
 from sandbox.model.goal import make_goal
@@ -75,7 +75,7 @@ def test_the_nearest_edge_point_by_projection_agrees_with_geos():
     points = np.array([[5.0, -2.0], [12.0, 12.0], [-1.0, 4.0], [5.0, 10.5]])
     # Below the bottom edge, beyond the top right corner, left of the left edge, above the top edge.
     expected = np.array([[5.0, 0.0], [10.0, 10.0], [0.0, 4.0], [5.0, 10.0]])
-    assert thin._project_onto_edges(points, square) == pytest.approx(expected)
+    assert geometry.nearest_on_outline(points, square) == pytest.approx(expected)
     assert thin.nearest_edge_points(points, square) == pytest.approx(expected)
 
 

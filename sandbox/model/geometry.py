@@ -95,6 +95,18 @@ def distances_to_edges(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
     return np.sqrt(((p - nearest) ** 2).sum(-1))
 
 
+def nearest_on_outline(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """For each point (m, 2), the nearest point on the closed polygon's edges (the foot of
+    :func:`distances_to_edges`' nearest edge)."""
+    a = polygon[None, :, :]
+    edge = np.roll(polygon, -1, axis=0)[None, :, :] - a
+    p = points[:, None, :]
+    along = np.clip(((p - a) * edge).sum(-1) / np.maximum((edge * edge).sum(-1), 1e-300), 0.0, 1.0)
+    foot = a + along[..., None] * edge
+    nearest = np.hypot(*(p - foot).transpose(2, 0, 1)).argmin(axis=1)
+    return foot[np.arange(len(points)), nearest]
+
+
 def distance_to_outline(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
     """Distance from each point (m, 2) to the closed polyline through ``vertices``.
 

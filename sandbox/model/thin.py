@@ -142,16 +142,6 @@ def nearest_edge_points(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
             shapely.shortest_line(shapely.Polygon(vertices).exterior, shapely.points(points)))[0::2]
     bad = ~np.all(np.isfinite(found), axis=1)
     if bad.any():
-        found[bad] = _project_onto_edges(points[bad], vertices)
+        found[bad] = geometry.nearest_on_outline(points[bad], vertices)
     return found
 
-
-def _project_onto_edges(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
-    """The nearest point on the closed polyline ``vertices`` to each point, by projection onto each edge."""
-    start = vertices
-    along = np.roll(vertices, -1, axis=0) - start
-    length2 = np.einsum("si,si->s", along, along)
-    t = np.einsum("psi,si->ps", points[:, None, :] - start[None], along) / np.where(length2 > 0, length2, 1.0)
-    foot = start[None] + np.clip(t, 0.0, 1.0)[..., None] * along[None]
-    gap = np.einsum("psi,psi->ps", points[:, None, :] - foot, points[:, None, :] - foot)
-    return foot[np.arange(len(points)), gap.argmin(axis=1)]

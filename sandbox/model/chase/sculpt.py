@@ -11,6 +11,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from sandbox.model.chase.tuning import SCULPTING, Sculpting
+from sandbox.model.geometry import nearest_on_outline
 
 #: Segments per quarter circle of an offset's round corners.
 ROUND_SEGMENTS = 4
@@ -40,17 +41,6 @@ def densify(vertices: np.ndarray, spacing: float) -> np.ndarray:
     steps = np.repeat(ends - vertices, pieces, axis=0)
     fraction = np.concatenate([np.arange(k) / k for k in pieces])
     return starts + fraction[:, None] * steps
-
-
-def nearest_on_outline(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
-    """For each point, the nearest point on the closed polygon's edges."""
-    a = polygon[None, :, :]
-    edge = np.roll(polygon, -1, axis=0)[None, :, :] - a
-    p = points[:, None, :]
-    along = np.clip(((p - a) * edge).sum(-1) / np.maximum((edge * edge).sum(-1), 1e-300), 0.0, 1.0)
-    foot = a + along[..., None] * edge
-    nearest = np.hypot(*(p - foot).transpose(2, 0, 1)).argmin(axis=1)
-    return foot[np.arange(len(points)), nearest]
 
 
 def full_counts(goal: np.ndarray, points: np.ndarray, radius: float, box_area: float, packing: float) -> np.ndarray:
