@@ -1,0 +1,121 @@
+"""Where the robots are, side by side of the goal, cycle by cycle; and the mirror test.
+
+A lab script for the notched README's section *Why the K loses* (issue 42),
+not part of the sandbox. Two uses, each on one shape and seed::
+
+    python static/shapes/notched/diagnose_sides.py count static/shapes/notched/own/K.txt --seed 0
+    python static/shapes/notched/diagnose_sides.py mirror static/shapes/notched/own/K.txt --seeds 0 1 2 3
+
+``count`` prints, every 1,000 steps, the band's distance and phase and how
+many robots lie beside each side of the goal's bounding box (L and R within
+its height, B below it, T above it, I inside it), and the boxes outside the
+goal to its left.
+
+``mirror`` is a diagnostic, not a light program: at each turn of the band
+from dilating to contracting it mirrors the robots across the goal's
+vertical axis (only those outside the construction area whose mirror image
+is outside it too), then prints each trial's fraction at the last step and
+its mean over the last fifth. ``--no-mirror`` runs the same loop untouched
+(it gives the default's trials bit for bit). Mirroring moves pymunk bodies
+by hand, which no light can do: it only tells whether the robots' side
+matters.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import shapely
+
+from sandbox.model.config import Config
+from sandbox.model.simulation import Simulation
+
+
+def sides(robots: np.ndarray, bounds: tuple[float, float, float, float]) -> dict[str, int]:
+    """How many robots lie beside each side of the goal's bounding box, or inside it."""
+    x0, y0, x1, y1 = bounds
+    x, y = robots[:, 0], robots[:, 1]
+    level = (y > y0) & (y < y1)
+    return {"L": int(((x < x0) & level).sum()), "R": int(((x > x1) & level).sum()),
+            "B": int((y < y0).sum()), "T": int((y > y1).sum()),
+            "I": int(((x >= x0) & (x <= x1) & level).sum())}
+
+
+def count(shape: str, seed: int, steps: int) -> None:
+    sim = Simulation(Config(shape=shape, seed=seed))
+    goal = shapely.Polygon(sim.goal.vertices)
+    while sim.steps_done < steps:
+        sim.step(1000)
+        boxes = sim.box_positions
+        outside = ~shapely.contains_xy(goal, boxes[:, 0], boxes[:, 1])
+        state = sim.controller.state
+        print(sim.steps_done, f"{sim.measure().fraction_in_goal:.3f}", f"band {state.scale:.2f} m", state.phase,
+              "robots", sides(sim.robot_positions, goal.bounds),
+              "boxes outside to the left", int((outside & (boxes[:, 0] < goal.bounds[0])).sum()), flush=True)
+
+
+def mirror_outside(sim: Simulation, axis_x: float) -> int:
+    """Mirror the robots outside the construction area across x = axis_x (those whose image is outside
+    it too); how many moved."""
+    centre, half = sim.config.centre, sim.config.construction_size / 2 + sim.config.robot_radius
+
+    def outside(x: float, y: float) -> bool:
+        return abs(x - centre) > half or abs(y - centre) > half
+
+    moved = 0
+    for body in sim.world.robot_bodies:
+        x, y = body.position
+        if outside(x, y) and outside(2 * axis_x - x, y):
+            body.position = (2 * axis_x - x, y)
+            body.angle = math.pi - body.angle
+            moved += 1
+    sim.world.read()
+    return moved
+
+
+def trial(args: tuple[str, int, int, bool]) -> tuple[int, int, float, float]:
+    shape, seed, steps, mirror = args
+    sim = Simulation(Config(shape=shape, seed=seed))
+    x0, _, x1, _ = shapely.Polygon(sim.goal.vertices).bounds
+    phase, turns, late = sim.controller.state.phase, 0, []
+    while sim.steps_done < steps:
+        sim.step(100)
+        now = sim.controller.state.phase
+        if mirror and phase.startswith("dilat") and now.startswith("contr"):
+            mirror_outside(sim, (x0 + x1) / 2)
+            turns += 1
+        phase = now
+        if sim.steps_done >= 0.8 * steps and sim.steps_done % 1000 == 0:
+            late.append(sim.measure().fraction_in_goal)
+    return seed, turns, sim.measure().fraction_in_goal, float(np.mean(late))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("use", choices=("count", "mirror"))
+    parser.add_argument("shape")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
+    parser.add_argument("--steps", type=int)
+    parser.add_argument("--no-mirror", action="store_true")
+    parser.add_argument("--workers", type=int, default=2)
+    args = parser.parse_args()
+    if args.use == "count":
+        count(args.shape, args.seed, args.steps or 60_000)
+        return
+    jobs = [(args.shape, seed, args.steps or 100_000, not args.no_mirror) for seed in args.seeds]
+    with ProcessPoolExecutor(args.workers) as pool:
+        results = list(pool.map(trial, jobs))
+    for seed, turns, last, late in results:
+        print(f"seed {seed}: {turns} turns mirrored, {last:.3f} at the last step, {late:.3f} over the last fifth")
+    for name, values in (("last step", [r[2] for r in results]), ("last fifth", [r[3] for r in results])):
+        v = np.array(values)
+        error = v.std(ddof=1) / math.sqrt(len(v)) if len(v) > 1 else float("nan")
+        print(f"{name}: {v.mean():.3f} ± {error:.3f}")
+
+
+if __name__ == "__main__":
+    main()
