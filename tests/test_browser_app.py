@@ -746,6 +746,7 @@ def test_compare_mode_from_the_panel_and_learn(app, page, tmp_path):
     # A recording of compare mode holds both worlds.
     open_folder(page, "Record")
     click_button(page, "Start recording")
+    wait_until(lambda: app.panel.record.recorder is not None, what="recording")
     frames = app.frames_drawn
     wait_until(lambda: app.frames_drawn > frames + 5, what="some frames")
     with page.expect_download() as info:
@@ -866,8 +867,19 @@ def test_a_page_gets_no_more_frames_than_it_draws(app, browser):
     assert not app.runner.errors
 
 
+def idle_record_folder(app, page) -> None:
+    """The Record folder open and idle: the page and the app live for the whole module, and a test that
+    failed while recording leaves the folder open (open_folder toggles it) and the recording running."""
+    if not app.panel.record.idle:
+        app.events.call(app.panel.record.stop)
+    # Whether the folder is open, by its text (the button's label may not have reached the page yet).
+    if not page.get_by_text("Capture the run and download it", exact=False).first.is_visible():
+        open_folder(page, "Record")
+    page.get_by_role("button", name="Start recording", exact=True).wait_for()
+
+
 def test_recording_downloads_a_standalone_page(app, browser, page, tmp_path):
-    open_folder(page, "Record")
+    idle_record_folder(app, page)
     click_button(page, "Start recording")
     wait_until(lambda: app.panel.record.recorder is not None, what="recording")
     frames = app.frames_drawn

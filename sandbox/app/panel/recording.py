@@ -49,12 +49,17 @@ class RecordFolder:
 
         @self.button.on_click
         def _(event: viser.GuiEvent) -> None:
-            if self.recorder is None and self._finished_html is None:
+            if self.idle:
                 self.start()
                 return
             html = self.stop()
             event.client.send_file_download(recording_name(self._snap, _dt.datetime.now()), html.encode("utf-8"),
                                             save_immediately=True)
+
+    @property
+    def idle(self) -> bool:
+        """Neither recording nor holding a finished recording to download."""
+        return self.recorder is None and self._finished_html is None
 
     def update(self, snap: Snapshot) -> None:
         self._snap = snap
