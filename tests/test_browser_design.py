@@ -6,11 +6,13 @@ Set PHOTOTAXIS_SHOTS=DIR to keep a screenshot of every step there."""
 from __future__ import annotations
 
 import os
+import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from sandbox.experiments import advise as experiments_advice
 from tests.browsing import BROWSER_MARKS, playwright_api, small_app  # noqa: F401 - playwright_api: skips without it
 from tests.test_browser_app import choose
 from tests.waiting import paused_step, wait_until
@@ -130,14 +132,32 @@ def test_download_design_saves_a_file_that_replays(app, page, tmp_path):
     assert design.steps_run >= 2_000 and design.patterns.shape[1:] == (64, 64)
 
 
-def test_the_advisor_speaks_plainly_and_says_the_time_left(app, page):
+def test_the_advisor_speaks_plainly_and_says_the_time_left(app, page, monkeypatch):
     """Item 7: while it runs, the time left; then the ranking's plain column names."""
     advice = app.panel.advice
     advice.seeds, advice.steps = 1, 600  # short trials: the words, not the ranking, are under test
-    open_folder(page, "Which strategy builds my shape?")
-    press(page, "Try them all")
-    page.get_by_text("trials done", exact=False).first.wait_for()
-    wait_until(lambda: "left" in advice.status.content or not advice.running, what="the time left, once known")
+    # Short trials can all end before a loaded page draws the progress line: hold them after the first
+    # until the page has shown it (the hold is in the trials' own thread; the app runs on).
+    shown, real = threading.Event(), experiments_advice.advise
+
+    def held(*args, progress, **kwargs):
+        def told(done: int, total: int) -> None:
+            progress(done, total)
+            if done >= 1:
+                shown.wait(120)
+        return real(*args, progress=told, **kwargs)
+
+    monkeypatch.setattr(experiments_advice, "advise", held)
+    try:
+        open_folder(page, "Which strategy builds my shape?")
+        press(page, "Try them all")
+        wait_until(lambda: advice.running and advice.status.content.startswith("Running: 1 of"),
+                   what="the first trial done, the rest held")
+        assert " left." in advice.status.content, advice.status.content  # the time left, from the pace so far
+        page.get_by_text("trials done", exact=False).first.wait_for()
+        page.get_by_text(" left.", exact=False).first.wait_for()
+    finally:
+        shown.set()
     wait_until(lambda: not advice.running, 300, what="the trials")
     page.get_by_text("stray boxes' mean distance to the goal (m)", exact=False).first.wait_for()
     page.get_by_text("boxes in the goal", exact=False).first.wait_for()
