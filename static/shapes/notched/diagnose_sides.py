@@ -19,6 +19,14 @@ its mean over the last fifth. ``--no-mirror`` runs the same loop untouched
 (it gives the default's trials bit for bit). Mirroring moves pymunk bodies
 by hand, which no light can do: it only tells whether the robots' side
 matters.
+
+``gather`` is a light program (the robots move only by the light): at each
+such turn the paper's controller is paused for ``--hold`` steps while only
+the band's lights beside the chosen sides of the goal's bounding box stay
+lit (``--sides``: any of L, R, B, T), so robots within reach of them drive
+there; then the band comes back where it was and the controller goes on::
+
+    python static/shapes/notched/diagnose_sides.py gather static/shapes/notched/own/K.txt --sides L --hold 3000
 """
 
 from __future__ import annotations
@@ -76,41 +84,88 @@ def mirror_outside(sim: Simulation, axis_x: float) -> int:
     return moved
 
 
-def trial(args: tuple[str, int, int, bool]) -> tuple[int, int, float, float]:
-    shape, seed, steps, mirror = args
+def beside(sim: Simulation, sides: str) -> np.ndarray:
+    """Which lights lie beyond the goal's bounding box on the given sides (L, R, B, T), shaped as the
+    controller's pattern."""
+    from sandbox.model.lights import light_centres
+
+    x0, y0, x1, y1 = shapely.Polygon(sim.goal.vertices).bounds
+    centres = light_centres(sim.config).reshape(-1, 2)
+    x, y = centres[:, 0], centres[:, 1]
+    chosen = {"L": x < x0, "R": x > x1, "B": y < y0, "T": y > y1}
+    keep = np.zeros(len(centres), bool)
+    for side in sides:
+        keep |= chosen[side]
+    return keep.reshape(sim.controller.intensities.shape)
+
+
+def gather_at_turns(sim: Simulation, sides: str, hold: int) -> dict[str, int]:
+    """Make the paper's controller, at each turn from dilating to contracting, pause for ``hold`` of its
+    updates (one a step) with only the band's lights beside ``sides`` lit; the count of turns so far."""
+    controller, keep = sim.controller, beside(sim, sides)
+    advance = controller.update
+    state = {"phase": controller.state.phase, "held": 0, "turns": 0}
+
+    def update(observation):
+        if state["held"] > 0:
+            state["held"] -= 1
+            return controller.intensities if state["held"] == 0 else None  # the band again, where it was
+        pattern = advance(observation)
+        now, before = controller.state.phase, state["phase"]
+        state["phase"] = now
+        if before.startswith("dilat") and now.startswith("contr"):
+            state["held"], state["turns"] = hold, state["turns"] + 1
+            return controller.intensities * keep
+        return pattern
+
+    controller.update = update
+    return state
+
+
+def trial(args: tuple[str, int, int, str, str, int]) -> tuple[int, int, float, float]:
+    shape, seed, steps, use, sides, hold = args
     sim = Simulation(Config(shape=shape, seed=seed))
     x0, _, x1, _ = shapely.Polygon(sim.goal.vertices).bounds
+    gathered = gather_at_turns(sim, sides, hold) if use == "gather" else None
     phase, turns, late = sim.controller.state.phase, 0, []
     while sim.steps_done < steps:
         sim.step(100)
         now = sim.controller.state.phase
-        if mirror and phase.startswith("dilat") and now.startswith("contr"):
+        if use == "mirror" and phase.startswith("dilat") and now.startswith("contr"):
             mirror_outside(sim, (x0 + x1) / 2)
             turns += 1
         phase = now
         if sim.steps_done >= 0.8 * steps and sim.steps_done % 1000 == 0:
             late.append(sim.measure().fraction_in_goal)
+    if gathered is not None:
+        turns = gathered["turns"]
     return seed, turns, sim.measure().fraction_in_goal, float(np.mean(late))
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("use", choices=("count", "mirror"))
+    parser.add_argument("use", choices=("count", "mirror", "gather"))
     parser.add_argument("shape")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
     parser.add_argument("--steps", type=int)
     parser.add_argument("--no-mirror", action="store_true")
+    parser.add_argument("--sides", default="L", help="gather: the sides to gather beside (any of L, R, B, T)")
+    parser.add_argument("--hold", type=int, default=3000, help="gather: steps the band is held at each turn")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
     if args.use == "count":
         count(args.shape, args.seed, args.steps or 60_000)
         return
-    jobs = [(args.shape, seed, args.steps or 100_000, not args.no_mirror) for seed in args.seeds]
+    if args.use == "gather" and (not args.sides or set(args.sides) - set("LRBT") or args.hold < 1):
+        parser.error("gather needs --sides made of L, R, B and T, and --hold of at least 1 step")
+    use = "none" if args.no_mirror else args.use
+    jobs = [(args.shape, seed, args.steps or 100_000, use, args.sides, args.hold) for seed in args.seeds]
     with ProcessPoolExecutor(args.workers) as pool:
         results = list(pool.map(trial, jobs))
     for seed, turns, last, late in results:
-        print(f"seed {seed}: {turns} turns mirrored, {last:.3f} at the last step, {late:.3f} over the last fifth")
+        what = "left alone" if use == "none" else use
+        print(f"seed {seed}: {turns} turns {what}, {last:.3f} at the last step, {late:.3f} over the last fifth")
     for name, values in (("last step", [r[2] for r in results]), ("last fifth", [r[3] for r in results])):
         v = np.array(values)
         error = v.std(ddof=1) / math.sqrt(len(v)) if len(v) > 1 else float("nan")
