@@ -27,6 +27,11 @@ lit (``--sides``: any of L, R, B, T), so robots within reach of them drive
 there; then the band comes back where it was and the controller goes on::
 
     python static/shapes/notched/diagnose_sides.py gather static/shapes/notched/own/K.txt --sides L --hold 3000
+
+``mouths`` prints each notch's mouth direction (from the notch's centroid to
+its mouth's), their mean, and the side a first rule gathers beside: the
+bounding box's side opposite the mean, when the mean is at least
+:data:`MEAN_AT_LEAST` long.
 """
 
 from __future__ import annotations
@@ -50,6 +55,32 @@ def sides(robots: np.ndarray, bounds: tuple[float, float, float, float]) -> dict
     return {"L": int(((x < x0) & level).sum()), "R": int(((x > x1) & level).sum()),
             "B": int((y < y0).sum()), "T": int((y > y1).sum()),
             "I": int(((x >= x0) & (x <= x1) & level).sum())}
+
+
+#: The first rule gathers only when the notches' mean mouth direction is at least this long.
+MEAN_AT_LEAST = 0.3
+
+
+def mouths(shape: str) -> None:
+    """Each notch's mouth direction, their mean, and the side the first rule gathers beside."""
+    from sandbox.model import notches
+
+    sim = Simulation(Config(shape=shape))
+    goal = shapely.Polygon(sim.goal.vertices)
+    directions = []
+    for notch in notches.notch_polygons(sim.goal.vertices):
+        mouth = notch.boundary.difference(goal.buffer(1e-3))  # the notch's edge that is not the goal's
+        if mouth.is_empty:
+            continue
+        towards = np.array(mouth.centroid.coords[0]) - np.array(notch.centroid.coords[0])
+        directions.append(towards / np.linalg.norm(towards))
+    mean = np.mean(directions, axis=0) if directions else np.zeros(2)
+    side = "none"
+    if np.hypot(*mean) >= MEAN_AT_LEAST:
+        outward = {"L": (-1, 0), "R": (1, 0), "B": (0, -1), "T": (0, 1)}
+        side = max(outward, key=lambda name: -float(np.dot(outward[name], mean)))
+    print(f"mouths {np.round(directions, 2).tolist()}, mean {np.round(mean, 2).tolist()} "
+          f"({np.hypot(*mean):.2f} long): gather beside {side}")
 
 
 def count(shape: str, seed: int, steps: int) -> None:
@@ -144,7 +175,7 @@ def trial(args: tuple[str, int, int, str, str, int]) -> tuple[int, int, float, f
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("use", choices=("count", "mirror", "gather"))
+    parser.add_argument("use", choices=("count", "mirror", "gather", "mouths"))
     parser.add_argument("shape")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
@@ -154,6 +185,9 @@ def main() -> None:
     parser.add_argument("--hold", type=int, default=3000, help="gather: steps the band is held at each turn")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
+    if args.use == "mouths":
+        mouths(args.shape)
+        return
     if args.use == "count":
         count(args.shape, args.seed, args.steps or 60_000)
         return
