@@ -43,18 +43,27 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 import shapely
 
+from sandbox.model import notches
 from sandbox.model.config import Config
+from sandbox.model.lights import light_centres
 from sandbox.model.simulation import Simulation
 
 
-def sides(robots: np.ndarray, bounds: tuple[float, float, float, float]) -> dict[str, int]:
-    """How many robots lie beside each side of the goal's bounding box, or inside it."""
+def beyond(points: np.ndarray, bounds: tuple[float, float, float, float]) -> dict[str, np.ndarray]:
+    """Which points lie beyond each side (L, R, B, T) of a bounding box (a corner's are beyond two)."""
     x0, y0, x1, y1 = bounds
-    x, y = robots[:, 0], robots[:, 1]
-    level = (y > y0) & (y < y1)
-    return {"L": int(((x < x0) & level).sum()), "R": int(((x > x1) & level).sum()),
-            "B": int((y < y0).sum()), "T": int((y > y1).sum()),
-            "I": int(((x >= x0) & (x <= x1) & level).sum())}
+    x, y = points[:, 0], points[:, 1]
+    return {"L": x < x0, "R": x > x1, "B": y < y0, "T": y > y1}
+
+
+def sides(robots: np.ndarray, bounds: tuple[float, float, float, float]) -> dict[str, int]:
+    """How many robots lie beside each side of the goal's bounding box (left and right within its
+    height, below and above it across the whole width), or inside it."""
+    out = beyond(robots, bounds)
+    level = ~out["B"] & ~out["T"]
+    return {"L": int((out["L"] & level).sum()), "R": int((out["R"] & level).sum()),
+            "B": int(out["B"].sum()), "T": int(out["T"].sum()),
+            "I": int((~out["L"] & ~out["R"] & level).sum())}
 
 
 #: The first rule gathers only when the notches' mean mouth direction is at least this long.
@@ -63,8 +72,6 @@ MEAN_AT_LEAST = 0.3
 
 def mouths(shape: str) -> None:
     """Each notch's mouth direction, their mean, and the side the first rule gathers beside."""
-    from sandbox.model import notches
-
     sim = Simulation(Config(shape=shape))
     goal = shapely.Polygon(sim.goal.vertices)
     directions = []
@@ -115,25 +122,22 @@ def mirror_outside(sim: Simulation, axis_x: float) -> int:
     return moved
 
 
-def beside(sim: Simulation, sides: str) -> np.ndarray:
-    """Which lights lie beyond the goal's bounding box on the given sides (L, R, B, T), shaped as the
-    controller's pattern."""
-    from sandbox.model.lights import light_centres
-
-    x0, y0, x1, y1 = shapely.Polygon(sim.goal.vertices).bounds
+def beside(sim: Simulation, chosen: str) -> np.ndarray:
+    """Which lights lie beyond the goal's bounding box on the chosen sides (any of L, R, B, T), shaped as
+    the controller's pattern."""
     centres = light_centres(sim.config).reshape(-1, 2)
-    x, y = centres[:, 0], centres[:, 1]
-    chosen = {"L": x < x0, "R": x > x1, "B": y < y0, "T": y > y1}
+    out = beyond(centres, shapely.Polygon(sim.goal.vertices).bounds)
     keep = np.zeros(len(centres), bool)
-    for side in sides:
-        keep |= chosen[side]
+    for side in chosen:
+        keep |= out[side]
     return keep.reshape(sim.controller.intensities.shape)
 
 
-def gather_at_turns(sim: Simulation, sides: str, hold: int) -> dict[str, int]:
+def gather_at_turns(sim: Simulation, chosen: str, hold: int) -> dict[str, int]:
     """Make the paper's controller, at each turn from dilating to contracting, pause for ``hold`` of its
-    updates (one a step) with only the band's lights beside ``sides`` lit; the count of turns so far."""
-    controller, keep = sim.controller, beside(sim, sides)
+    updates (one a step) with only the band's lights beside the ``chosen`` sides lit; the count of turns so
+    far."""
+    controller, keep = sim.controller, beside(sim, chosen)
     advance = controller.update
     state = {"phase": controller.state.phase, "held": 0, "turns": 0}
 
