@@ -47,6 +47,7 @@ from sandbox.model import notches
 from sandbox.model.config import Config
 from sandbox.model.lights import light_centres
 from sandbox.model.simulation import Simulation
+from sandbox.shapes import ShapeError, shape_vertices
 
 
 def beyond(points: np.ndarray, bounds: tuple[float, float, float, float]) -> dict[str, np.ndarray]:
@@ -189,6 +190,17 @@ def main() -> None:
     parser.add_argument("--hold", type=int, default=3000, help="gather: steps the band is held at each turn")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
+    try:
+        vertices = shape_vertices(args.shape)
+    except ShapeError as exc:
+        parser.error(str(exc))
+    if vertices is None:
+        parser.error(f"{args.shape} is a circle: it has no sides or notches to look at; give a polygon")
+    if args.steps is not None and (args.steps < 1000 or args.steps % 1000):
+        parser.error(f"--steps must be a positive multiple of 1,000 (counts and the last fifth's mean are taken "
+                     f"every 1,000 steps), not {args.steps}")
+    if args.workers < 1:
+        parser.error(f"--workers must be at least 1, not {args.workers}")
     if args.use == "mouths":
         mouths(args.shape)
         return
