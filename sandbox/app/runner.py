@@ -612,7 +612,7 @@ class Runner(SimulationRunner):
             frame=self._frame,
             step=sim.steps_done,
             time=sim.time,
-            phase=sim.phase,
+            phase=sim.phase_said,
             cycle=sim.cycle,
             seed=sim.seed,
             shape_name=self.shape_name,

@@ -291,6 +291,11 @@ class Config:
         "the goal, farther beside thin parts, tips and corners (issue 42); 'plain', the band alone. "
         "Open loop only: chase lights its own band",
         group="strategies", choices=("lit", "plain"), rebuild=False)
+    gather: str = _param(
+        "auto", "the offset outline on a goal with lit notches in line whose mouths face opposite sides (an H, a K, "
+        "an X, a W): 'auto', while the band dilates beyond 2.5 m of the goal only its lights beyond the "
+        "sides no mouth faces stay lit, so the robots the notches let out come back to those sides (issue 42); "
+        "'off', the whole band", group="strategies", choices=("auto", "off"), rebuild=False)
     no_corners_count: str = _param(
         "at-least", "how many lights no_corners c turns off of n lit: 'round', round(c n), equally near lights "
         "taken column by column (paper text), or 'at-least', the fewest k with k / n >= c, row by row (the "

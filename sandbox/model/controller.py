@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model import band, geometry
+from sandbox.model import band, gather, geometry
 from sandbox.model.config import Config
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal, make_goal
 from sandbox.model.lights import light_centres
@@ -252,6 +252,8 @@ class Controller(Cycle):
         self.outline = np.empty((0, 2))
         self.corners = np.empty((0, 2))
         self.intensities = np.zeros((config.lights_per_side,) * 2)
+        #: The goal's sides beside which alone the band is lit now ('' the whole band; :mod:`sandbox.model.gather`).
+        self.gathering = ""
         #: Said about the goal's fit (its largest outline past the walls); a goal whose smallest
         #: outline does not fit is refused here with a ShapeError.
         self.notes = goal_notes(config, goal, self.sizing)
@@ -276,12 +278,21 @@ class Controller(Cycle):
             self.outline = geometry.regular_polygon(radius, CIRCLE_DRAW_VERTICES, self.goal.centre)
             self.corners = np.empty((0, 2))
             on = band.around(self._centres, self.goal.centre, radius, self.config.band)
+            self.gathering = ""
         else:
             self.outline, self.corners = s.sizing.polygon(s.scale), s.sizing.corners(s.scale)
             on = s.sizing.lit(self._centres, s.scale, self.config.band, dilating=s.phase == DILATING)
+            self.gathering = s.sizing.gathering_at(s.scale, s.phase == DILATING)
             if s.strategies["no_corners"] > 0 and len(self.corners):
                 on = self._darken_corners(on)
         self._light(on)
+
+    @property
+    def phase_said(self) -> str:
+        """The phase in words, with the sides the band gathers the robots beside when it does."""
+        if not self.gathering:
+            return self.phase
+        return f"{self.phase}, gathering the robots beside {gather.said(self.gathering)}"
 
     def _darken_corners(self, on: np.ndarray) -> np.ndarray:
         return band.darken_corners(on, self._centres, self.corners, self.strategies["no_corners"], self.config)

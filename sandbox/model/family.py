@@ -27,7 +27,7 @@ import dataclasses
 
 import numpy as np
 
-from sandbox.model import geometry, notches, outlines
+from sandbox.model import gather, geometry, notches, offset, outlines
 from sandbox.model.config import Config
 from sandbox.model.goal import Goal, inside_construction
 
@@ -101,12 +101,24 @@ def settle(config: Config, goal: Goal) -> Goal:
 def notches_said(config: Config, vertices: np.ndarray) -> str:
     """What the offset outline does with the goal's notches, in words ('' for none, notches = plain or
     chase on)."""
-    count = len(notches.lit_notches(config, vertices, config.chase))
-    if not count:
+    lit = notches.lit_notches(config, vertices, config.chase)
+    if not lit:
         return ""
-    what = "a notch" if count == 1 else f"{count} notches"
+    what = "a notch" if len(lit) == 1 else f"{len(lit)} notches"
     return (f". The goal has {what} (gaps narrower than {2 * notches.CLOSING_RADIUS:g} m): each is lit while the "
             f"band closes in, and the band moves at {notches.PACE:.1f} of its pace within "
             f"{notches.SLOW_WITHIN:g} m of the goal, so the robots clear them before the band presses the boxes "
             f"into them; beside thin parts, tips and corners the band holds farther out, so the robots do not ride "
-            f"onto them (notches = lit; chase, when on, lights its own band)")
+            f"onto them (notches = lit; chase, when on, lights its own band)" + gathering_said(config, vertices, lit))
+
+
+def gathering_said(config: Config, vertices: np.ndarray, lit: tuple) -> str:
+    """What the dilating band does about the sides the notches starve, in words ('' when it gathers
+    nowhere)."""
+    sides = offset.gather_sides(config, vertices, lit)
+    if not sides:
+        return ""
+    faced = gather.all_faced(gather.mouth_directions(vertices, lit))
+    return (f". The notches' mouths face {gather.said(faced)} of the goal: the robots they let out go "
+            f"there, and none come back to {gather.said(sides)}. While the band dilates beyond {gather.BEYOND:g} m "
+            f"only its lights beyond those sides stay lit, so the robots gather there (gather = auto)")

@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
-from sandbox.model import geometry, notches as notch_lights, thin
+from sandbox.model import gather as gathering, geometry, notches as notch_lights, thin
 from sandbox.model.config import Config
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal
 
@@ -94,6 +94,15 @@ def wall_distance(goal: Goal, arena_size: float, clearance: float) -> float:
     return float(min(low.min(), (arena_size - high).min()) - clearance)
 
 
+def gather_sides(config: Config, vertices: np.ndarray | None, notches: tuple) -> str:
+    """The sides the dilating band gathers the robots beside (:mod:`sandbox.model.gather`): '' without lit
+    notches or with ``gather = off``."""
+    if not notches or config.gather != "auto":
+        return ""
+    found = gathering.mouths(vertices, notches)
+    return gathering.starved_sides([direction for direction, _ in found], [bounds for _, bounds in found])
+
+
 # -- the family ---------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class OffsetSizing:
@@ -116,6 +125,9 @@ class OffsetSizing:
     #: The lights' glow on a notched goal, whose band holds farther out beside thin parts and tips
     #: (:mod:`sandbox.model.thin`); None: it comes to ``smallest`` all round.
     glow: thin.Glow | None = None
+    #: The sides of the goal's bounding box the dilating band gathers the robots beside, beyond
+    #: :data:`sandbox.model.gather.BEYOND` (:mod:`sandbox.model.gather`); '' lights the whole band.
+    gather: str = ""
     #: Flare and switch reshape a scaled outline; a grown goal has nothing for them to do.
     switchable = False
     shape = None
@@ -133,7 +145,7 @@ class OffsetSizing:
         notches = notch_lights.lit_notches(config, goal.vertices, chase)
         return cls(goal, smallest, largest, max(turn, smallest), goal.radius, config.circle_max * config.arena_size / 2.0,
                    notches, notch_lights.PACE if notches else 1.0, notch_lights.SLOW_WITHIN,
-                   thin.Glow.of(config) if notches else None)
+                   thin.Glow.of(config) if notches else None, gather_sides(config, goal.vertices, notches))
 
     def pace_at(self, size: float) -> float:
         """The power each step's factor is raised to at this size: ``pace`` within ``slow_within``."""
@@ -178,19 +190,28 @@ class OffsetSizing:
         known = self._distances.get("centres")
         if known is None or known[0] is not centres:
             known = self._distances["centres"] = (centres, *self._light_distances(centres))
-        _, distances, reach, least = known
+        _, distances, reach, least, starved = known
         level = size if least is None else np.maximum(size, least)
         on = np.abs(distances - level) <= band + _EDGE
         if reach is not None and not dilating:
             on |= size <= reach
+        if dilating and starved is not None and size > gathering.BEYOND:
+            on &= starved
         return on
 
-    def _light_distances(self, centres: np.ndarray) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    def gathering_at(self, size: float, dilating: bool) -> str:
+        """The sides the band gathers the robots beside at this size ('' for none)."""
+        return self.gather if dilating and size > gathering.BEYOND else ""
+
+    def _light_distances(self, centres: np.ndarray) -> tuple:
         """Each light's signed distance to the goal, the band size within which it is lit as part of a
-        notch, and the least distance the band comes to it (None where the goal has no notch)."""
+        notch, the least distance the band comes to it (None where the goal has no notch), and whether it
+        lies beside a side the dilating band gathers at (None: no gathering)."""
         distances = signed_distance(centres, self.goal)
         if not self.notches:
-            return distances, None, None
+            return distances, None, None, None
         least = (thin.hold_distances(self.glow, centres, distances, self.goal.vertices, self.smallest)
                  if self.glow is not None else None)
-        return distances, notch_lights.notch_reach(centres, self.notches, distances), least
+        starved = (gathering.beyond_sides(centres, shapely.Polygon(self.goal.vertices).bounds, self.gather)
+                   if self.gather else None)
+        return distances, notch_lights.notch_reach(centres, self.notches, distances), least, starved

@@ -114,6 +114,10 @@ class Sizing(Protocol):
         """Which lights (centres, flat) the band at ``size`` lights: those within ``width`` of it (and, for
         the offset family, a notch's while the band is not ``dilating``)."""
 
+    def gathering_at(self, size: float, dilating: bool) -> str:
+        """The sides of the goal's bounding box (any of ``LRBT``) beside which alone the band is lit at
+        ``size``, gathering the robots there ('' for the whole band; see :mod:`sandbox.model.gather`)."""
+
 
 @dataclass(frozen=True)
 class ScaledSizing:
@@ -182,6 +186,9 @@ class ScaledSizing:
 
     def lit(self, centres: np.ndarray, size: float, width: float, dilating: bool = False) -> np.ndarray:
         return band.along(centres, self.polygon(size), width)
+
+    def gathering_at(self, size: float, dilating: bool) -> str:
+        return ""
 
 
 def sizing_for(config: Config, goal: Goal, flare: float, chase: float = 0.0) -> Sizing:

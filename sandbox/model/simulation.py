@@ -371,6 +371,11 @@ class Simulation:
         return self.controller.phase
 
     @property
+    def phase_said(self) -> str:
+        """The phase in words, and what the band does in it beyond the paper's (a light program: its phase)."""
+        return getattr(self.controller, "phase_said", self.controller.phase)
+
+    @property
     def cycle(self) -> int:
         return self.controller.cycle
 

@@ -93,6 +93,8 @@ TIPS = {
                "('offset', any shape); 'auto' scales roundish goals only.",
     "notches": "On a shape with narrow notches, light them while the band closes in so the robots keep them "
                "clear ('lit'), or leave the band alone ('plain').",
+    "gather": "On a shape whose notches open both ways (an H, a K), light only the starved sides as the band "
+              "grows, so the robots come back there ('auto'), or the whole band ('off').",
     "no_corners_count": "How No corners counts the lights it leaves dark: rounded (the paper) or at least "
                         "that share (the authors' program).",
     # Run

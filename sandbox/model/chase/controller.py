@@ -120,6 +120,7 @@ class ChaseController(Controller):
         """The goal grown by the distance the scale gives, sculpted near the goal from
         what the boxes show (see :mod:`sandbox.model.chase.sculpt`)."""
         cfg, goal = self.config, self.goal
+        self.gathering = ""  # chase lights its own band, never the notches' gathering
         polygon = goal.outline()
         distance = self.sizing.distance(self.scale)
         if self.seen is None:

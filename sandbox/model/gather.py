@@ -1,0 +1,125 @@
+"""The sides a notched goal's robots are gathered back to (issue 42; ``Config.gather``).
+
+A lit notch (:mod:`sandbox.model.notches`) draws robots in at each press
+and, when the band dilates, lets them out through its mouth, so they leave
+towards the side of the goal its mouth faces. When the notches' mouths face
+two opposite sides (the letters H, K, X and W open up and down), every cycle
+takes robots from the two sides between and none come back: a robot drives
+only up a gradient, and an evenly lit band never sends it along itself. The
+letter K's stem side held 30 robots in its first cycle and 6 in its sixth, and
+the K built 0.720 (``static/shapes/notched/README.md``).
+
+So while the band dilates beyond :data:`BEYOND` of the goal, only its lights
+beyond the goal's bounding box on those starved sides stay lit: the robots
+on the dark part drive to the nearest lit part and ride it back in. It costs
+no time (the band's sizes are the paper's schedule's), and the page shows
+exactly the lights that are on.
+
+Only notches in line gather: two that open towards opposite sides and
+overlap across that axis (the H's, the K's and the X's; the W's lower one
+overlaps each of its upper two). The letter S's two bays open left and
+right at different heights: gathering beside its top and bottom cost it
+0.011 +- 0.006 (seeds 0-3, paired), so staggered notches gather nowhere.
+
+A mouth *faces* each side of the goal's bounding box its direction leans
+towards by at least :data:`FACING`, the direction being from the notch's
+centroid to its mouth's (the notch's edge that is not the goal's). Mouths
+facing one side only (the E, the comb, the Y) leave three sides unfaced:
+gathering there helped none of those measured, so they gather nowhere.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+
+#: The bounding box's sides, each with its outward direction.
+OUTWARD = {"L": (-1.0, 0.0), "R": (1.0, 0.0), "B": (0.0, -1.0), "T": (0.0, 1.0)}
+#: Each side's opposite.
+OPPOSITE = {"L": "R", "R": "L", "B": "T", "T": "B"}
+#: A mouth faces each side its direction leans towards by at least this (its component along the side's
+#: outward direction; 0.3 is within 72.5 degrees). The letter K's notches open up and down, leaning 0.36
+#: to the right, towards the open V between its arms: the robots they let out go there too, and only the
+#: stem's side starves. The W's lean 0.12 (drawn upright, they face the top alone).
+FACING = 0.3
+#: Said in words.
+SIDE_NAMES = {"L": "left", "R": "right", "B": "bottom", "T": "top"}
+#: While dilating beyond this distance (m) from the goal the band lights only the starved sides. It starts
+#: once the robots have followed the band out of the notches; the robots then need the rest of the
+#: dilation to drive round. Measured on the letter K (seeds 0-3, 100,000 steps): gathering from 2.0, 2.5
+#: or 2.9 m builds it at 0.750, 0.759 and 0.753, from 3.5 m only 0.727.
+BEYOND = 2.5
+
+
+def mouth_directions(vertices: np.ndarray, notches: tuple[shapely.Polygon, ...]) -> list[np.ndarray]:
+    """Each notch's mouth direction: the unit vector from its centroid to its mouth's (a notch whose
+    edges all lie on the goal's has none: see :func:`mouths`)."""
+    return [direction for direction, _ in mouths(vertices, notches)]
+
+
+def mouths(vertices: np.ndarray, notches: tuple[shapely.Polygon, ...]) -> list[tuple[np.ndarray, tuple]]:
+    """Each notch with a mouth: its mouth direction, from its centroid to its mouth's (the notch's edge that
+    is not the goal's), and its bounding box."""
+    goal = shapely.Polygon(vertices)
+    if not goal.is_valid:
+        goal = shapely.make_valid(goal).buffer(0)
+    directions = []
+    for notch in notches:
+        mouth = notch.boundary.difference(goal.buffer(1e-3))
+        if mouth.is_empty:
+            continue
+        towards = np.array(mouth.centroid.coords[0]) - np.array(notch.centroid.coords[0])
+        length = float(np.hypot(*towards))
+        if length > 1e-9:
+            directions.append((towards / length, notch.bounds))
+    return directions
+
+
+def faced_sides(direction: np.ndarray) -> str:
+    """The bounding box's sides a mouth direction leans towards by at least :data:`FACING`, in ``LRBT``
+    order."""
+    return "".join(side for side in OUTWARD if float(np.dot(OUTWARD[side], direction)) >= FACING)
+
+
+def all_faced(directions: list[np.ndarray]) -> str:
+    """The sides any of the mouths faces, in ``LRBT`` order."""
+    faced = set("".join(faced_sides(d) for d in directions))
+    return "".join(side for side in OUTWARD if side in faced)
+
+
+def in_line(first: tuple, second: tuple, side: str) -> bool:
+    """Whether two notches (their bounding boxes, ``x0, y0, x1, y1``) whose mouths face ``side`` and its
+    opposite overlap across that axis: side by side along x for the top and bottom, along y for the left and
+    right."""
+    low, high = (0, 2) if side in "BT" else (1, 3)
+    return min(first[high], second[high]) > max(first[low], second[low])
+
+
+def starved_sides(directions: list[np.ndarray], bounds: list[tuple]) -> str:
+    """The sides to gather beside, in ``LRBT`` order: those no mouth faces, when two notches in line
+    (:func:`in_line`) open towards opposite sides; '' otherwise. ``bounds`` are the notches' bounding
+    boxes, one per direction."""
+    sides = [faced_sides(d) for d in directions]
+    opposed = any(side in sides[i] and OPPOSITE[side] in sides[j] and in_line(bounds[i], bounds[j], side)
+                  for i in range(len(sides)) for j in range(len(sides)) if i != j for side in OUTWARD)
+    if not opposed:
+        return ""
+    faced = all_faced(directions)
+    return "".join(side for side in OUTWARD if side not in faced)
+
+
+def beyond_sides(points: np.ndarray, bounds: tuple[float, float, float, float], sides: str) -> np.ndarray:
+    """Which points lie beyond any of the given sides of a bounding box (``x0, y0, x1, y1``)."""
+    x0, y0, x1, y1 = bounds
+    x, y = points[:, 0], points[:, 1]
+    past = {"L": x < x0, "R": x > x1, "B": y < y0, "T": y > y1}
+    out = np.zeros(len(points), bool)
+    for side in sides:
+        out |= past[side]
+    return out
+
+
+def said(sides: str) -> str:
+    """The sides in words: 'the left and right'."""
+    names = [SIDE_NAMES[s] for s in sides]
+    return "the " + (names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1])
