@@ -133,8 +133,8 @@ def test_the_default_gathers_beside_the_starved_sides_and_says_so(path, sides):
 def test_the_letter_hs_reason_names_the_sides():
     goal = make_goal(Config(), shape_vertices(str(NOTCHED / "shapes" / "letter-H.txt")))
     assert ("The notches' mouths face the bottom and top of the goal: the robots they let out go there, and none "
-            "come back to the left and right. While the band dilates beyond 2.5 m only its lights beyond those "
-            "sides stay lit") in goal.family_reason
+            "come back to the left and right. While the band dilates beyond 2.5 m only its lights beyond the "
+            "left and right stay lit") in goal.family_reason
 
 
 def test_the_controller_gathers_while_dilating_far_out_and_the_phase_says_so():

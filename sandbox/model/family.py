@@ -121,4 +121,4 @@ def gathering_said(config: Config, vertices: np.ndarray, lit: tuple) -> str:
     faced = gather.all_faced(gather.mouth_directions(vertices, lit))
     return (f". The notches' mouths face {gather.said(faced)} of the goal: the robots they let out go "
             f"there, and none come back to {gather.said(sides)}. While the band dilates beyond {gather.BEYOND:g} m "
-            f"only its lights beyond those sides stay lit, so the robots gather there (gather = auto)")
+            f"only its lights beyond {gather.said(sides)} stay lit, so the robots gather there (gather = auto)")
