@@ -108,6 +108,12 @@ def starved_sides(directions: list[np.ndarray], bounds: list[tuple]) -> str:
     return "".join(side for side in OUTWARD if side not in faced)
 
 
+def sides_to_gather(vertices: np.ndarray, notches: tuple[shapely.Polygon, ...]) -> str:
+    """The sides a goal with these notches gathers its robots beside ('' for none)."""
+    found = mouths(vertices, notches)
+    return starved_sides([direction for direction, _ in found], [bounds for _, bounds in found])
+
+
 def beyond_sides(points: np.ndarray, bounds: tuple[float, float, float, float], sides: str) -> np.ndarray:
     """Which points lie beyond any of the given sides of a bounding box (``x0, y0, x1, y1``)."""
     x0, y0, x1, y1 = bounds

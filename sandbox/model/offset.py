@@ -99,8 +99,7 @@ def gather_sides(config: Config, vertices: np.ndarray | None, notches: tuple) ->
     notches or with ``gather = off``."""
     if not notches or config.gather != "auto":
         return ""
-    found = gathering.mouths(vertices, notches)
-    return gathering.starved_sides([direction for direction, _ in found], [bounds for _, bounds in found])
+    return gathering.sides_to_gather(vertices, notches)
 
 
 # -- the family ---------------------------------------------------------------------------------
@@ -186,7 +185,8 @@ class OffsetSizing:
     def lit(self, centres: np.ndarray, size: float, band: float, dilating: bool = False) -> np.ndarray:
         """The lights whose signed distance to the goal is within ``band`` of ``size`` (or of their least
         distance beside a thin part, when ``size`` is below it), and unless the band is dilating those of a
-        notch it has come within reach of (measured once per goal)."""
+        notch it has come within reach of (measured once per goal); dilating beyond
+        :data:`sandbox.model.gather.BEYOND`, only those beside the sides it gathers at."""
         known = self._distances.get("centres")
         if known is None or known[0] is not centres:
             known = self._distances["centres"] = (centres, *self._light_distances(centres))
