@@ -172,3 +172,14 @@ def test_gather_off_and_the_papers_cases_light_the_whole_band():
     sim = Simulation(Config(shape=str(NOTCHED / "shapes" / "letter-H.txt"), gather="off"))
     assert sim.controller.sizing.gather == "" and sim.phase_said == sim.phase
     assert Simulation(Config(shape="star")).controller.sizing.gathering_at(10.0, True) == ""
+
+
+def test_the_simulation_says_when_the_band_gathers():
+    """What the page's phase line and a recording's caption read (the runner's snapshot takes phase_said)."""
+    sim = Simulation(Config(shape=str(NOTCHED / "own" / "K.txt"), robots=20))
+    said = set()
+    while sim.steps_done < 20_000 and not any("gathering" in s for s in said):
+        sim.step(100)
+        said.add(sim.phase_said)
+    assert "dilating, gathering the robots beside the left" in said
+    assert sim.phase == DILATING
