@@ -46,28 +46,27 @@ def test_a_notchs_mouth_faces_where_it_opens():
     assert gather.all_faced(directions) == "BT"
 
 
-def test_a_mouth_faces_every_side_it_leans_towards_by_0_3():
-    assert gather.FACING == 0.3
-    assert gather.faced_sides(np.array([0.36, 0.93])) == "RT"  # the letter K's upper notch: up, 0.36 right
-    assert gather.faced_sides(np.array([0.36, -0.93])) == "RB"
-    assert gather.faced_sides(np.array([0.12, 0.99])) == "T"  # the W's: 0.12 is no lean
-    assert gather.faced_sides(np.array([0.99, 0.11])) == "R"  # the letter E's
-    assert gather.faced_sides(np.array([-0.88, -0.47])) == "LB"  # the letter Z's
-    assert gather.faced_sides(np.array([0.3, 0.954])) == "RT"  # exactly 0.3 leans
+def test_a_mouth_faces_the_side_it_points_to_most():
+    assert gather.faced_side(np.array([0.36, 0.93])) == "T"  # the letter K's upper notch: up, leaning right
+    assert gather.faced_side(np.array([-0.38, -0.92])) == "B"  # the N's lower one leans the other way
+    assert gather.faced_side(np.array([0.99, 0.11])) == "R"  # the letter E's
+    assert gather.faced_side(np.array([-0.88, -0.47])) == "L"  # the letter Z's
+    assert gather.all_faced([np.array([0.0, 1.0]), np.array([0.0, -1.0]), np.array([0.0, 1.0])]) == "BT"
 
 
-#: Notches' bounding boxes: two in line across x (one above the other), and two staggered.
+#: Pockets' bounding boxes: two in line across x (one above the other), and two staggered.
 ABOVE, BELOW, HIGH_LEFT, LOW_RIGHT = (2, 6, 4, 10), (2, 0, 4, 4), (0, 6, 3, 8), (3, 0, 6, 2)
 
 
 @pytest.mark.parametrize("faced, bounds, starved", [
     ([(0, 1), (0, -1)], [ABOVE, BELOW], "LR"),            # H, X: up and down; the left and right starve
-    ([(0, 1), (0, 1), (0, -1)], [(0, 6, 2.5, 10), (3.5, 6, 6, 10), (2, 0, 4, 4)], "LR"),  # W
-    ([(1, 0), (-1, 0)], [(2, 2, 6, 4), (0, 3, 4, 5)], "BT"),  # left and right, overlapping in y
+    ([(0.12, 0.99), (-0.12, 0.99), (0, -1)], [(0, 6, 6, 10)] * 2 + [(2, 0, 4, 4)], "LR"),  # W
+    ([(-0.38, 0.92), (0.38, -0.92)], [ABOVE, BELOW], "LR"),  # N: the leans cancel
+    ([(0.36, 0.93), (0.36, -0.93)], [ABOVE, BELOW], "L"),  # K: both lean 0.36 right; only the stem's side
+    ([(-0.88, -0.47), (0.88, 0.47)], [(0, 0, 6, 10), (2, 0, 8, 10)], ""),  # Z: in line, leaning 0.47 up and down
+    ([(-0.88, -0.4), (0.88, 0.4)], [(0, 0, 6, 10), (2, 0, 8, 10)], "BT"),  # ... were it to lean 0.4 only
     ([(1, 0), (-1, 0)], [(2, 6, 6, 8), (0, 0, 4, 2)], ""),  # S: left and right at different heights
     ([(0, 1), (0, -1)], [HIGH_LEFT, LOW_RIGHT], ""),       # up and down, side by side: not in line
-    ([(0.36, 0.93), (0.36, -0.93)], [ABOVE, BELOW], "L"),  # K: leaning right; only the stem's side starves
-    ([(-0.88, -0.47), (0.88, 0.47)], [ABOVE, BELOW], ""),  # Z: each mouth faces two sides, all four faced
     ([(0, 1), (0, -1), (1, 0)], [ABOVE, BELOW, (4, 4, 6, 6)], "L"),  # three sides faced: the fourth
     ([(0, 1), (0, -1), (1, 0), (-1, 0)], [ABOVE, BELOW, (4, 4, 6, 6), (0, 4, 2, 6)], ""),  # all faced
     ([(1, 0), (1, 0)], [ABOVE, BELOW], ""),                # E: one side only
@@ -76,7 +75,26 @@ ABOVE, BELOW, HIGH_LEFT, LOW_RIGHT = (2, 6, 4, 10), (2, 0, 4, 4), (0, 6, 3, 8), 
     ([], [], ""),
 ])
 def test_only_notches_in_line_facing_opposite_sides_starve_the_sides_between(faced, bounds, starved):
+    assert gather.LEAN == 0.45
     assert gather.starved_sides([np.array(d, float) for d in faced], bounds) == starved
+
+
+def test_the_mouths_lean_adds_each_ones_lean_towards_a_side():
+    ks = [np.array([0.36, 0.93]), np.array([0.36, -0.93])]
+    assert gather.lean(ks, "R") == pytest.approx(0.72) and gather.lean(ks, "L") == 0.0
+    ns = [np.array([-0.38, 0.92]), np.array([0.38, -0.92])]
+    assert gather.lean(ns, "L") == pytest.approx(0.38) and gather.lean(ns, "R") == pytest.approx(0.38)
+
+
+def test_the_ns_notches_lie_at_opposite_ends_but_their_pockets_side_by_side():
+    vertices = shape_vertices(str(NOTCHED / "own" / "N.txt")) * 1.0
+    found = gather.mouths(vertices, tuple(notches.notch_polygons(vertices)))
+    (up, above), (down, below) = sorted(found, key=lambda f: -f[0][1])
+    assert up[1] > 0.9 and down[1] < -0.9 and up[0] < -0.3 and down[0] > 0.3  # leaning left and right
+    # The pockets are the triangles beside the diagonal, each between x = 1.5 and 6.
+    assert above[0] == pytest.approx(1.5) and above[2] == pytest.approx(6.0)
+    assert below[0] == pytest.approx(1.5) and below[2] == pytest.approx(6.0)
+    assert gather.in_line(above, below, "T")
 
 
 def test_notches_are_in_line_when_they_overlap_across_their_axis():
@@ -116,6 +134,7 @@ def test_the_dilating_band_beyond_2_5_m_lights_only_the_gathered_sides():
     (NOTCHED / "shapes" / "letter-H.txt", "LR"), (NOTCHED / "own" / "K.txt", "L"), (NOTCHED / "own" / "X.txt", "LR"),
     (NOTCHED / "shapes" / "W.txt", "LR"), (ROOT / "static" / "shapes" / "templates" / "shapes" / "letter-S.txt", ""),
     (ROOT / "static" / "shapes" / "templates" / "shapes" / "letter-Z.txt", ""),
+    (NOTCHED / "own" / "N.txt", "LR"), (NOTCHED / "own" / "M.txt", "LR"), (NOTCHED / "own" / "A.txt", ""),
     (NOTCHED / "shapes" / "letter-E.txt", ""), (NOTCHED / "shapes" / "comb.txt", ""), (NOTCHED / "own" / "Y.txt", ""),
     (NOTCHED / "shapes" / "letter-F.txt", ""),
 ])

@@ -293,7 +293,7 @@ class Config:
         group="strategies", choices=("lit", "plain"), rebuild=False)
     gather: str = _param(
         "auto", "the offset outline on a goal with lit notches in line whose mouths face opposite sides (an H, a K, "
-        "an X, a W): 'auto', while the band dilates beyond 2.5 m of the goal only its lights beyond the "
+        "an N, an X, a W): 'auto', while the band dilates beyond 2.5 m of the goal only its lights beyond the "
         "sides no mouth faces stay lit, so the robots the notches let out come back to those sides (issue 42); "
         "'off', the whole band", group="strategies", choices=("auto", "off"), rebuild=False)
     no_corners_count: str = _param(

@@ -15,17 +15,19 @@ on the dark part drive to the nearest lit part and ride it back in. It costs
 no time (the band's sizes are the paper's schedule's), and the page shows
 exactly the lights that are on.
 
-Only notches in line gather: two that open towards opposite sides and
-overlap across that axis (the H's, the K's and the X's; the W's lower one
-overlaps each of its upper two). The letter S's two bays open left and
+A mouth *faces* the side of the goal's bounding box its direction points to
+most, the direction being from the notch's centroid to its mouth's (the
+notch's edge that is not the goal's). Only notches in line gather: two
+that face opposite sides and whose pockets (the pieces of the goal's convex
+hull outside it that hold them) overlap across that axis, as the H's, the
+K's, the X's, the N's, the M's and the W's do. The letter S's two bays open left and
 right at different heights: gathering beside its top and bottom cost it
-0.011 +- 0.006 (seeds 0-3, paired), so staggered notches gather nowhere.
-
-A mouth *faces* each side of the goal's bounding box its direction leans
-towards by at least :data:`FACING`, the direction being from the notch's
-centroid to its mouth's (the notch's edge that is not the goal's). Mouths
-facing one side only (the E, the comb, the Y) leave three sides unfaced:
-gathering there helped none of those measured, so they gather nowhere.
+0.011 +- 0.006 (seeds 0-3, paired), so staggered pockets gather nowhere.
+Of the unfaced sides, one the mouths lean towards (:data:`LEAN`) is fed as
+well: the K's lean to its right, so it gathers beside its stem alone, and
+the Z's lean up and down, so it gathers nowhere. Mouths facing one side only (the E, the comb, the Y)
+leave three sides unfaced: gathering there helped none of those measured,
+so they gather nowhere.
 """
 
 from __future__ import annotations
@@ -37,11 +39,15 @@ import shapely
 OUTWARD = {"L": (-1.0, 0.0), "R": (1.0, 0.0), "B": (0.0, -1.0), "T": (0.0, 1.0)}
 #: Each side's opposite.
 OPPOSITE = {"L": "R", "R": "L", "B": "T", "T": "B"}
-#: A mouth faces each side its direction leans towards by at least this (its component along the side's
-#: outward direction; 0.3 is within 72.5 degrees). The letter K's notches open up and down, leaning 0.36
-#: to the right, towards the open V between its arms: the robots they let out go there too, and only the
-#: stem's side starves. The W's lean 0.12 (drawn upright, they face the top alone).
-FACING = 0.3
+#: An unfaced side is fed, not starved, when the mouths' leans towards it (each direction's component
+#: along its outward direction, where positive) add up to at least this. The letter K's two notches open
+#: up and down, each leaning 0.36 to the right, towards the open V between its arms (0.72 in all): the
+#: robots they let out reach its right side too, and only the stem's side starves. The N's lean 0.38 one
+#: way and 0.38 the other: gathered beside its left and right it builds 0.788 against 0.746. The Z's lean
+#: 0.47 up and 0.47 down: gathered beside its top and bottom it lost 0.015 (0.024 over the last 20,000
+#: steps). So the value lies between 0.38 and 0.47, measured on those two; a goal whose lean is near it
+#: could go either way.
+LEAN = 0.45
 #: Said in words.
 SIDE_NAMES = {"L": "left", "R": "right", "B": "bottom", "T": "top"}
 #: While dilating beyond this distance (m) from the goal the band lights only the starved sides. It starts
@@ -59,11 +65,15 @@ def mouth_directions(vertices: np.ndarray, notches: tuple[shapely.Polygon, ...])
 
 def mouths(vertices: np.ndarray, notches: tuple[shapely.Polygon, ...]) -> list[tuple[np.ndarray, tuple]]:
     """Each notch with a mouth: its mouth direction, from its centroid to its mouth's (the notch's edge that
-    is not the goal's), and its bounding box."""
+    is not the goal's), and the bounding box of its pocket, the piece of the goal's convex hull outside the
+    goal that holds it (a notch is only a pocket's narrow end: the letter N's lie at opposite ends of its
+    stems, while its pockets, the triangles beside its diagonal, lie side by side)."""
     goal = shapely.Polygon(vertices)
     if not goal.is_valid:
         goal = shapely.make_valid(goal).buffer(0)
-    directions = []
+    outside = goal.convex_hull.difference(goal)
+    pockets = [p for p in getattr(outside, "geoms", [outside]) if isinstance(p, shapely.Polygon) and p.area > 0]
+    found = []
     for notch in notches:
         mouth = notch.boundary.difference(goal.buffer(1e-3))
         if mouth.is_empty:
@@ -71,41 +81,47 @@ def mouths(vertices: np.ndarray, notches: tuple[shapely.Polygon, ...]) -> list[t
         towards = np.array(mouth.centroid.coords[0]) - np.array(notch.centroid.coords[0])
         length = float(np.hypot(*towards))
         if length > 1e-9:
-            directions.append((towards / length, notch.bounds))
-    return directions
+            pocket = max(pockets, key=lambda p: p.intersection(notch).area, default=notch)
+            found.append((towards / length, pocket.bounds))
+    return found
 
 
-def faced_sides(direction: np.ndarray) -> str:
-    """The bounding box's sides a mouth direction leans towards by at least :data:`FACING`, in ``LRBT``
-    order."""
-    return "".join(side for side in OUTWARD if float(np.dot(OUTWARD[side], direction)) >= FACING)
+def faced_side(direction: np.ndarray) -> str:
+    """The bounding box's side a mouth direction points to most."""
+    return max(OUTWARD, key=lambda side: float(np.dot(OUTWARD[side], direction)))
 
 
 def all_faced(directions: list[np.ndarray]) -> str:
     """The sides any of the mouths faces, in ``LRBT`` order."""
-    faced = set("".join(faced_sides(d) for d in directions))
+    faced = {faced_side(d) for d in directions}
     return "".join(side for side in OUTWARD if side in faced)
 
 
 def in_line(first: tuple, second: tuple, side: str) -> bool:
-    """Whether two notches (their bounding boxes, ``x0, y0, x1, y1``) whose mouths face ``side`` and its
+    """Whether two pockets (their bounding boxes, ``x0, y0, x1, y1``) whose mouths face ``side`` and its
     opposite overlap across that axis: side by side along x for the top and bottom, along y for the left and
     right."""
     low, high = (0, 2) if side in "BT" else (1, 3)
     return min(first[high], second[high]) > max(first[low], second[low])
 
 
+def lean(directions: list[np.ndarray], side: str) -> float:
+    """How much the mouths lean towards a side: their directions' components along its outward direction,
+    where positive, added up."""
+    return float(sum(max(float(np.dot(OUTWARD[side], d)), 0.0) for d in directions))
+
+
 def starved_sides(directions: list[np.ndarray], bounds: list[tuple]) -> str:
-    """The sides to gather beside, in ``LRBT`` order: those no mouth faces, when two notches in line
-    (:func:`in_line`) open towards opposite sides; '' otherwise. ``bounds`` are the notches' bounding
-    boxes, one per direction."""
-    sides = [faced_sides(d) for d in directions]
-    opposed = any(side in sides[i] and OPPOSITE[side] in sides[j] and in_line(bounds[i], bounds[j], side)
-                  for i in range(len(sides)) for j in range(len(sides)) if i != j for side in OUTWARD)
+    """The sides to gather beside, in ``LRBT`` order: when two notches in line (:func:`in_line`, ``bounds``
+    their pockets' bounding boxes, one per direction) face opposite sides, the sides no mouth faces, less
+    those the mouths lean towards (:data:`LEAN`); '' otherwise."""
+    sides = [faced_side(d) for d in directions]
+    opposed = any(sides[j] == OPPOSITE[sides[i]] and in_line(bounds[i], bounds[j], sides[i])
+                  for i in range(len(sides)) for j in range(len(sides)))
     if not opposed:
         return ""
     faced = all_faced(directions)
-    return "".join(side for side in OUTWARD if side not in faced)
+    return "".join(side for side in OUTWARD if side not in faced and lean(directions, side) < LEAN)
 
 
 def sides_to_gather(vertices: np.ndarray, notches: tuple[shapely.Polygon, ...]) -> str:
