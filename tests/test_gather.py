@@ -174,7 +174,7 @@ def test_the_controller_gathers_while_dilating_far_out_and_the_phase_says_so():
                 turning += 1
             else:
                 assert controller.phase == DILATING and controller.scale > gather.BEYOND
-            assert controller.phase_said == f"{controller.phase}, gathering the robots beside the left and right"
+            assert controller.phase_said == f"{controller.phase}, gathering beside the left and right"
             assert lit.any() and ((centres[lit, 0] < x0) | (centres[lit, 0] > x1)).all()
         elif controller.phase == CONTRACTING and controller.scale > gather.BEYOND:
             seen.add("contracting")
@@ -200,5 +200,5 @@ def test_the_simulation_says_when_the_band_gathers():
     while sim.steps_done < 20_000 and not any("gathering" in s for s in said):
         sim.step(100)
         said.add(sim.phase_said)
-    assert "dilating, gathering the robots beside the left" in said
+    assert "dilating, gathering beside the left" in said
     assert sim.phase == DILATING

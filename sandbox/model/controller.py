@@ -289,10 +289,11 @@ class Controller(Cycle):
 
     @property
     def phase_said(self) -> str:
-        """The phase in words, with the sides the band gathers the robots beside when it does."""
+        """The phase in words, with the sides the band gathers the robots beside when it does (short: a
+        phone's caption shows it on one line)."""
         if not self.gathering:
             return self.phase
-        return f"{self.phase}, gathering the robots beside {gather.said(self.gathering)}"
+        return f"{self.phase}, gathering beside {gather.said(self.gathering)}"
 
     def _darken_corners(self, on: np.ndarray) -> np.ndarray:
         return band.darken_corners(on, self._centres, self.corners, self.strategies["no_corners"], self.config)
