@@ -117,6 +117,7 @@ def test_caption_names_the_case_and_the_step(snapshot):
     assert case_name("star", {"switch": 0.25}) == "star-switch (star + switch 0.25)"
     assert case_name("circle", {}) == "circle"
     assert case_name("heart", {"flare": 1.5}) == "heart + flare 1.5"
+    assert case_name("static/shapes/notched/own/K.txt", {}) == "K.txt"  # fits a phone's one-line caption
     text = caption(snapshot)
     assert text.startswith("circle | step ") and "cycle 0" in text and "% in goal" in text
     # Another program lights the floor: the caption says so instead of the paper's phase.

@@ -83,12 +83,15 @@ class Snapshot:
 
 def case_name(shape: str, strategies: dict) -> str:
     """The goal and its strategies in words: the paper's case name when they
-    are one of its seven cases, else e.g. ``heart + flare 1.5``."""
+    are one of its seven cases, else e.g. ``heart + flare 1.5`` (a shape file by its name alone:
+    ``K.txt``)."""
     from sandbox.model.config import STRATEGY_NAMES
 
     active = {name: float(strategies.get(name, 0.0)) for name in STRATEGY_NAMES if strategies.get(name, 0.0) > 0}
     words = {"flare": "flare", "switch": "switch", "no_corners": "no corners", "chase": "chase"}
-    described = " + ".join([shape, *(f"{words[k]} {v:g}" for k, v in active.items())])
+    # A shape file by its name alone: its folders pushed a phone's one-line caption off the screen.
+    shown = shape.replace("\\", "/").rsplit("/", 1)[-1]
+    described = " + ".join([shown, *(f"{words[k]} {v:g}" for k, v in active.items())])
     name = running_case(shape, strategies)
     if name is None:
         return described
