@@ -119,9 +119,16 @@ def caption(snap: Snapshot) -> str:
             f" | {100 * snap.sample.fraction_in_goal:.0f} % in goal")
 
 
+def _phase_in_caption(phase: str) -> str:
+    """The phase in one word: a dilating band that gathers the robots beside some sides ("dilating,
+    gathering beside the left and right", as the panel says) is "gathering", so a phone's one-line
+    caption keeps its step and share in view."""
+    return "gathering" if ", gathering beside " in phase else phase
+
+
 def _lit_by(snap: Snapshot) -> str:
     if snap.program == PAPER_PROGRAM:
-        return f"{snap.phase}, cycle {snap.cycle}"
+        return f"{_phase_in_caption(snap.phase)}, cycle {snap.cycle}"
     if snap.program == LAMP_PROGRAM:
         return "lit by your lamp"
     return f"lit by {snap.program.rsplit(':', 1)[-1]}"  # a light program's class
