@@ -67,7 +67,7 @@ def mouths(vertices: np.ndarray, notches: tuple[shapely.Polygon, ...]) -> list[t
     """Each notch with a mouth: its mouth direction, from its centroid to its mouth's (the notch's edge that
     is not the goal's), and the bounding box of its pocket, the piece of the goal's convex hull outside the
     goal that holds it (a notch is only a pocket's narrow end: the letter N's lie at opposite ends of its
-    stems, while its pockets, the triangles beside its diagonal, lie side by side)."""
+    stems, while its pockets, the triangles beside its diagonal, span the same width)."""
     goal = shapely.Polygon(vertices)
     if not goal.is_valid:
         goal = shapely.make_valid(goal).buffer(0)
