@@ -183,7 +183,11 @@ def parse_polygon(text: str, source: str = "<input>", fmt: str | None = None) ->
         return validate_polygon(points, source, line_numbers=line_numbers)
     except ShapeError:
         raise
-    except (RecursionError, MemoryError, ArithmeticError, ValueError, TypeError) as error:
+    except MemoryError:
+        # A file of at most 1 MB runs out of memory only under a limit: the page's reader, whose child says
+        # how much it was allowed (sandbox/shapes/isolated.py); read here it came out as a parse error.
+        raise
+    except (RecursionError, ArithmeticError, ValueError, TypeError) as error:
         # Whatever a parser or a check gives up with (JSON nested 100,000 deep, ...) is the file's fault.
         raise fail(source, f"could not be read as {fmt.upper()} ({type(error).__name__}: "
                    f"{str(error)[:60] or 'no details'})") from None
