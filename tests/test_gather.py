@@ -202,3 +202,4 @@ def test_the_simulation_says_when_the_band_gathers():
         said.add(sim.phase_said)
     assert "dilating, gathering beside the left" in said
     assert sim.phase == DILATING
+    assert sim.gathering == "L"  # what the runner's snapshot carries for the caption

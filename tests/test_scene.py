@@ -128,7 +128,7 @@ def test_caption_names_the_case_and_the_step(snapshot):
     assert "| lit by your lamp |" in caption(replace(snapshot, program=LAMP_PROGRAM))
     assert "| lit by ShrinkingRing |" in caption(replace(snapshot, program="examples/ring.py:ShrinkingRing"))
     # A band that gathers the robots: one word on the floor, the sides in the panel's phase line.
-    gathering = replace(snapshot, phase="dilating, gathering beside the left and right")
+    gathering = replace(snapshot, phase="dilating, gathering beside the left and right", gathering="LR")
     assert "| gathering, cycle 0 |" in caption(gathering)
 
 

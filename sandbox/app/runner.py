@@ -642,6 +642,7 @@ class Runner(SimulationRunner):
             world_key=self._world_key,
             family=sim.goal.family,
             family_reason=sim.goal.family_reason,
+            gathering=sim.gathering,
         )
         with self._new_frame:
             self._latest = snap

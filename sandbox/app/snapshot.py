@@ -75,6 +75,8 @@ class Snapshot:
     #: The outline family the band follows ('scaled' or 'offset') and why.
     family: str = "scaled"
     family_reason: str = ""
+    #: The goal's sides beside which alone the band is lit now ('' the whole band; sandbox/model/gather.py).
+    gathering: str = ""
 
     def robot(self, index: int | None) -> RobotView | None:
         """The followed robot ``index``, or None (not followed, or not in this world)."""
@@ -119,16 +121,11 @@ def caption(snap: Snapshot) -> str:
             f" | {100 * snap.sample.fraction_in_goal:.0f} % in goal")
 
 
-def _phase_in_caption(phase: str) -> str:
-    """The phase in one word: a dilating band that gathers the robots beside some sides ("dilating,
-    gathering beside the left and right", as the panel says) is "gathering", so a phone's one-line
-    caption keeps its step and share in view."""
-    return "gathering" if ", gathering beside " in phase else phase
-
-
 def _lit_by(snap: Snapshot) -> str:
     if snap.program == PAPER_PROGRAM:
-        return f"{_phase_in_caption(snap.phase)}, cycle {snap.cycle}"
+        # A band that gathers says so in one word: the panel's phase line names the sides, and the caption
+        # keeps to one line on a phone.
+        return f"{'gathering' if snap.gathering else snap.phase}, cycle {snap.cycle}"
     if snap.program == LAMP_PROGRAM:
         return "lit by your lamp"
     return f"lit by {snap.program.rsplit(':', 1)[-1]}"  # a light program's class

@@ -376,6 +376,11 @@ class Simulation:
         return getattr(self.controller, "phase_said", self.controller.phase)
 
     @property
+    def gathering(self) -> str:
+        """The goal's sides beside which alone the band is lit now ('' the whole band, or a light program)."""
+        return getattr(self.controller, "gathering", "")
+
+    @property
     def cycle(self) -> int:
         return self.controller.cycle
 
