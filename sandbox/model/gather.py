@@ -130,11 +130,17 @@ def sides_to_gather(vertices: np.ndarray, notches: tuple[shapely.Polygon, ...]) 
     return starved_sides([direction for direction, _ in found], [bounds for _, bounds in found])
 
 
-def beyond_sides(points: np.ndarray, bounds: tuple[float, float, float, float], sides: str) -> np.ndarray:
-    """Which points lie beyond any of the given sides of a bounding box (``x0, y0, x1, y1``)."""
+def beyond(points: np.ndarray, bounds: tuple[float, float, float, float]) -> dict[str, np.ndarray]:
+    """Which points lie beyond each side (``LRBT``) of a bounding box (``x0, y0, x1, y1``; a corner's points
+    are beyond two)."""
     x0, y0, x1, y1 = bounds
     x, y = points[:, 0], points[:, 1]
-    past = {"L": x < x0, "R": x > x1, "B": y < y0, "T": y > y1}
+    return {"L": x < x0, "R": x > x1, "B": y < y0, "T": y > y1}
+
+
+def beyond_sides(points: np.ndarray, bounds: tuple[float, float, float, float], sides: str) -> np.ndarray:
+    """Which points lie beyond any of the given sides of a bounding box (``x0, y0, x1, y1``)."""
+    past = beyond(points, bounds)
     out = np.zeros(len(points), bool)
     for side in sides:
         out |= past[side]

@@ -43,24 +43,17 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 import shapely
 
-from sandbox.model import notches
+from sandbox.model import gather, notches
 from sandbox.model.config import Config
 from sandbox.model.lights import light_centres
 from sandbox.model.simulation import Simulation
 from sandbox.shapes import ShapeError, shape_vertices
 
 
-def beyond(points: np.ndarray, bounds: tuple[float, float, float, float]) -> dict[str, np.ndarray]:
-    """Which points lie beyond each side (L, R, B, T) of a bounding box (a corner's are beyond two)."""
-    x0, y0, x1, y1 = bounds
-    x, y = points[:, 0], points[:, 1]
-    return {"L": x < x0, "R": x > x1, "B": y < y0, "T": y > y1}
-
-
 def sides(robots: np.ndarray, bounds: tuple[float, float, float, float]) -> dict[str, int]:
     """How many robots lie beside each side of the goal's bounding box (left and right within its
     height, below and above it across the whole width), or inside it."""
-    out = beyond(robots, bounds)
+    out = gather.beyond(robots, bounds)
     level = ~out["B"] & ~out["T"]
     return {"L": int((out["L"] & level).sum()), "R": int((out["R"] & level).sum()),
             "B": int(out["B"].sum()), "T": int(out["T"].sum()),
@@ -78,19 +71,9 @@ MEAN_AT_LEAST = 0.3
 def mouths(shape: str) -> None:
     """Each notch's mouth direction, their mean, and the side the first rule gathers beside."""
     sim = Simulation(Config(shape=shape, gather=GATHER))
-    goal = shapely.Polygon(sim.goal.vertices)
-    directions = []
-    for notch in notches.notch_polygons(sim.goal.vertices):
-        mouth = notch.boundary.difference(goal.buffer(1e-3))  # the notch's edge that is not the goal's
-        if mouth.is_empty:
-            continue
-        towards = np.array(mouth.centroid.coords[0]) - np.array(notch.centroid.coords[0])
-        directions.append(towards / np.linalg.norm(towards))
+    directions = gather.mouth_directions(sim.goal.vertices, tuple(notches.notch_polygons(sim.goal.vertices)))
     mean = np.mean(directions, axis=0) if directions else np.zeros(2)
-    side = "none"
-    if np.hypot(*mean) >= MEAN_AT_LEAST:
-        outward = {"L": (-1, 0), "R": (1, 0), "B": (0, -1), "T": (0, 1)}
-        side = max(outward, key=lambda name: -float(np.dot(outward[name], mean)))
+    side = gather.faced_side(-mean) if np.hypot(*mean) >= MEAN_AT_LEAST else "none"
     print(f"mouths {np.round(directions, 2).tolist()}, mean {np.round(mean, 2).tolist()} "
           f"({np.hypot(*mean):.2f} long): gather beside {side}")
 
@@ -131,10 +114,7 @@ def beside(sim: Simulation, chosen: str) -> np.ndarray:
     """Which lights lie beyond the goal's bounding box on the chosen sides (any of L, R, B, T), shaped as
     the controller's pattern."""
     centres = light_centres(sim.config).reshape(-1, 2)
-    out = beyond(centres, shapely.Polygon(sim.goal.vertices).bounds)
-    keep = np.zeros(len(centres), bool)
-    for side in chosen:
-        keep |= out[side]
+    keep = gather.beyond_sides(centres, shapely.Polygon(sim.goal.vertices).bounds, chosen)
     return keep.reshape(sim.controller.intensities.shape)
 
 
