@@ -10,6 +10,7 @@ from sandbox.app.compare import COMPARE_CASES, LEAD_FRAMES, SAME, Lockstep, part
 from sandbox.app.runner import Runner
 from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 from sandbox.model.config import CASES, Config, ConfigError
+from tests.shown import shown
 from tests.waiting import wait_until
 
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
@@ -220,8 +221,8 @@ def test_the_app_draws_both_worlds_and_charts_both(comparing_app):
     assert labels == ["step", "in goal: star (left)", "star-switch (right)", "change"]
     data = app.panel.metrics.chart_goal.data
     assert len(data) == 4 and np.isfinite(data[2]).sum() >= 2  # the right world's curve, at the same steps
-    assert "**Right** star-switch" in app.panel.compare.status.content
-    assert "**Right** (star-switch): **in goal**" in app.panel.metrics.text.content
+    assert "**Right** star-switch" in shown(app.panel.compare.status.content)
+    assert "**Right** (star-switch): **in goal**" in shown(app.panel.metrics.text.content)
     # The CSV holds both worlds' samples, each row led by its world.
     rows = app.panel.metrics.csv().splitlines()
     assert rows[0].startswith("world,step,") and rows[0].endswith(",time")

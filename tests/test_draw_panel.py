@@ -12,6 +12,7 @@ from sandbox.app.panel.draw import PICK_TEMPLATE, status_text
 from sandbox.app.draw_view import DIM_OPACITY, SELECTED_COLOUR  # noqa: I001 - after the panel, which imports it first
 from sandbox.model.geometry import signed_area
 from sandbox.shapes.templates import template_vertices
+from tests.shown import shown
 from tests.test_security import connected, make_app, own_page, uuid_of, wait_until
 from tests.viser_wire import RawClient
 
@@ -86,8 +87,8 @@ def test_a_crossing_is_red_named_and_blocks_close_and_use(draw):
     draw._change([(10, 10), (14, 14), (14, 10), (10, 14)])  # a bow tie: 1-2 crosses 3-4
     assert draw.view.crossing.visible and draw.close.disabled
     assert len(draw.view.crossing.points) == 2  # the two edges
-    assert "edges at vertices 1-2 and 3-4" in draw.status.content
-    assert "In red on the floor: edges 1-2 and 3-4" in draw.status.content
+    assert "edges at vertices 1-2 and 3-4" in shown(draw.status.content)
+    assert "In red on the floor: edges 1-2 and 3-4" in shown(draw.status.content)
     draw.vertex_drag(1, "end", (14, 10.5))  # drag 2 ...
     draw.vertex_drag(2, "end", (14, 14))  # ... and 3 back into a simple outline
     assert draw.points == [(10.0, 10.0), (14.0, 10.5), (14.0, 14.0), (10.0, 14.0)]
@@ -138,7 +139,7 @@ def test_a_page_picks_a_template_types_points_and_uses_them(app, draw, page):
     wait_until(lambda: draw.typed.value == "0 0\n6 0\n6", what="the typed text")
     page.click(uuid_of(draw.apply))
     wait_until(lambda: "Points not applied" in draw.status.content, what="the error line")
-    assert "pair 3: '6' is not two numbers" in draw.status.content and len(draw.points) == 5
+    assert "pair 3: '6' is not two numbers" in shown(draw.status.content) and len(draw.points) == 5
 
     page.set_value(uuid_of(draw.typed), "[[0, 0], [6, 0], [6, 6], [0, 6]]")
     wait_until(lambda: draw.typed.value.startswith("[["), what="the typed JSON")
@@ -180,8 +181,8 @@ def test_status_text_words():
     assert "place point 3" in status_text(2, True, "", None)
     text = status_text(4, False, "the outline crosses itself near (2, 2) (edges at vertices 1-2 and 3-4)", None,
                        red=["1-2", "3-4"])
-    assert text.startswith("**Close and use is off**: the outline crosses") and "edges 1-2 and 3-4;" in text
-    assert "edge 4-1;" in status_text(4, False, "touches", None, red=["4-1"])
+    assert text.startswith("**Close and use is off**: the outline crosses") and "edges 1-2 and 3-4;" in shown(text)
+    assert "edge 4-1;" in shown(status_text(4, False, "touches", None, red=["4-1"]))
 
 
 # ------------------------------------------------- insert, select, delete (issue 40, item 3)

@@ -123,7 +123,7 @@ class AdviceFolder:
         self._busy = False
         self.start.disabled, self.cancel.visible, self.bar.visible = False, False, False
         self.use_best.disabled = self.best_to_the_end.disabled = not self.results
-        self._show(self._text())
+        self._show()
 
     def _heard(self, done: int, total: int) -> None:
         self._progress = (done, total)
@@ -141,9 +141,10 @@ class AdviceFolder:
 
     # ------------------------------------------------------------ read-outs
     def update(self, snap: Snapshot) -> None:
-        self._show(self._text(snap))
+        self._show(snap)
 
-    def _show(self, text: str) -> None:
+    def _show(self, snap: Snapshot | None = None) -> None:
+        text = self._text(snap)
         if text != self._shown:
             self.status.content = self._shown = text
 

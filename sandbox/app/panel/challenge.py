@@ -22,6 +22,7 @@ import numpy as np
 import viser
 
 from sandbox.app.panel.common import notify_error
+from sandbox.app.panel.plain import plain
 from sandbox.app.snapshot import LAMP_PROGRAM, Snapshot
 from sandbox.model.challenge import ROUND_SEED, ROUND_STEPS, Gain, lamp_start, paper_gain
 from sandbox.processes import simulation_context
@@ -102,7 +103,7 @@ class ChallengeFolder:
         self._cancel_hint()
         with self._lock:
             r = self.round = Round(player, int(self.round_steps))
-        self.status.content = f"**{player}**: building the round's world..."
+        self.status.content = f"**{plain(player)}**: building the round's world..."
         self.hint.content = ""
         self.lockstep.set_playing(False)
 
@@ -160,14 +161,14 @@ class ChallengeFolder:
                 self.hint.content = ""
                 self._arm_hint(r)
             if snap.step < r.steps:
-                self.status.content = (f"**{r.player}**: step {snap.step:,} of {r.steps:,}, "
+                self.status.content = (f"**{plain(r.player)}**: step {snap.step:,} of {r.steps:,}, "
                                        f"{describe(Gain(r.started, now, len(snap.box_in_goal)))}")
                 return
             r.score, r.at_step = Gain(r.started, now, len(snap.box_in_goal)), int(snap.step)
         self._cancel_hint()
         self.hint.content = ""
         self.lockstep.set_playing(False)
-        self.status.content = (f"**{r.player}**: {describe(r.score)} after {r.at_step:,} steps. "
+        self.status.content = (f"**{plain(r.player)}**: {describe(r.score)} after {r.at_step:,} steps. "
                                "The paper's controller is playing the same world...")
         self.runner.world_spec(on_done=lambda spec: self._score_the_paper(r, spec),
                                on_error=lambda exc: self._show(r, problem=f"no reference: {exc}"))
@@ -179,7 +180,7 @@ class ChallengeFolder:
             self.round = None
         self._cancel_hint()
         self.hint.content = ""
-        self.status.content = f"**{r.player}**: round abandoned ({why})."
+        self.status.content = f"**{plain(r.player)}**: round abandoned ({plain(why)})."
 
     # ------------------------------------------------------------ the hint
     def _arm_hint(self, r: Round) -> None:
@@ -241,8 +242,8 @@ class ChallengeFolder:
             r.paper = paper
             ranked = sorted(self.best.items(), key=lambda item: -item[1])
         against = (f"the paper's controller: **{describe(r.paper)}** in the same world and steps"
-                   if r.paper is not None else problem)
+                   if r.paper is not None else plain(problem))
         verdict = "" if r.paper is None else (" You beat it!" if r.score.brought > r.paper.brought else "")
-        self.status.content = f"**{r.player}**: **{describe(r.score)}**; {against}.{verdict}"
+        self.status.content = f"**{plain(r.player)}**: **{describe(r.score)}**; {against}.{verdict}"
         self.scores.content = ("| player | best: boxes brought in, of those outside |\n|---|---|\n"
-                               + "".join(f"| {name} | {100 * share:.0f} % |\n" for name, share in ranked))
+                               + "".join(f"| {plain(name)} | {100 * share:.0f} % |\n" for name, share in ranked))

@@ -10,6 +10,7 @@ import viser
 
 from sandbox.app.compare import COMPARE_CASES, SAME, Comparison, partner_config, side_name
 from sandbox.app.panel.common import notify_error
+from sandbox.app.panel.plain import plain
 from sandbox.app.runner import wait_for
 from sandbox.app.scene import PHONE_ASPECT
 from sandbox.app.snapshot import Snapshot
@@ -135,9 +136,9 @@ class CompareFolder:
         other = partner.latest
         first, second = ("Top", "Bottom") if self.comparison.stacked else ("Left", "Right")
         self.status.content = (
-            f"**{first}** {side_name(snap)}: {100 * snap.sample.fraction_in_goal:.1f} % in the goal, step "
-            f"{snap.step:,}  \n**{second}** {side_name(other)}: {100 * other.sample.fraction_in_goal:.1f} % in the "
-            f"goal, step {other.step:,}")
+            f"**{first}** {plain(side_name(snap))}: {100 * snap.sample.fraction_in_goal:.1f} % in the goal, "
+            f"step {snap.step:,}  \n**{second}** {plain(side_name(other))}: "
+            f"{100 * other.sample.fraction_in_goal:.1f} % in the goal, step {other.step:,}")
 
 
 def tall(client: Any) -> bool:

@@ -25,6 +25,7 @@ import viser
 
 from sandbox.app.draw_view import DrawView
 from sandbox.app.panel.common import notify_error
+from sandbox.app.panel.plain import plain
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.preview import GoalPreview, preview_goal
 from sandbox.shapes import ShapeError, validate_polygon
@@ -83,9 +84,9 @@ def status_text(n: int, drawing: bool, problem: str, preview: GoalPreview | None
     elif n < 3:
         text = f"**Close and use needs at least 3 points**: {n} so far. {place}"
     elif problem:
-        text = f"**Close and use is off**: {problem}."
+        text = f"**Close and use is off**: {plain(problem)}."
         if red:
-            names = ", ".join(red[:-1]) + " and " + red[-1] if len(red) > 1 else red[0]
+            names = plain(", ".join(red[:-1]) + " and " + red[-1] if len(red) > 1 else red[0])
             text += f" In red on the floor: edge{'s' if len(red) > 1 else ''} {names}; drag a numbered point " \
                     "to untangle them."
     else:
@@ -93,12 +94,12 @@ def status_text(n: int, drawing: bool, problem: str, preview: GoalPreview | None
         if preview is not None:
             text += (f"Dashed on the floor: the goal at its final size ({preview.area:.0f} m², centred) in blue, "
                      "the smallest and largest outlines of its light band in orange. ")
-            text += "".join(f"Note: {note}. " for note in preview.notes)
+            text += "".join(f"Note: {plain(note)}. " for note in preview.notes)
         text += "**Close and use** builds it; **Use and run to the end** builds it and gives the answer."
     if selected is not None and 0 <= selected < n:
         text += f"\n\n**Point {selected + 1} selected**: drag it, or **Delete point** (the Delete key) removes it."
     if typed_error:
-        text += f"\n\n**Points not applied**: {typed_error}"
+        text += f"\n\n**Points not applied**: {plain(typed_error)}"
     return text
 
 

@@ -13,6 +13,7 @@ import viser.uplot
 
 from sandbox.app import palette as pal
 from sandbox.app.compare import side_name
+from sandbox.app.panel.plain import plain
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.metrics import SampleWriter
 
@@ -199,7 +200,7 @@ class MetricsFolder:
     def _compared_text(other: Snapshot) -> str:
         """Compare mode: the second world's metrics under the first's (the charts' yellow curves)."""
         s = other.sample
-        return (f"  \n**Right** ({side_name(other)}): **in goal** {100 * s.fraction_in_goal:.1f} % &nbsp; "
+        return (f"  \n**Right** ({plain(side_name(other))}): **in goal** {100 * s.fraction_in_goal:.1f} % &nbsp; "
                 f"**stray distance** {s.mean_outside_distance:.2f} m")
 
     @staticmethod

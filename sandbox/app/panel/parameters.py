@@ -17,6 +17,7 @@ import numpy as np
 import viser
 
 from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.panel.plain import plain
 from sandbox.app.panel.tips import tip
 from sandbox.app.snapshot import Snapshot
 from sandbox.model.config import STRATEGY_NAMES, Config, params
@@ -117,7 +118,7 @@ class ParametersFolder:
             if name == "profile":
                 self._show_profile_values(settings)
             if self.waiting:
-                self.pending.content = ("**Applies on reset:** " + ", ".join(self.waiting) +
+                self.pending.content = ("**Applies on reset:** " + plain(", ".join(self.waiting)) +
                                         " (press *Reset* in Run)")
             if name in self.waiting:
                 notify(client, "Applies on reset", f"{name} = {value} takes effect when you press Reset.", "yellow")

@@ -35,6 +35,7 @@ from typing import Any, Callable
 
 import viser
 
+from sandbox.app.panel.plain import plain
 from sandbox.app.snapshot import Snapshot, case_name
 
 #: How long the Start over offer stays (s): a loaded classroom laptop may take half a minute to show it.
@@ -49,11 +50,12 @@ def title_lines(snap: Snapshot, compared: Snapshot | None, controls: bool) -> tu
     """The title card's three lines: what the class is looking at, what to watch for, what to do."""
     cfg = snap.world_config
     if compared is None:
-        looking = f"{cfg.robots} robots that only drive towards light push {cfg.boxes} boxes into a {snap.shape_name}."
+        looking = (f"{cfg.robots} robots that only drive towards light push {cfg.boxes} boxes into a "
+                   f"{plain(snap.shape_name)}.")
         watch = "Watch the yellow band shrink: the robots ride it and push the boxes into the goal (pink)."
     else:
-        looking = (f"The same start twice: {case_name(snap.shape_name, snap.strategies)} and "
-                   f"{case_name(compared.shape_name, compared.strategies)}.")
+        looking = (f"The same start twice: {plain(case_name(snap.shape_name, snap.strategies))} and "
+                   f"{plain(case_name(compared.shape_name, compared.strategies))}.")
         watch = "Watch which one gets more boxes into its goal: the large share under each."
     act = "**Press Play (space) to start.**" if controls else "The presenter starts it with Play."
     return looking, watch, act

@@ -20,6 +20,7 @@ from typing import Any
 import viser
 
 from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.panel.plain import plain
 from sandbox.app.snapshot import Snapshot
 
 
@@ -106,7 +107,7 @@ class ProgramFolder:
 
     @staticmethod
     def _status(snap: Snapshot) -> str:
-        return f"**Lights:** {snap.program}"
+        return f"**Lights:** {plain(snap.program)}"
 
 
 def _example_spec() -> str:

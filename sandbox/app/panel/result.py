@@ -18,6 +18,7 @@ import viser
 
 from sandbox.app.commands import Arrival
 from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.panel.plain import plain
 from sandbox.app.snapshot import Snapshot, case_name
 from sandbox.model.design import file_bytes
 from sandbox.model.explain import PERFECT_PACKING, place_strays, strays_in_words
@@ -40,7 +41,7 @@ def explanation(snap: Snapshot) -> str:
     strays = place_strays(snap.box_positions, in_goal, snap.goal_outline, cfg.centre, cfg.construction_size,
                           2 * cfg.box_apothem)
     share = 100 * snap.sample.fraction_in_goal
-    ran = case_name(snap.shape_name, snap.strategies)
+    ran = plain(case_name(snap.shape_name, snap.strategies))
     outline = "the goal scaled" if snap.family == "scaled" else "the goal's edge at a distance (offset)"
     return (f"**{share:.1f} %** of the boxes are in the goal ({int(in_goal.sum())} of {len(in_goal)}) at step "
             f"{snap.step:,}. {strays_in_words(strays, 2 * cfg.box_apothem)} Ringed in orange on the floor.\n\n"

@@ -11,6 +11,7 @@ import viser
 from sandbox.app.commands import Arrival
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.framing import VIEWS, Framing
+from sandbox.app.panel.plain import plain
 from sandbox.app.runner import FASTEST
 from sandbox.app.snapshot import Snapshot
 
@@ -200,7 +201,8 @@ class RunFolder:
         cfg, runner = snap.world_config, self.runner
         return (f"**Step** {snap.step:,} &nbsp; **time** {snap.time:,.1f} s  \n"
                 f"**Phase** {snap.phase} &nbsp; **cycle** {snap.cycle}  \n"
-                f"**Seed** {snap.seed} &nbsp; {cfg.robots} robots, {cfg.boxes} boxes, goal *{snap.shape_name}*  \n"
+                f"**Seed** {snap.seed} &nbsp; {cfg.robots} robots, {cfg.boxes} boxes, "
+                f"goal *{plain(snap.shape_name)}*  \n"
                 + (f"**Speed** {runner.steps_per_second():,.0f} steps/s "
                    f"({runner.steps_per_second() * cfg.dt:,.1f}x real time), "
                    f"{runner.frames_per_second():,.0f} frames/s sent" if snap.playing else "**Paused**"))

@@ -14,6 +14,7 @@ from typing import Any, Callable
 import viser
 
 from sandbox.app.panel.common import notify, notify_error
+from sandbox.app.panel.plain import plain
 from sandbox.app.snapshot import Snapshot, running_case
 from sandbox.model.config import CASES, STRATEGIES, param
 from sandbox.model.notes import strategy_effect_note
@@ -90,7 +91,7 @@ class StrategiesFolder:
     def _outline_text(snap: Snapshot) -> str:
         reason = snap.family_reason.split(": ", 1)[-1] if snap.family_reason else ""
         follows = "the goal grown by a distance" if snap.family == "offset" else "the goal scaled"
-        return f"**Band follows:** {follows} ({snap.family}){' - ' + reason if reason else ''}"
+        return f"**Band follows:** {follows} ({snap.family}){' - ' + plain(reason) if reason else ''}"
 
     def use(self, outline: str, strategies: dict[str, float], client: Any) -> None:
         """An outline and the strategies' amounts (those not given off), shown and applied."""
