@@ -29,9 +29,14 @@ import string
 #: stands for the character itself. Escaping them all leaves no markdown or HTML construct a name
 #: could start: no tag or comment (``<``), entity (``&``), link or image (``[``, ``!``, ``(``),
 #: code (backtick), emphasis (``*``, ``_``, ``~``), heading, list, quote or rule at a line's start
-#: (``#``, ``-``, ``+``, ``.``, ``>``), table cell (``|``), and no GitHub autolink
-#: (``https://``, ``www.``, ``a@b.c``: their ``:``, ``.`` and ``@`` are escaped).
+#: (``#``, ``-``, ``+``, ``.``, ``>``), table cell (``|``).
 _PUNCTUATION = re.compile("([" + re.escape(string.punctuation) + "])")
+#: GitHub's autolinks are found in the text once escapes are undone (remark-gfm links
+#: ``https://evil.example`` written ``https\:\/\/evil\.example``): an invisible word joiner after
+#: each ``:`` and ``@`` and between ``www`` and its ``.`` breaks the patterns it looks for
+#: (``https?://``, ``www.``, ``name@domain``). The page shows the same characters.
+_AUTOLINK = re.compile(r"([:@]|(?i:www)(?=\.))")
+WORD_JOINER = "\u2060"
 #: Line breaks, tabs and other control characters (C0, DEL, C1, the Unicode line and paragraph
 #: separators): a name is one line. A new line in it could start a block of its own (a table row
 #: ends at one); runs of spaces become one (markdown shows one, and four start code).
@@ -41,6 +46,8 @@ _BREAKS = re.compile(r"[\s\x00-\x1f\x7f-\x9f\u2028\u2029]+")
 def plain(text: object) -> str:
     """``text`` (a name, a file's words, an error message) to write into markdown, so that the page
     shows exactly its characters: every ASCII punctuation character backslash-escaped, line breaks
-    and runs of white space as one space. Use it on each piece from outside, never on markdown we
-    wrote (its ``**`` would show), and never inside a code span (escapes are literal there)."""
-    return _PUNCTUATION.sub(r"\\\1", _BREAKS.sub(" ", str(text)))
+    and runs of white space as one space, a word joiner where an autolink would start. Use it on
+    each piece from outside, never on markdown we wrote (its ``**`` would show), and never inside a
+    code span (escapes are literal there)."""
+    one_line = _BREAKS.sub(" ", str(text))
+    return _PUNCTUATION.sub(r"\\\1", _AUTOLINK.sub(r"\1" + WORD_JOINER, one_line))
