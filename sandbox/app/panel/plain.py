@@ -17,7 +17,8 @@ How viser 1.1.1's page shows what the server sends it (read from its client, ``v
   for text).
 
 ``tests/test_plain_text.py`` checks that every markdown writer under ``sandbox/app`` puts text from
-outside through :func:`plain`, and, in a real browser, that hostile names arrive as text.
+outside through :func:`plain`; ``tests/test_browser_names.py``, that hostile names arrive as text in
+a real browser.
 """
 
 from __future__ import annotations
