@@ -24,8 +24,9 @@ The rules follow Jupyter's server:
   ``Authorization: token ...`` instead. A request is authorised when any token
   it presents (each header, cookie and query parameter) is the server's; one
   that presents a malformed token (not :func:`well_formed_token`, e.g.
-  non-ASCII or empty), among any number of good ones, is refused with 403. Without the token a page may still *watch* (``viewers="watch"``,
-  the default), or is refused (``"none"``).
+  non-ASCII or empty), among any number of good ones, is refused with 403.
+  Without the token a page may still *watch* (``viewers="watch"``, the
+  default), or is refused (``"none"``).
 - **Light programs** run Python files on the server: only a controlling page
   on this machine may load them (:meth:`Access.local_page`), unless the server
   was started with ``--allow-programs``. It is decided from the connection's
