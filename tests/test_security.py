@@ -323,10 +323,12 @@ def test_a_watching_page_cannot_start_compare_mode(shared_app):
 
 
 # ------------------------------------------------------------- issue 39: the network holes
-def raw_request(port: int, request_line: bytes, headers: dict[str, bytes] | None = None) -> tuple[int, dict]:
-    """Send one HTTP request's exact bytes (what http.client would reject or encode); its status and headers."""
+def raw_request(port: int, request_line: bytes, headers: dict[str, bytes] | list | None = None) -> tuple[int, dict]:
+    """Send one HTTP request's exact bytes (what http.client would reject or encode); its status and headers.
+    ``headers`` as a list of (name, value) pairs may repeat a name (a second Host among them)."""
     lines = [request_line, f"Host: 127.0.0.1:{port}".encode()]
-    lines += [name.encode() + b": " + value for name, value in (headers or {}).items()]
+    pairs = headers.items() if isinstance(headers, dict) else headers or []
+    lines += [name.encode() + b": " + value for name, value in pairs]
     with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
         sock.sendall(b"\r\n".join(lines) + b"\r\n\r\n")
         head = b""
@@ -571,3 +573,62 @@ def test_serve_trust_proxy_reaches_the_servers_rules_and_a_bad_token_is_one_line
     assert main(["serve", "--token", "caf\u00e9-secret-42"]) == 2
     said = capsys.readouterr().err.strip()
     assert "--token must be" in said and "ASCII" in said and "\n" not in said
+
+
+# ----------------------------------------------------------- issue 54 G: the small holes
+def refused_websocket_status(port: int, headers: list[tuple[str, str]], path: str = "/") -> int:
+    """The status a websocket handshake with ``headers`` (a list: a name may repeat) is refused with."""
+    with pytest.raises(websockets.exceptions.InvalidStatus) as refused:
+        RawClient(port, headers, path=path).close()
+    return refused.value.response.status_code
+
+
+def test_a_duplicated_host_or_origin_is_refused_with_403_never_a_server_error(app, caplog):
+    """Hole G1: two Host or two Origin headers answered 500 (viser's headers refuse to pick one) and nothing
+    was logged. A request that repeats either is refused with 403 and one line, whatever the values, page
+    and websocket alike; the same request with one of each still works."""
+    own_host, own_origin = f"127.0.0.1:{app.port}", f"http://127.0.0.1:{app.port}"
+    twice = {
+        "the same Host twice": [("Host", own_host.encode())],
+        "another Host after ours": [("Host", b"rebind.evil.example")],
+        "the same Origin twice": [("Origin", own_origin.encode())] * 2,
+        "our Origin and another": [("Origin", own_origin.encode()), ("Origin", b"http://evil.example")],
+    }
+    for what, headers in twice.items():
+        status, _ = raw_request(app.port, b"GET / HTTP/1.1", headers)
+        assert status == 403, f"page with {what}: answered {status}"
+        ws_headers = [(name, value.decode()) for name, value in headers]
+        if any(name == "Host" for name, _ in headers):  # the client sends its own Host: one more makes two
+            ws_headers = [("Host", own_host)] if what == "the same Host twice" else ws_headers
+        status = refused_websocket_status(app.port, ws_headers)
+        assert status == 403, f"websocket with {what}: answered {status}"
+    said = [r.getMessage() for r in caplog.records if r.name == "sandbox.app.gate"]
+    assert sum("more than one" in line for line in said) == 2 * len(twice), said
+    assert raw_request(app.port, b"GET / HTTP/1.1", [("Origin", own_origin.encode())])[0] == 200
+    connected(app, RawClient(app.port, own_page(app)))
+
+
+def test_every_token_a_request_presents_must_be_well_formed(shared_app):
+    """Hole G2: ?token=VALID&token=%C3%A9 answered 302 (only the first query token was read), where a
+    malformed token is a 403. Every token a request presents (each query parameter, each cookie, each
+    Authorization header) must be well-formed; control needs one of them to be the server's, so the
+    token repeated, or beside a stale one, still controls."""
+    app = shared_app
+    cookie = f"phototaxis-token-{app.port}"
+    malformed = {
+        "the token and then a non-ASCII one": (f"/?token={TOKEN}&token=%C3%A9", []),
+        "a non-ASCII one and then the token": (f"/?token=%C3%A9&token={TOKEN}", []),
+        "the token and an empty one": (f"/?token={TOKEN}&token=", []),
+        "two cookies in one header": ("/", [("Cookie", f"{cookie}={TOKEN}; {cookie}=caf\u00e9".encode())]),
+        "two Cookie headers": ("/", [("Cookie", f"{cookie}={TOKEN}".encode()), ("Cookie", f"{cookie}=a b".encode())]),
+        "two Authorization headers": ("/", [("Authorization", f"token {TOKEN}".encode()),
+                                            ("Authorization", "token caf\u00e9".encode())]),
+    }
+    for what, (path, headers) in malformed.items():
+        status, _ = raw_request(app.port, f"GET {path} HTTP/1.1".encode(), headers)
+        assert status == 403, f"{what}: answered {status}"
+    assert refused_websocket_status(app.port, [], path=f"/?token={TOKEN}&token=%C3%A9") == 403
+    for repeated in (f"/?token={TOKEN}&token={TOKEN}", f"/?token=an-older-token&token={TOKEN}"):
+        status, headers = raw_request(app.port, f"GET {repeated} HTTP/1.1".encode())
+        assert status == 302 and f"={TOKEN};" in headers["Set-Cookie"], repeated
+    presenter_controls(app)

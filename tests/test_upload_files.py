@@ -1,6 +1,7 @@
 """Polygon files uploaded over the network as a page sends them (issue 39, holes 2 and 5): a
 megabyte of SVG curves is refused with a notice while another viewer's scene keeps coming and the
-server stays its size; a file name with a NUL byte gets a notice, and the simulation goes on."""
+server stays its size; a file name with a NUL byte gets a notice, and the simulation goes on; two pages
+uploading at once are each told of their own file (issue 54 G)."""
 
 from __future__ import annotations
 
@@ -149,6 +150,28 @@ def test_an_upload_shorter_than_announced_gets_a_notice(app):
     assert notice(uploader, "File not uploaded") == "short?.txt: 12 bytes arrived of the 1000 announced."
     assert app.gate.inbox._transfers == {} and app.runner.latest.shape_name == "circle"
     uploader.close()
+
+
+def test_two_pages_uploading_at_once_are_each_told_of_their_own_file(app):
+    """Hole G3 (issue 54): the upload callback read the button's value, which viser shares between pages,
+    so of two uploads finished before the first callback ran, both pages were told of (and used) the
+    second file. The app's events are held until both uploads are in, then each page's notice names its
+    own file."""
+    first, second = page(app), page(app)
+    holding, release = threading.Event(), threading.Event()
+    app.events.post(lambda: (holding.set(), release.wait(30)))
+    wait_until(holding.is_set, what="the app's events to be held")
+    try:
+        upload(app, first, "first-square.txt", b"0 0\n4 0\n4 4\n0 4\n")
+        upload(app, second, "second-triangle.txt", b"0 0\n6 0\n3 5\n")
+        for client in (first, second):  # acknowledged: the inbox has handed the file to the callbacks
+            assert "FileTransferPartAck" in client.received_types(30, until=frozenset({"FileTransferPartAck"}))
+    finally:
+        release.set()
+    assert notice(first, "Goal changed").startswith("Using first-square.txt (4 vertices)")
+    assert notice(second, "Goal changed").startswith("Using second-triangle.txt (3 vertices)")
+    first.close()
+    second.close()
 
 
 @pytest.mark.parametrize("sent, shown", [("a\x00b.svg", "a?b.svg"), ("C:\\Users\\me\\goal.txt", "goal.txt"),

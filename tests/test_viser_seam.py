@@ -154,15 +154,16 @@ def test_each_way_of_checking_finds_a_missing_piece():
 
 
 def test_serve_refuses_in_one_line_on_a_viser_without_a_piece(monkeypatch, capsys):
-    from viser import _gui_api
+    from viser import _gui_handles
 
     from sandbox.commands import main
 
-    monkeypatch.delattr(_gui_api, "_FileUploadState")  # a type viser uses only in annotations: nothing running breaks
+    # _gui_api holds its own name for it, and _gui_handles uses it only in annotations: nothing running breaks
+    monkeypatch.delattr(_gui_handles, "_CommandHandleState")
     assert main(["serve", "--port", "0"]) == 2
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1, err
-    assert f"viser {viser.__version__} lacks" in err and "viser._gui_api:_FileUploadState" in err, err
+    assert f"viser {viser.__version__} lacks" in err and "viser._gui_handles:_CommandHandleState" in err, err
     assert "install viser==1.1.1" in err, err
 
 

@@ -12,7 +12,9 @@ The rules follow Jupyter's server:
   ``host:port`` equal to the ``Host`` it asked) or one given with
   ``--allow-origin`` is refused: another site's page cannot drive the
   sandbox. A client that sends no ``Origin`` is not a browser page, so the
-  cross-site rule does not apply to it.
+  cross-site rule does not apply to it. A request that repeats ``Host`` or
+  ``Origin`` is refused whatever the values: which one to believe is not
+  ours to guess (and websockets' headers refuse to pick one).
 - **Token.** Served beyond this machine, control needs the secret token that
   start-up prints in the URL (``?token=...``). The page's first request
   carries it; the answer stores it in a cookie (``HttpOnly``,
@@ -20,10 +22,11 @@ The rules follow Jupyter's server:
   it (:func:`redirect_target`: never to another site), so the websocket,
   which viser opens without the query, presents the cookie. Scripts may send
   ``Authorization: token ...`` instead. A request is authorised when any token
-  it presents (header, cookie or query) is the server's; one that presents a
-  malformed token (not :func:`well_formed_token`, e.g. non-ASCII) is refused
-  with 403. Without the token a page may still *watch* (``viewers="watch"``,
-  the default), or is refused (``"none"``).
+  it presents (each header, cookie and query parameter) is the server's; one
+  that presents a malformed token (not :func:`well_formed_token`, e.g.
+  non-ASCII or empty), among any number of good ones, is refused with 403.
+  Without the token a page may still *watch* (``viewers="watch"``, the
+  default), or is refused (``"none"``).
 - **Light programs** run Python files on the server: only a controlling page
   on this machine may load them (:meth:`Access.local_page`), unless the server
   was started with ``--allow-programs``. It is decided from the connection's
@@ -55,6 +58,8 @@ CONTROL, WATCH = "control", "watch"
 TOKEN_PATTERN = re.compile(r"[\x21\x23-\x2B\x2D-\x3A\x3C-\x5B\x5D-\x7E]{1,256}")
 #: Headers a reverse proxy adds: a request that carries one came through a proxy (or says so).
 PROXY_HEADERS = ("Forwarded", "X-Forwarded-For", "X-Real-IP")
+#: Headers a request may carry once: two Hosts or two Origins are refused, whatever they say.
+SINGLE_HEADERS = ("Host", "Origin")
 #: A path of ours to send a page on to: segments of unreserved characters, one "/" each (never "//").
 OWN_PATH = re.compile(r"/(?:[A-Za-z0-9._~-]+/)*[A-Za-z0-9._~-]*")
 
@@ -182,6 +187,9 @@ class Access:
                server_address: str = "") -> Decision:
         """Decide a request from its headers, path (with query), the peer's address and the address the
         connection reached the server at."""
+        repeated = next((name for name in SINGLE_HEADERS if len(_all_values(headers, name)) > 1), None)
+        if repeated:
+            return Decision(status=403, reason=f"this request has more than one {repeated} header; send one")
         host = headers.get("Host")
         if not host or not self.host_allowed(_hostname(host)):
             return Decision(status=403, reason=f"this server does not answer to the host {host!r}; "
@@ -198,7 +206,7 @@ class Access:
             return Decision(status=403, reason="this sandbox needs the link with its token (?token=...)")
         role = CONTROL if authorised else WATCH
         programs = role == CONTROL and (self.allow_programs or self.local_page(headers, peer, server_address))
-        store = authorised and self.token is not None and _query_token(path) is not None
+        store = authorised and self.token is not None and bool(_query_tokens(path))
         address = self.client_address(headers, peer, server_address)
         return Decision(grant=Grant(role, programs, address), store_token=store)
 
@@ -251,15 +259,15 @@ class Access:
         return last or None
 
     def _tokens_in(self, headers: Mapping[str, str], path: str) -> list[str]:
-        """Every token the request presents: its ``Authorization: token``, its cookie and its query."""
+        """Every token the request presents: each ``Authorization: token``, each cookie of ours and each
+        ``token`` of its query (a blank one too: it is malformed, not absent)."""
         tokens = []
         for authorization in _all_values(headers, "Authorization"):
             if authorization.lower().startswith("token "):
                 tokens.append(authorization[6:].strip())
         for cookie in _all_values(headers, "Cookie"):
             tokens += _cookie_values(cookie, self.cookie_name)
-        query = _query_token(path)
-        return tokens + ([query] if query is not None else [])
+        return tokens + _query_tokens(path)
 
     def set_cookie_header(self) -> str:
         return f"{self.cookie_name}={self.token}; Path=/; HttpOnly; SameSite=Strict"
@@ -354,9 +362,9 @@ def _bracketed(host: str) -> str:
     return f"[{host}]" if ":" in host and not host.startswith("[") else host
 
 
-def _query_token(path: str) -> str | None:
-    values = parse_qs(urlsplit(path).query).get("token")
-    return values[0] if values else None
+def _query_tokens(path: str) -> list[str]:
+    """Every ``token`` of the query, in order (``?token=A&token=B``: both)."""
+    return parse_qs(urlsplit(path).query, keep_blank_values=True).get("token", [])
 
 
 def _own_names() -> frozenset:

@@ -13,7 +13,9 @@ Uploads are handled here, not by viser: an upload starts only if its
 announced size is within the limit, its parts are counted as they arrive and
 the transfer is dropped the moment they pass it, one transfer per page at a
 time, and the acknowledgements go to the uploading page alone (viser
-broadcasts them into the backlog every new page replays).
+broadcasts them into the backlog every new page replays). A whole file
+reaches the button's callbacks in its own event, not through the button's
+value, which every page shares.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from viser import (
     GuiSliderHandle,
     GuiTextHandle,
     GuiUploadButtonHandle,
+    UploadedFile,
 )
 
 from sandbox.app import viser_seam
@@ -271,12 +274,11 @@ class Inbox:
                 del self._transfers[uuid]
 
     def _finish(self, transfer_uuid: str, transfer: _Transfer) -> None:
-        """Hand the whole file to the upload button's callbacks, as viser would."""
-        viser_seam.finish_upload(self.server.gui, transfer_uuid, client_id=transfer.client_id,
-                                 component=transfer.component, filename=transfer.filename,
-                                 mime_type=transfer.mime_type, part_count=transfer.part_count,
-                                 parts=transfer.parts, total_bytes=transfer.size,
-                                 transferred_bytes=transfer.received)
+        """Hand the whole file to the upload button's callbacks, in their event: the page that sent it
+        is told of this file, whatever another page uploads meanwhile."""
+        content = b"".join(transfer.parts[index] for index in range(transfer.part_count))
+        viser_seam.finish_upload(self.server.gui, self._client(transfer.client_id), transfer.component,
+                                 UploadedFile(name=transfer.filename, content=content))
         close = messages.RemoveNotificationMessage(uuid=f"upload-{transfer_uuid}")
         for seconds in UPLOAD_NOTICE_CLOSED_AFTER:
             _later(seconds, self._send, transfer.client_id, close)

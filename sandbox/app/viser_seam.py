@@ -23,7 +23,7 @@ import dataclasses
 import dis
 import importlib
 import inspect
-import threading
+import logging
 import types
 from concurrent.futures import Future
 from dataclasses import dataclass
@@ -33,6 +33,8 @@ from typing import Any, AsyncGenerator, Callable
 import viser
 
 from sandbox.app.events import QueueStopped
+
+log = logging.getLogger("sandbox.app.viser_seam")
 
 #: The viser release whose private code this module uses (pinned in pyproject.toml and by a test).
 WRITTEN_FOR = "1.1.1"
@@ -118,14 +120,10 @@ USES: tuple[Use, ...] = (
         "the control a message names, shared or the page's own, to check it is shown and enabled", ASSIGNED),
     Use("keyboard commands by uuid", "viser._gui_api:GuiApi._command_handle_from_uuid",
         "the command a message names, to check it is enabled", ASSIGNED),
-    Use("uploads in progress", "viser._gui_api:GuiApi._current_file_upload_states",
-        "the inbox receives uploads itself (size limit, one per page) and hands viser the whole file",
-        ASSIGNED),
-    Use("an upload's state", "viser._gui_api:_FileUploadState", "the keys the inbox fills in", KEYS,
-        names=("client_id", "filename", "mime_type", "part_count", "parts", "total_bytes", "transferred_bytes",
-               "lock")),
-    Use("finishing an upload", "viser._gui_api:GuiApi._finish_file_upload",
-        "viser assembles the file and calls the upload button's callbacks", arguments=3),
+    Use("an upload button's callbacks", "viser._gui_handles:_GuiHandleState",
+        "the inbox receives uploads itself (size limit, one per page) and calls them with the whole file in "
+        "the event (viser would put it in the button's value, which every page shares)", FIELDS,
+        names=("update_cb",)),
     Use("a client's connection", "viser._viser:ClientHandle._websock_connection",
         "a message to this page only, never into the backlog every new page replays", ASSIGNED),
     # -------------------------------------------------------------- the icons (sandbox.app.icons)
@@ -140,7 +138,8 @@ USES: tuple[Use, ...] = (
         "sync callbacks (connect, disconnect, camera) and each new page's GUI and scene get it: route_callbacks "
         "replaces it", ASSIGNED),
     Use("the GUI's thread pool", "viser._gui_api:GuiApi._thread_executor",
-        "sync GUI callbacks (updates, clicks, commands) run on it: route_callbacks replaces it", ASSIGNED),
+        "sync GUI callbacks (updates, clicks, commands) run on it: route_callbacks replaces it, and "
+        "finish_upload gives it an upload button's", ASSIGNED),
     Use("the scene's thread pool", "viser._scene_api:SceneApi._thread_executor",
         "sync scene callbacks (pointer, clicks, drags) run on it: route_callbacks replaces it", ASSIGNED),
 )
@@ -398,16 +397,34 @@ def command_handle(gui: viser.GuiApi, uuid: str) -> Any:
     return gui._command_handle_from_uuid.get(uuid)
 
 
-def finish_upload(gui: viser.GuiApi, transfer_uuid: str, *, client_id: int, component: str, filename: str,
-                  mime_type: str, part_count: int, parts: dict[int, bytes], total_bytes: int,
-                  transferred_bytes: int) -> None:
-    """Hand a whole uploaded file (received by the inbox) to the upload button's callbacks, as viser
-    would have."""
-    gui._current_file_upload_states[transfer_uuid] = {
-        "client_id": client_id, "filename": filename, "mime_type": mime_type, "part_count": part_count,
-        "parts": parts, "total_bytes": total_bytes, "transferred_bytes": transferred_bytes,
-        "lock": threading.Lock()}
-    gui._finish_file_upload(client_id, transfer_uuid, component)
+@dataclasses.dataclass(frozen=True)
+class UploadEvent(viser.GuiEvent):
+    """viser's event for an upload button, with the file this upload brought: the button's ``value`` is
+    one for every page, and another page's upload may replace it before this event's callback runs."""
+
+    file: viser.UploadedFile
+
+
+def finish_upload(gui: viser.GuiApi, client: Any, component: str, file: viser.UploadedFile) -> None:
+    """Hand a whole uploaded ``file`` (received by the inbox from ``client``) to the callbacks of the upload
+    button ``component``, as viser would (plain ones on the GUI's thread pool, async ones on this event
+    loop), but each with its own file (:class:`UploadEvent`); the button's shared value is left alone."""
+    handle = input_handle(gui, component)
+    if handle is None or is_removed(handle) or client is None:
+        return
+    event = UploadEvent(client, client.client_id, handle, file)
+    for callback in list(handle._impl.update_cb):
+        if inspect.iscoroutinefunction(callback):
+            asyncio.get_running_loop().create_task(callback(event))
+        else:
+            gui._thread_executor.submit(callback, event).add_done_callback(_log_failure)
+
+
+def _log_failure(done: Future) -> None:
+    """What viser's thread pool says of a callback that raised (a stopped queue's skipped one is no failure)."""
+    error = done.exception()
+    if error is not None and not isinstance(error, QueueStopped):
+        log.error("an upload's callback failed", exc_info=error)
 
 
 # ------------------------------------------------------------ callbacks

@@ -13,6 +13,7 @@ from typing import Any, Callable
 
 import viser
 
+from sandbox.app import viser_seam
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.draw import DrawFolder
 from sandbox.app.snapshot import Snapshot
@@ -90,8 +91,8 @@ class ShapeFolder:
             self.use(vertices, name, event.client, announce=False)
 
         @self.upload.on_upload
-        def _(event: viser.GuiEvent) -> None:
-            uploaded = self.upload.value
+        def _(event: viser_seam.UploadEvent) -> None:
+            uploaded = event.file  # this page's file: the button's value is one for every page
             self.take_upload(uploaded.name or "upload.txt", uploaded.content, event.client)
 
         @self.download_shape.on_click
