@@ -485,8 +485,9 @@ def _check_pattern_bytes(shape: tuple[int, ...], itemsize: int, where: Any) -> N
     unpacked = count * rows * cols * itemsize
     if unpacked > MAX_PATTERN_BYTES:
         raise DesignError(f"{where} is too large: its {count:,} patterns of {rows:,} x {cols:,} lights unpack to "
-                          f"{_megabytes(unpacked)}; a design's patterns unpack to at most "
-                          f"{_megabytes(MAX_PATTERN_BYTES)}")
+                          f"{unpacked:,} bytes; a design's patterns unpack to at most {MAX_PATTERN_BYTES:,} "
+                          f"({MAX_PATTERNS:,} on / off patterns of {_DEFAULT.lights_per_side} x "
+                          f"{_DEFAULT.lights_per_side} lights)")
 
 
 def _check_light_field(grid: dict, config: Config, path: Any) -> None:
