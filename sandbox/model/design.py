@@ -469,7 +469,7 @@ def _check_name(name: Any, what: str, where: Any, most: int) -> None:
 
 def _check_vertex_count(vertices: Any, what: str, where: Any) -> None:
     """At most an upload's :data:`MAX_VERTICES`, counted before the list becomes an array."""
-    if vertices is not None and len(vertices) > MAX_VERTICES:
+    if isinstance(vertices, (list, np.ndarray)) and len(vertices) > MAX_VERTICES:  # else not a polygon: said later
         raise DesignError(f"{where} is too large: {what} has {len(vertices):,} vertices; a goal has at most "
                           f"{MAX_VERTICES:,}")
 
