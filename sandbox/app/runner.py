@@ -27,7 +27,7 @@ from sandbox.app.commands import (Apply, Arrival, CancelBuild, Command, Controls
                                   UpdateConfig, WorldSpec, DesignOf, PlayDesign)
 from sandbox.app.contract import Deliver, SimulationRunner, answer
 from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM, RobotView, Snapshot
-from sandbox.model.design import PatternRecorder
+from sandbox.model.design import MAX_PATTERNS, PatternRecorder
 
 #: What lights the floor while a design's recorded light program plays (serve --design).
 DESIGN_PROGRAM = "the design's recorded light program"
@@ -94,8 +94,9 @@ def handles(kind: type) -> Callable:
     return register
 
 
-#: Patterns a live world's design keeps: about 50 controller cycles at the default settings, 25 MB at most.
-MOST_PATTERNS = 50_000
+#: Patterns a live world's design keeps: as many as a design file holds (10,000 on the default grid,
+#: ten default runs of the paper's controller; fewer on a larger grid), 5 MB kept as bits.
+MOST_PATTERNS = MAX_PATTERNS
 #: Steps between two progress reports of a skip ahead: 0.2-0.5 s of stepping; each report costs a message.
 SKIP_CHUNK = 2000
 

@@ -66,10 +66,15 @@ def open_trace(path: str | None) -> tuple[IO[str] | None, Any]:
     return handle, SampleWriter(handle)
 
 
-def check_design_target(path: str | None) -> None:
-    """Refuse, before the run, a --save-design file that could not be written after it."""
+def check_design_target(path: str | None, config: Config) -> None:
+    """Refuse, before the run, a --save-design file that could not be written after it, or a design
+    that could not be read back (a goal's name too long to show)."""
     if not path:
         return
+    try:
+        designs.check_recordable(config)
+    except designs.DesignError as exc:
+        raise UserError(f"--save-design {path}: {exc}") from None
     target = Path(path)
     if target.is_dir():
         raise UserError(f"--save-design {path}: that is a directory")
@@ -127,7 +132,7 @@ def run_command(args: argparse.Namespace) -> int:
     else:
         config, shape = config_from_args(args), "from-config"
         (spec, program), time_limit = controller_from_args(args), program_time_limit(args)
-    check_design_target(args.save_design)
+    check_design_target(args.save_design, config)
     recorder = designs.PatternRecorder() if args.save_design else None
     handle, writer = open_trace(args.trace)
     try:

@@ -8,7 +8,8 @@ plays them back at their steps, so the same seed and settings rebuild the same w
 without the controller that first lit it. :func:`save` and :func:`load` write and read the one file
 format, a NumPy ``.npz`` archive (docs/design-files.md): a JSON ``header``, ``steps`` and
 ``patterns``. :func:`load` checks everything: a damaged, truncated, foreign or inconsistent file is
-a :class:`DesignError` in one line.
+a :class:`DesignError` in one line, and so is one larger than the bounds below, refused from the
+archive's directory and each array's header before anything is unpacked (:mod:`.bounded_npz`).
 """
 
 from __future__ import annotations
@@ -17,16 +18,22 @@ import io
 import json
 import math
 import os
+import re
+import stat
+import struct
 import zipfile
 import zlib
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO, Iterator
 
 import numpy as np
 
+from sandbox.model import bounded_npz
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.programs import LightProgram, ProgramError
+from sandbox.shapes.validation import MAX_VERTICES
 
 #: What the header's ``format`` says: a file without it is not a design.
 FORMAT = "phototaxis-design"
@@ -34,6 +41,30 @@ FORMAT = "phototaxis-design"
 VERSION = 1
 #: The arrays of a design file, besides which it holds nothing.
 ARRAYS = ("header", "steps", "patterns")
+
+# Bounds on a design, checked before anything is unpacked; :func:`save` and the recorder keep to them
+# too, so every design this program writes, it reads (docs/design-files.md#bounds).
+_DEFAULT = Config()
+#: Light patterns a design holds: ten times the controller updates of a default run (100,000 steps,
+#: an update every 100): 10,000. The star with switch and chase holds 942 in a default run.
+MAX_PATTERNS = 10 * (_DEFAULT.steps // _DEFAULT.update_every)
+#: Bytes its patterns unpack to: that many on / off patterns of the default 64 x 64 grid, 41 MB
+#: (1,250 patterns of float64 intensities).
+MAX_PATTERN_BYTES = MAX_PATTERNS * _DEFAULT.lights_per_side ** 2
+#: Characters of its JSON header: the goal as given and as fitted, each of an upload's most vertices
+#: (10,000) at up to 52 characters a vertex, is 1.04 million; the rest is 2,000.
+MAX_HEADER_CHARS = 1_500_000
+#: Characters of a name shown in the page (the goal's, the settings' shape), as an uploaded file's name.
+MAX_NAME_CHARS = 80
+#: Characters of what lit the floor (a light program's file and class): longer is cut when recorded.
+MAX_CONTROLLER_CHARS = 1_000
+#: Bytes of the file on disk: its largest patterns and header even if nothing compressed, and margin.
+MAX_FILE_BYTES = 64_000_000
+#: Characters a name may not hold: it is shown on one line.
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+
+#: What a design keeps of its run's end (the header's ``result``).
+RESULT_KEYS = ("fraction_in_goal", "mean_outside_distance", "state_digest")
 #: Other files a design file may be taken for, by their first bytes (to say what it is instead).
 _MAGIC = {b"\x89PNG": "a PNG image", b"\xff\xd8\xff": "a JPEG image", b"GIF8": "a GIF image",
           b"%PDF": "a PDF document", b"\x93NUMPY": "a single NumPy array (.npy)", b"\x1f\x8b": "a gzip file"}
@@ -43,7 +74,7 @@ class DesignError(ValueError):
     """A design that cannot be read or made: the message says why, in one line."""
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Design:
     """A goal, the settings and seed, and the light program that ran on them."""
 
@@ -66,6 +97,11 @@ class Design:
     @property
     def seed(self) -> int:
         return self.config.seed
+
+    def __repr__(self) -> str:
+        """A line, not its arrays: an error quoting a command that carries a design stays one line."""
+        return (f"Design(shape={self.config.shape[:MAX_NAME_CHARS]!r}, seed={self.seed}, steps_run={self.steps_run}, "
+                f"patterns={len(self.patterns)} x {' x '.join(map(str, self.patterns.shape[1:]))})")
 
     def header(self) -> dict:
         """The file's JSON header (docs/design-files.md)."""
@@ -91,6 +127,13 @@ def light_field(config: Config) -> dict:
             "on_intensity": config.light_intensity, "step_seconds": config.dt}
 
 
+def _shortened(controller: str) -> str:
+    """What lit the floor, as a design keeps it: on one line, cut to :data:`MAX_CONTROLLER_CHARS` (it only
+    describes: the patterns replay without it)."""
+    text = _CONTROL.sub("?", str(controller))
+    return text if len(text) <= MAX_CONTROLLER_CHARS else text[:MAX_CONTROLLER_CHARS - 1] + "…"
+
+
 def _number(value: float) -> float | None:
     """A result for JSON: None where it is not a number (the stray distance with no box outside)."""
     return None if math.isnan(value) else float(value)
@@ -109,14 +152,16 @@ class PatternRecorder:
     costs a comparison and 512 bytes (a 64 x 64 on / off pattern, packed bits) or a copy (other
     intensities); nothing is done between changes."""
 
-    def __init__(self, most: int | None = None) -> None:
-        """``most``: keep at most this many patterns (a live world runs for hours); past it the recorder
-        stops, and :meth:`design` says so."""
-        self.most = most
+    def __init__(self, most: int = MAX_PATTERNS) -> None:
+        """``most``: keep at most this many patterns (a live world runs for hours), and never more than a
+        design holds (:data:`MAX_PATTERNS`, :data:`MAX_PATTERN_BYTES` unpacked: fewer on a larger grid or
+        with intensities other than 0 and 1); past it the recorder stops, and :meth:`design` says so."""
+        self.most = min(most, MAX_PATTERNS)
         self.full = False
         self._steps: list[int] = []
         self._kept: list[tuple[bool, np.ndarray]] = []  # (on / off only?, packed bits or the intensities)
         self._shape: tuple[int, int] = (0, 0)
+        self._dimmed = False  # an intensity other than 0 and 1 so far: the design stores float64
 
     def attach(self, sim: Any) -> "PatternRecorder":
         sim.pattern_recorder = self
@@ -126,37 +171,46 @@ class PatternRecorder:
     def start(self, step: int, pattern: np.ndarray) -> None:
         """A light program starts here (a new world): forget what came before."""
         self._steps, self._kept, self._shape = [], [], tuple(pattern.shape)
-        self.full = False
+        self.full = self._dimmed = False
         self.change(step, pattern)
 
     def change(self, step: int, pattern: np.ndarray) -> None:
         """The lit pattern became ``pattern`` at ``step`` (before that world step is computed)."""
-        if self.most is not None and len(self._steps) >= self.most:
-            self.full = True
+        if self.full:
             return
         on_off = bool(((pattern == 0) | (pattern == 1)).all())
+        if len(self._steps) >= self._room(self._dimmed or not on_off):
+            self.full = True
+            return
+        self._dimmed = self._dimmed or not on_off
         self._steps.append(int(step))
         self._kept.append((on_off, np.packbits(pattern != 0) if on_off else np.array(pattern, dtype=np.float64)))
 
     def __len__(self) -> int:
         return len(self._steps)
 
+    def _room(self, dimmed: bool) -> int:
+        """Patterns a design of this grid holds: at most ``most``, unpacking to :data:`MAX_PATTERN_BYTES`."""
+        rows, cols = self._shape
+        return min(self.most, MAX_PATTERN_BYTES // max(1, rows * cols * (8 if dimmed else 1)))
+
     def patterns(self) -> tuple[np.ndarray, np.ndarray]:
-        """The steps (k,) and the patterns (k, rows, cols), uint8 if every light was only off or at 1."""
+        """The steps (k,) and the patterns (k, rows, cols), uint8 if every light was only off or at 1
+        (unpacked into one array: at most :data:`MAX_PATTERN_BYTES`)."""
         rows, cols = self._shape
         size = rows * cols
-        if all(on_off for on_off, _ in self._kept):
-            patterns = np.stack([np.unpackbits(bits, count=size) for _, bits in self._kept])
-        else:
-            patterns = np.stack([np.unpackbits(kept, count=size).astype(np.float64) if on_off else kept.reshape(-1)
-                                 for on_off, kept in self._kept])
+        patterns = np.empty((len(self._kept), size), dtype=np.float64 if self._dimmed else np.uint8)
+        for row, (on_off, kept) in zip(patterns, self._kept):
+            row[:] = np.unpackbits(kept, count=size) if on_off else kept.reshape(-1)
         return np.array(self._steps, dtype=np.int64), patterns.reshape(-1, rows, cols)
 
     def design(self, sim: Any, controller: str = "") -> Design:
         """The design of ``sim`` as it stands: its goal, settings, seed, steps and this light program."""
         if self.full:
-            raise DesignError(f"this world's light program has more than {self.most:,} patterns, more than a design "
-                              "keeps from a live world: reset it, and download the design sooner")
+            rows, cols = self._shape
+            raise DesignError(f"this world's light program has more than {len(self):,} patterns of {rows} x {cols} "
+                              f"lights, more than a design holds: record a shorter run (a live world: reset it, "
+                              f"and download its design sooner)")
         if not self._steps or self._steps[0] != 0:
             start = self._steps[0] if self._steps else "nowhere"
             raise DesignError(f"the light program was recorded from step {start}, not from the world's start: "
@@ -165,7 +219,7 @@ class PatternRecorder:
         sample = sim.measure()
         goal = sim.goal
         return Design(config=sim.config, shape=None if sim.shape_vertices is None else np.array(sim.shape_vertices),
-                      steps_run=sim.steps_done, steps=steps, patterns=patterns, controller=controller,
+                      steps_run=sim.steps_done, steps=steps, patterns=patterns, controller=_shortened(controller),
                       goal={"vertices": _listed(goal.vertices), "centre": np.asarray(goal.centre, float).tolist(),
                             "radius": goal.radius},
                       result={"fraction_in_goal": _number(sample.fraction_in_goal),
@@ -206,85 +260,186 @@ class Replay(LightProgram):
 
 # ----------------------------------------------------------------- the file
 def file_bytes(design: Design) -> bytes:
-    """The design file's bytes (a NumPy .npz archive, compressed): what :func:`save` writes."""
+    """The design file's bytes (a NumPy .npz archive, compressed): what :func:`save` writes. A design
+    over a bound is a :class:`DesignError`: what this program writes, it reads."""
+    header = json.dumps(design.header(), allow_nan=False)
+    _check_writable(design, header)
     buffer = io.BytesIO()
-    np.savez_compressed(buffer, header=np.array(json.dumps(design.header(), allow_nan=False)),
-                        steps=np.asarray(design.steps, dtype=np.int64), patterns=design.patterns)
+    np.savez_compressed(buffer, header=np.array(header), steps=np.asarray(design.steps, dtype=np.int64),
+                        patterns=design.patterns)
     return buffer.getvalue()
 
 
 def save(design: Design, path: str | os.PathLike) -> None:
     """Write the design to ``path`` (a NumPy .npz archive, compressed), whole or not at all."""
     path = Path(path)
+    data = file_bytes(design)
     part = path.with_name(path.name + ".part")
     try:
-        part.write_bytes(file_bytes(design))
+        part.write_bytes(data)
         os.replace(part, path)
     except OSError as exc:
         part.unlink(missing_ok=True)
         raise DesignError(f"cannot write design file {path}: {exc.strerror or exc}") from None
 
 
+def check_recordable(config: Config) -> None:
+    """Refuse, before a run, settings whose design could not be read back: a goal's name too long to
+    show (a polygon file's path, as typed)."""
+    _check_name(config.shape, "its goal's name (the settings' shape)", "a design of this run", MAX_NAME_CHARS)
+
+
+def _check_writable(design: Design, header: str) -> None:
+    where = "this design"
+    _check_name(design.config.shape, "its goal's name (the settings' shape)", where, MAX_NAME_CHARS)
+    _check_name(design.controller, "its controller's name", where, MAX_CONTROLLER_CHARS)
+    _check_vertex_count(design.shape, "its goal as given", where)
+    _check_vertex_count(design.goal.get("vertices"), "its goal as fitted", where)
+    if len(header) > MAX_HEADER_CHARS:
+        raise DesignError(f"{where} is too large: its header is {len(header):,} characters of JSON; "
+                          f"at most {MAX_HEADER_CHARS:,}")
+    _check_pattern_count(len(design.patterns), where)
+    _check_pattern_bytes(design.patterns.shape, design.patterns.dtype.itemsize, where)
+
+
 def load(path: str | os.PathLike) -> Design:
-    """The design in ``path``, checked; a :class:`DesignError` in one line if it is not one."""
+    """The design in ``path``, checked; a :class:`DesignError` in one line if it is not one. Nothing is
+    unpacked past a bound: the file's size, the archive's directory and each array's header are
+    checked before what they describe is read."""
     try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise DesignError(f"cannot read design file {path}: {exc.strerror or exc}") from None
-    arrays = _arrays(raw, path)
-    try:
-        return _design(arrays, path)
+        with _opened(path) as handle, bounded_npz.Archive(handle) as archive:
+            return _design(archive, path)
     except DesignError:
         raise
+    except bounded_npz.ArchiveTooLarge as exc:
+        raise DesignError(f"{path} is too large: {exc}") from None
+    except bounded_npz.ArchiveDamaged as exc:
+        raise DesignError(f"{path} is damaged: {exc}") from None
+    except (zipfile.BadZipFile, zlib.error, EOFError, OSError, struct.error) as exc:
+        raise DesignError(f"{path} is damaged (cut short or altered?): {_first_line(exc)}") from None
     except Exception as exc:  # noqa: BLE001 - whatever else a crafted file trips: still one line
         raise DesignError(f"{path}: not a valid design file ({type(exc).__name__}: {_first_line(exc)})") from None
 
 
-def _arrays(raw: bytes, path: Any) -> dict[str, np.ndarray]:
-    """The archive's arrays, read whole (no pickles); a DesignError for anything that is not one."""
-    if not raw.startswith(b"PK"):
-        what = next((kind for magic, kind in _MAGIC.items() if raw.startswith(magic)),
-                    "empty" if not raw else "not a NumPy .npz archive")
-        raise DesignError(f"{path} is not a design file: it is {what}")
+@contextmanager
+def _opened(path: Any) -> Iterator[BinaryIO]:
+    """``path`` opened for reading, once it is known to be a file of at most :data:`MAX_FILE_BYTES`
+    (a pipe or a device is never read: /dev/zero never ends) that starts like a zip archive."""
     try:
-        with np.load(io.BytesIO(raw), allow_pickle=False) as archive:
-            if "header" not in archive.files:
-                held = ", ".join(archive.files[:5]) or "nothing"
-                raise DesignError(f"{path} is not a design file: a NumPy archive without a header (it holds {held})")
-            return {name: archive[name] for name in archive.files}
-    except DesignError:
-        raise
-    except (zipfile.BadZipFile, zlib.error, EOFError, ValueError, OSError, KeyError) as exc:
-        raise DesignError(f"{path} is damaged (cut short or altered?): {_first_line(exc)}") from None
+        _check_file(os.stat(path), path)  # before opening: a pipe's open waits for a writer
+        handle = open(path, "rb")  # noqa: SIM115 - closed by the with below
+    except OSError as exc:
+        raise DesignError(f"cannot read design file {path}: {exc.strerror or exc}") from None
+    with handle:
+        _check_file(os.fstat(handle.fileno()), path)  # the file opened, not one that replaced it
+        start = handle.read(8)
+        if not start.startswith(b"PK"):
+            what = next((kind for magic, kind in _MAGIC.items() if start.startswith(magic)),
+                        "empty" if not start else "not a NumPy .npz archive")
+            raise DesignError(f"{path} is not a design file: it is {what}")
+        handle.seek(0)
+        yield handle
 
 
-def _design(arrays: dict[str, np.ndarray], path: Any) -> Design:
-    header = _header(arrays["header"], path)
-    missing = [name for name in ARRAYS if name not in arrays]
+def _check_file(info: os.stat_result, path: Any) -> None:
+    if not stat.S_ISREG(info.st_mode):
+        kind = ("a folder" if stat.S_ISDIR(info.st_mode) else "a pipe" if stat.S_ISFIFO(info.st_mode)
+                else "a socket" if stat.S_ISSOCK(info.st_mode) else "a device")
+        raise DesignError(f"cannot read design file {path}: it is {kind}, not a file")
+    if info.st_size > MAX_FILE_BYTES:
+        raise DesignError(f"{path} is too large: {_megabytes(info.st_size)} on disk; a design file is "
+                          f"at most {_megabytes(MAX_FILE_BYTES)}")
+
+
+def _design(archive: bounded_npz.Archive, path: Any) -> Design:
+    _check_members(archive, path)
+    described = _described(archive, path)
+    steps = _steps(archive, described["steps_run"], path)
+    patterns = _patterns(archive, len(steps), described["config"].lights_per_side, path)
+    return Design(steps=steps, patterns=patterns, **described)
+
+
+def _described(archive: bounded_npz.Archive, path: Any) -> dict:
+    """What the header says, checked: the Design's fields but its arrays. Only what a design uses is
+    kept, so the parsed header (up to :data:`MAX_HEADER_CHARS` of JSON) is gone before the arrays are read."""
+    header = _header(archive, path)
+    missing = [name for name in ARRAYS if name not in archive.arrays]
     if missing:
         raise DesignError(f"{path} is damaged: it has no {' or '.join(repr(m) for m in missing)} array")
     try:
         config = Config().replace(**_field(header, "config", dict, path))
     except ConfigError as exc:
         raise DesignError(f"{path}: its settings are refused: {exc}") from None
+    goal = _field(header, "goal", dict, path)
+    controller = header.get("controller", "")
+    _check_name(config.shape, "its goal's name (the settings' shape)", path, MAX_NAME_CHARS)
+    if "name" in goal:
+        _check_name(goal["name"], "its goal's name", path, MAX_NAME_CHARS)
+    _check_name(controller, "its controller's name", path, MAX_CONTROLLER_CHARS)
+    _check_vertex_count(goal.get("given"), "its goal as given", path)
+    _check_vertex_count(goal.get("vertices"), "its goal as fitted", path)
     steps_run = _field(header, "steps_run", int, path)
     if _field(header, "seed", int, path) != config.seed:
         raise DesignError(f"{path} is inconsistent: its seed {header['seed']} is not its settings' {config.seed}")
     _check_light_field(_field(header, "light_field", dict, path), config, path)
-    steps = _steps(arrays["steps"], steps_run, path)
-    patterns = _patterns(arrays["patterns"], len(steps), config.lights_per_side, path)
-    goal = _field(header, "goal", dict, path)
-    return Design(config=config, shape=_vertices(goal.get("given"), path), steps_run=steps_run, steps=steps,
-                  patterns=patterns, controller=str(header.get("controller", "")),
-                  goal={k: v for k, v in goal.items() if k not in ("name", "given")},
-                  result=header.get("result") if isinstance(header.get("result"), dict) else {})
+    result = header.get("result")
+    return dict(config=config, shape=_vertices(goal.get("given"), path), steps_run=steps_run, controller=controller,
+                goal=_fitted(goal, path), result=_result(result) if isinstance(result, dict) else {})
 
 
-def _header(array: np.ndarray, path: Any) -> dict:
-    if array.dtype.kind != "U" or array.shape != ():
+def _fitted(goal: dict, path: Any) -> dict:
+    """The goal as fitted on the floor, as the header gives it: its vertices (a polygon, or None for the
+    circle), centre and radius; nothing else is kept."""
+    kept: dict = {}
+    if "vertices" in goal:
+        kept["vertices"] = _listed(_vertices(goal["vertices"], path))
+    centre = goal.get("centre")
+    if isinstance(centre, list) and len(centre) == 2 and all(_is_number(c) for c in centre):
+        kept["centre"] = [float(c) for c in centre]
+    if _is_number(goal.get("radius")):
+        kept["radius"] = float(goal["radius"])
+    return kept
+
+
+def _result(result: dict) -> dict:
+    """The run's end as the header gives it: its known keys, each a number, null or a short text."""
+    def plain(value: Any) -> bool:
+        return value is None or _is_number(value) or (isinstance(value, str) and len(value) <= MAX_NAME_CHARS)
+
+    return {key: result[key] for key in RESULT_KEYS if key in result and plain(result[key])}
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _check_members(archive: bounded_npz.Archive, path: Any) -> None:
+    """A header first (else it is some other archive), then nothing but a design's arrays, each once."""
+    held = archive.arrays
+    if "header" not in held:
+        raise DesignError(f"{path} is not a design file: a NumPy archive without a header "
+                          f"(it holds {', '.join(held[:5]) or 'nothing'})")
+    stranger = next((name for name in archive.members if name[:-4] not in ARRAYS or not name.endswith(".npy")), None)
+    if stranger is not None:
+        raise DesignError(f"{path} is not a design file: it holds {stranger[:MAX_NAME_CHARS]!r} besides a design's "
+                          f"arrays ({', '.join(ARRAYS)})")
+    twice = next((name for name in held if held.count(name) > 1), None)
+    if twice is not None:
+        raise DesignError(f"{path} is damaged: it holds {twice!r} twice")
+
+
+def _header(archive: bounded_npz.Archive, path: Any) -> dict:
+    """The JSON header, refused from its array's header if it is longer than :data:`MAX_HEADER_CHARS`."""
+    described = archive.header("header")
+    if described.dtype.kind != "U" or described.shape != ():
         raise DesignError(f"{path} is not a design file: its header is not one JSON text")
+    chars = described.dtype.itemsize // 4  # numpy's text is four bytes a character
+    if chars > MAX_HEADER_CHARS:
+        raise DesignError(f"{path} is too large: its header is {chars:,} characters of JSON; "
+                          f"at most {MAX_HEADER_CHARS:,}")
+    text = str(archive.read("header", MAX_HEADER_CHARS * 4))
     try:
-        header = json.loads(str(array))
+        header = json.loads(text)
     except json.JSONDecodeError as exc:
         raise DesignError(f"{path} is damaged: its header is not valid JSON ({exc.msg} at {exc.pos})") from None
     if not isinstance(header, dict) or header.get("format") != FORMAT:
@@ -302,6 +457,39 @@ def _field(header: dict, name: str, kind: type, path: Any) -> Any:
     return value
 
 
+def _check_name(name: Any, what: str, where: Any, most: int) -> None:
+    """A name the page shows: text on one line, at most ``most`` characters."""
+    if not isinstance(name, str):
+        raise DesignError(f"{where} is damaged: {what} is {type(name).__name__}, not text")
+    if len(name) > most:
+        raise DesignError(f"{where} is refused: {what} is {len(name):,} characters long; at most {most:,}")
+    if _CONTROL.search(name):
+        raise DesignError(f"{where} is refused: {what} holds a control character (a line break?); a name is one line")
+
+
+def _check_vertex_count(vertices: Any, what: str, where: Any) -> None:
+    """At most an upload's :data:`MAX_VERTICES`, counted before the list becomes an array."""
+    if isinstance(vertices, (list, np.ndarray)) and len(vertices) > MAX_VERTICES:  # else not a polygon: said later
+        raise DesignError(f"{where} is too large: {what} has {len(vertices):,} vertices; a goal has at most "
+                          f"{MAX_VERTICES:,}")
+
+
+def _check_pattern_count(count: int, where: Any) -> None:
+    if count > MAX_PATTERNS:
+        raise DesignError(f"{where} is too large: it holds {count:,} light patterns; a design holds at most "
+                          f"{MAX_PATTERNS:,}")
+
+
+def _check_pattern_bytes(shape: tuple[int, ...], itemsize: int, where: Any) -> None:
+    count, rows, cols = shape
+    unpacked = count * rows * cols * itemsize
+    if unpacked > MAX_PATTERN_BYTES:
+        raise DesignError(f"{where} is too large: its {count:,} patterns of {rows:,} x {cols:,} lights unpack to "
+                          f"{unpacked:,} bytes; a design's patterns unpack to at most {MAX_PATTERN_BYTES:,} "
+                          f"({MAX_PATTERNS:,} on / off patterns of {_DEFAULT.lights_per_side} x "
+                          f"{_DEFAULT.lights_per_side} lights)")
+
+
 def _check_light_field(grid: dict, config: Config, path: Any) -> None:
     expected = light_field(config)
     wrong = [key for key in ("rows", "cols", "pitch_m", "step_seconds") if grid.get(key) != expected[key]]
@@ -309,24 +497,36 @@ def _check_light_field(grid: dict, config: Config, path: Any) -> None:
         raise DesignError(f"{path} is inconsistent: its light field's {', '.join(wrong)} disagree with its settings")
 
 
-def _steps(steps: np.ndarray, steps_run: int, path: Any) -> np.ndarray:
-    if steps.ndim != 1 or steps.dtype.kind not in "iu" or len(steps) == 0:
-        raise DesignError(f"{path} is damaged: 'steps' must be a list of whole steps, not {steps.dtype} {steps.shape}")
+def _steps(archive: bounded_npz.Archive, steps_run: int, path: Any) -> np.ndarray:
+    described = archive.header("steps")
+    if len(described.shape) != 1 or described.dtype.kind not in "iu" or described.shape[0] == 0:
+        raise DesignError(f"{path} is damaged: 'steps' must be a list of whole steps, not {described.dtype} "
+                          f"{described.shape}")
+    _check_pattern_count(described.shape[0], path)
+    steps = archive.read("steps", MAX_PATTERNS * 8)  # int64 at most
     if steps[0] != 0 or (np.diff(steps) < 0).any() or steps[-1] > steps_run:
         raise DesignError(f"{path} is inconsistent: the patterns' steps must start at 0 and never go back, "
                           f"within the {steps_run} steps run")
     return steps.astype(np.int64)
 
 
-def _patterns(patterns: np.ndarray, count: int, n: int, path: Any) -> np.ndarray:
-    if patterns.shape != (count, n, n):
-        raise DesignError(f"{path} is inconsistent: 'patterns' is {patterns.shape}; {count} steps on a "
+def _patterns(archive: bounded_npz.Archive, count: int, n: int, path: Any) -> np.ndarray:
+    """The patterns, their shape and type checked from their header and their size bounded before they
+    are read; their values then checked without a temporary array as large as they are."""
+    described = archive.header("patterns")
+    if described.shape != (count, n, n):
+        raise DesignError(f"{path} is inconsistent: 'patterns' is {described.shape}; {count} steps on a "
                           f"{n} x {n} grid need ({count}, {n}, {n})")
+    if described.dtype not in (np.dtype(np.uint8), np.dtype(np.float64)):
+        raise DesignError(f"{path} is damaged: 'patterns' must be uint8 0 / 1 or float64 intensities, finite "
+                          f"and not negative")
+    _check_pattern_bytes(described.shape, described.dtype.itemsize, path)
+    patterns = archive.read("patterns", MAX_PATTERN_BYTES)
     if patterns.dtype == np.uint8:
-        if (patterns > 1).any():
+        if patterns.size and patterns.max() > 1:
             raise DesignError(f"{path} is damaged: on / off patterns hold values other than 0 and 1")
         return patterns
-    if patterns.dtype != np.float64 or not np.isfinite(patterns).all() or (patterns < 0).any():
+    if patterns.size and not (patterns.min() >= 0 and patterns.max() < math.inf):  # a NaN fails both
         raise DesignError(f"{path} is damaged: 'patterns' must be uint8 0 / 1 or float64 intensities, finite "
                           f"and not negative")
     return patterns
@@ -339,6 +539,10 @@ def _vertices(given: Any, path: Any) -> np.ndarray | None:
     if vertices.ndim != 2 or vertices.shape[1] != 2 or len(vertices) < 3 or not np.isfinite(vertices).all():
         raise DesignError(f"{path} is damaged: its goal is not a polygon of at least 3 (x, y) points")
     return vertices
+
+
+def _megabytes(n: int) -> str:
+    return f"{n / 1_000_000:,.1f} MB"
 
 
 def _first_line(exc: BaseException) -> str:
