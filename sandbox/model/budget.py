@@ -265,26 +265,23 @@ def parse_budget(text: str) -> int:
     """Bytes from '1.5G', '800M', '2GiB', '1000000000' or '50%' (of the machine's memory); a ValueError
     in one line otherwise."""
     raw = str(text).strip().upper().replace(" ", "")
+    share = raw.endswith("%")
+    number = raw[:-1] if share else raw.rstrip("KMGTIB")
+    unit = "" if share else raw[len(number):]
     try:
-        if raw.endswith("%"):
-            share = float(raw[:-1]) / 100.0
-            physical = physical_memory()
-            if physical is None:
-                raise ValueError("this system does not say how much memory it has; give a size such as 2G")
-            value = share * physical
-        else:
-            number = raw.rstrip("KMGTIB")
-            unit = raw[len(number):]
-            if unit not in _UNITS:
-                raise ValueError
-            value = float(number) * _UNITS[unit]
-    except ValueError as exc:
-        detail = str(exc) if str(exc) else "give a size such as 2G, 800M or 50% (of the machine's memory)"
-        raise ValueError(f"memory budget {text!r}: {detail}") from None
-    if not math.isfinite(value) or value < 50 * MB:
+        amount = float(number)
+    except ValueError:
+        amount = math.nan
+    if not math.isfinite(amount) or amount < 0 or unit not in _UNITS:
+        raise ValueError(f"memory budget {text!r}: give a size such as 2G, 800M or 50% (of the machine's memory)")
+    physical = physical_memory()
+    if share and physical is None:
+        raise ValueError(f"memory budget {text!r}: this system does not say how much memory it has; give a size "
+                         f"such as 2G")
+    value = amount / 100.0 * physical if share else amount * _UNITS[unit]
+    if value < 50 * MB:
         raise ValueError(f"memory budget {text!r}: at least 50M (a world of the paper's settings needs ~10 MB, "
                          f"a Python process with the model ~200 MB more)")
-    physical = physical_memory()
     if physical is not None and value > physical:
         raise ValueError(f"memory budget {text!r} is more than this machine's {size_text(physical)} of memory")
     return int(value)
