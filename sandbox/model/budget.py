@@ -2,7 +2,7 @@
 it must fit (issue 54).
 
 Every setting has a range, but some in-range combinations need more memory than any machine has:
-light pitch 0.05 with field samples 64 asks for a 58 GB luminosity field, an arena of 2,000 m at
+light pitch 0.05 with field samples 64 asks for a 61 GB luminosity field, an arena of 2,000 m at
 pitch 0.05 for 1.6 billion lights. So before a world is built its cost is estimated from its
 :class:`~sandbox.model.config.Config` alone, term by term, and settings over the budget are refused
 with one line that names the values to change and how far (:func:`refusal`). The check runs where
@@ -10,41 +10,37 @@ every configuration is made (``Config.__post_init__``) and again where every wor
 (``Simulation.reset``): the command line, config and design files and the page all pass through it.
 
 The terms (bytes; the constants measured on Linux, CPython 3.11, pymunk 7, as peak resident memory
-over a process that has imported the model):
+over a process that has imported the model, every light on):
 
-* **light field**: the sampled luminosity field, float32, ``length^2`` samples, ``length`` the
-  samples per side of :class:`sandbox.model.lights._AxisLayout` (the arena's light cells plus a
-  window's worth of padding each side, times the samples per cell, about ``field_samples + 3``),
-  worked out exactly here without building it (:func:`field_side`); plus the block each light adds
-  (``kernel_side^2`` float32) and the float64 arrays it is computed from, :data:`KERNEL_BUILD`
-  bytes per kernel sample at their peak. The whole field counts: a light program may light every
-  light, and every page of the field is then written.
-* **lights**: :data:`PER_LIGHT` bytes per light (its centre, the patterns the controller, the
-  field and the program keep, the outline's distances to it, and the copies a snapshot carries).
-* **bodies**: :data:`PER_ROBOT` and :data:`PER_BOX` bytes per body (pymunk's body and shape, their
-  collision pairs once packed, the state arrays, the placement grid).
-* **arena cells**: the offset outline measures how far its band must grow to cover the robots'
-  spawn square on a grid :data:`COVER_SPACING` apart (:func:`sandbox.model.offset.covering_distance`),
-  :data:`PER_COVER_POINT` bytes per point.
-* **metrics**: :data:`PER_SAMPLE` bytes per sample a run of ``steps`` keeps.
-* **goal** (:func:`goal_bytes`, once the goal is known): growing a polygon by a distance, as the
-  offset outline and chase do at every update, costs up to :data:`PER_VERTEX_PAIR` bytes per pair
-  of its vertices (a comb's teeth all overlap once grown), and the widths of a notched goal are
-  measured on a grid 0.1 m apart over its bounding box (:mod:`sandbox.model.thin`). A goal's
-  vertices are bounded first (:data:`MAX_GOAL_VERTICES`, :mod:`sandbox.model.goal`).
+* **light field**: the sampled luminosity field, float32, ``side^2`` samples, ``side`` as
+  :class:`sandbox.model.lights._AxisLayout` lays it out (the arena's light cells and a window's worth
+  of padding each side, times about ``field_samples + 3`` samples a cell), worked out exactly here
+  without its arrays (:func:`field_side`), and the block each light adds (``block^2`` float32). All
+  of it counts: a light program may light every light, and every page of the field is then written.
+* **field block** (for a moment): the float64 arrays a light's block is computed from,
+  :data:`KERNEL_BUILD` bytes a sample.
+* **lights**: :data:`PER_LIGHT` bytes a light (the arena's cells: its centre, the patterns the
+  controller, the field and a snapshot keep, the offset outline's distances to it).
+* **bodies**: :data:`PER_ROBOT` and :data:`PER_BOX` bytes a body (pymunk's body and shape and their
+  contacts, the state rows, the placement grid).
+* **metrics**: :data:`PER_SAMPLE` bytes a sample a run of ``steps`` keeps.
+* **goal** (for a moment, once the goal is known: :func:`world_cost`): growing a polygon by a
+  distance, as the offset outline and chase do at every update, costs up to :data:`PER_VERTEX_PAIR`
+  bytes a pair of its vertices (a comb's teeth all overlap once grown), and a notched goal's widths
+  are measured on a grid :data:`WIDTH_SPACING` apart over it (:mod:`sandbox.model.thin`). A goal's
+  vertices are bounded first (:data:`MAX_GOAL_VERTICES`, :func:`sandbox.model.goal.affordable_outline`).
 
-Calibrated on (measured peak over the imported model, then the estimate): field samples 64, 163
-MB, 156 MB; light pitch 0.125 in a 256 m arena with range 0.5, 473 MB, 465 MB; 40,000 robots,
-132 MB, 140 MB; 40,000 boxes, 191 MB, 240 MB. Checked on others (not used to calibrate): light
-pitch 0.25 in a 64 m arena, 134 MB measured, 148 MB estimated; field samples 32 at pitch 0.5, 207
-MB, 226 MB; 20,000 robots with 20,000 boxes, 190 MB, 195 MB; the 1,000-vertex comb of
-``tests/test_budget.py`` grown at every update, 250 MB, 260 MB (see docs/security.md, "What a world
-may cost").
+Measured against the estimate (MB; the first four calibrate, the others check): field samples 64,
+184 and 210; pitch 0.125 in a 256 m arena with range 0.5 and 1 sample (4.2 million lights), 748 and
+774; 40,000 robots, 172 and 181; 40,000 boxes, 236 and 281; pitch 0.25, 68 and 84; pitch 0.5 with
+32 samples, 220 and 250; 20,000 robots with 20,000 boxes, 181 and 231; pitch 0.1 with range 3.2,
+179 and 185; the 300-vertex C of 0.84 m teeth of tests/test_budget.py on the offset outline, 57 and
+53 (docs/security.md, "What a world may cost").
 
 The budget (:func:`memory_budget`) is the ``PHOTOTAXIS_MEMORY_BUDGET`` environment variable when
 set (``--memory-budget`` sets it for the command and its processes), else :func:`default_budget`:
-a quarter of the machine's memory, at most 1 GiB. A 4 GB laptop then runs a world and the world it
-is compared with (1 GiB each) beside the web server, its pages and the system; a bigger machine
+a quarter of the machine's memory, at most 1 GB. A 4 GB laptop then holds a world and the world it
+is compared with (1 GB each) beside the web server, its pages and the system; a bigger machine
 raises it on purpose.
 """
 
@@ -59,8 +55,7 @@ from typing import Callable, Iterator
 
 from sandbox.model.config import Config, ConfigError
 
-MB, GB = 10**6, 10**9
-GiB = 2**30
+MB, GB, GiB = 10**6, 10**9, 2**30
 #: The environment variable that sets the budget (bytes, or a number with K, M, G or T, or a share of
 #: the machine's memory such as ``50%``); ``--memory-budget`` sets it for a command and its processes.
 BUDGET_VARIABLE = "PHOTOTAXIS_MEMORY_BUDGET"
@@ -252,7 +247,7 @@ def physical_memory() -> int | None:
 
 
 def default_budget() -> int:
-    """A quarter of the machine's memory, at most 1 GiB (1 GiB where the system does not say)."""
+    """A quarter of the machine's memory, at most 1 GB (1 GB where the system does not say)."""
     physical = physical_memory()
     return DEFAULT_MOST if physical is None else int(min(DEFAULT_MOST, DEFAULT_SHARE * physical))
 
@@ -416,13 +411,13 @@ TERM_KNOBS = {
 FIXES_SAID = 2
 
 
-def refusal(config: Config, cost: Cost, budget: float, extra: float = 0.0) -> str:
-    """One line: which values need how much, over which budget, and what to change how far.
-    ``extra``: bytes the goal adds, which the changes must leave room for."""
+def refusal(config: Config, cost: Cost, budget: float) -> str:
+    """One line: which values need how much, over which budget, and what to change how far (the nearest
+    value of each of the two most to blame that alone would fit)."""
     culprits = _culprits(config, cost)
     named = " with ".join(f"{_words(name)} {_value(getattr(config, name))}" for name in culprits[:2])
-    fixes = _fixes(config, culprits, budget - extra)
-    line = f"{named} needs ~{size_text(cost.total + extra)} ({cost.said()}), over the {size_text(budget)} budget"
+    fixes = _fixes(config, culprits, budget)
+    line = f"{named} needs ~{size_text(cost.total)} ({cost.said()}), over the {size_text(budget)} budget"
     if fixes:
         return f"{line}: {' or '.join(fixes)}"
     return (f"{line}: {' and '.join(_verb(name) + ' ' + _words(name) for name in culprits[:2])} together, "
