@@ -231,10 +231,22 @@ def test_a_design_file_over_the_budget_is_refused_in_one_line(tmp_path):
 
 
 def test_a_design_files_needle_goal_is_refused_in_one_line(tmp_path):
+    """Before, ``serve --design`` of it ended in a traceback: its simulation process could not build the first
+    world. Now the server fits the goal before it starts one."""
     path = _design_file(tmp_path, Config(robots=10, outline="offset"), spiky_c(9_990, 0.12))
-    out = phototaxis("run", "--design", str(path), "--no-progress")
+    for command in (["run", "--no-progress"], ["serve", "--port", "0"]):
+        out = phototaxis(command[0], "--design", str(path), *command[1:])
+        assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1, out.stderr
+        assert "the goal has 9,990 vertices" in out.stderr and "afford at most 300" in out.stderr
+
+
+def test_serve_refuses_a_needle_goal_before_it_starts(tmp_path):
+    path = polygon_file(tmp_path, spiky_c(9_990, 0.12))
+    started = time.perf_counter()
+    out = phototaxis("serve", "--shape", str(path), "--port", "0")
+    assert time.perf_counter() - started < 2.0  # reading and validating 9,990 vertices takes most of it
     assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1
-    assert "the goal has 9,990 vertices" in out.stderr and "afford at most 300" in out.stderr
+    assert out.stderr.startswith(f"phototaxis serve: error: {path}: the goal has 9,990 vertices")
 
 
 # ------------------------------------------------------------------ goals
@@ -308,12 +320,13 @@ def test_a_goal_that_would_take_the_world_over_the_budget_is_refused(monkeypatch
 
 
 # ------------------------------------------------------------------ the page
-@pytest.fixture
-def app():
+@pytest.fixture(params=[False, pytest.param(True, marks=pytest.mark.slow)], ids=["in-process", "own-process"])
+def app(request):
+    """The app, its simulation in this process, and (slow) in its own process as ``serve`` runs it."""
     from sandbox.app.server import App, free_port
 
     a = App(Config(robots=12, boxes=20, update_every=10, hold_steps=3), port=free_port(), fps=30, steps_per_frame=2,
-            process=False).start()
+            process=request.param).start()
     yield a
     a.stop()
 
