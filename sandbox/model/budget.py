@@ -47,11 +47,12 @@ raises it on purpose.
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import os
 import threading
 from dataclasses import dataclass
-from typing import Callable, Iterator
+from typing import Callable, Iterator, NamedTuple
 
 from sandbox.model.config import Config, ConfigError
 
@@ -181,9 +182,25 @@ def _light_columns(config: Config) -> tuple[int, int]:
     return count, max(b for _, b in spans) + 1
 
 
+class _Grid(NamedTuple):
+    """What the field's layout depends on (Config's names: the functions above read either)."""
+
+    light_pitch: float
+    light_range: float
+    field_samples: int
+    light_window: str
+    lights_per_side: int
+
+
 def field_side(config: Config) -> tuple[int, int]:
     """(samples per side of the luminosity field, samples per side of one light's block), as
     :class:`sandbox.model.lights._AxisLayout` makes them."""
+    return _field_side(_Grid(config.light_pitch, config.light_range, config.field_samples, config.light_window,
+                             config.lights_per_side))
+
+
+@functools.lru_cache(maxsize=256)  # every Config is checked, and most share their light grid
+def _field_side(config: _Grid) -> tuple[int, int]:
     per_cell = sum(count + 1 for count in _strip_counts(config))
     columns, pad = _light_columns(config)
     pitch, n = config.light_pitch, config.lights_per_side
@@ -238,6 +255,7 @@ def world_cost(config: Config, vertices: int = 0, width: float = 0.0, height: fl
 
 
 # -- the budget --------------------------------------------------------------------------------
+@functools.lru_cache(maxsize=1)
 def physical_memory() -> int | None:
     """The machine's memory (bytes), or None where the system does not say."""
     try:
