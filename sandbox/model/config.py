@@ -336,6 +336,11 @@ class Config:
         if abs(cells - round(cells)) > 1e-6:
             raise ConfigError(
                 f"arena_size ({self.arena_size}) must be a whole number of light_pitch ({self.light_pitch})")
+        if self.light_window == "cells" and math.floor(self.light_range / self.light_pitch + 1e-9) < 1:
+            # The program's window reaches floor(light_range / pitch) cells each way: none, and no light
+            # would reach the floor (building the field failed with a traceback).
+            raise ConfigError(f"light_range ({self.light_range:g}) must be at least light_pitch ({self.light_pitch:g}) "
+                              f"with light_window 'cells': a light reaches light_range / light_pitch cells each way")
         self._check_populations()
         self._check_budget()
 
