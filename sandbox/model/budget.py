@@ -106,10 +106,6 @@ class Cost:
         kept = sum(v for k, v in self.terms.items() if k not in self.passing)
         return float(kept + max((self.terms.get(k, 0.0) for k in self.passing), default=0.0))
 
-    def largest(self) -> str:
-        """The term that costs most."""
-        return max(self.terms, key=self.terms.get)
-
     def said(self) -> str:
         """The terms in words, largest first: 'light field 58 GB, lights 164 MB'."""
         shown = sorted(((v, k) for k, v in self.terms.items() if v >= 0.05 * self.total), reverse=True)
