@@ -39,7 +39,7 @@ from sandbox.cli import (UserError, add_config_arguments, add_controller_argumen
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.watchdog import DEFAULT_LIMIT
 from sandbox.processes import stop_fork_server
-from sandbox.shapes import shape_vertices
+from sandbox.shapes import ShapeError, shape_vertices
 
 TITLE = "Phototaxis sandbox"
 #: With no browser connected for this long, the app stops stepping (unless --keep-running).
@@ -376,6 +376,8 @@ def _app_from_args(args: argparse.Namespace) -> App:
         raise UserError(str(exc)) from None
     design = design_from_args(args)  # its goal, settings and seed, lit by its recorded light program
     config = design.config if design else config_from_args(args)
+    _check_goal(config, design.shape if design else shape_vertices(config.shape),
+                f"{args.design}: its goal" if design else config.shape)
     compare = None
     if args.compare:
         if args.case:
@@ -409,6 +411,18 @@ def _app_from_args(args: argparse.Namespace) -> App:
                    shape=design.shape if design else "from-config", design=design)
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
+
+
+def _check_goal(config: Config, vertices: Any, name: str) -> None:
+    """A goal the simulation would refuse (more vertices than the outlines afford, too large for the
+    construction area, over the memory budget) is refused here, in one line, before the simulation
+    process starts: it would fail to build its first world."""
+    from sandbox.model.goal import fit_goal
+
+    try:
+        fit_goal(config, vertices)
+    except ShapeError as exc:
+        raise UserError(f"{name}: {exc}") from None
 
 
 def _print_address(app: App, host: str) -> None:

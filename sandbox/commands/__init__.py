@@ -49,7 +49,21 @@ def build_parser(only: str | None = None) -> Parser:
     for name, module in SUBCOMMANDS.items():
         if only is None or name == only:
             importlib.import_module(module).add_parser(sub)
+            if name in BUILDS_WORLDS:
+                add_budget_argument(sub.choices[name])
     return parser
+
+
+#: The commands that build worlds, which take --memory-budget.
+BUILDS_WORLDS = ("run", "bench", "serve", "record", "sweep", "advise")
+
+
+def add_budget_argument(parser) -> None:
+    parser.add_argument("--memory-budget", metavar="SIZE", default=None,
+                        help="the memory a world may need, estimated from its settings before it is built (settings "
+                             "over it are refused): a size such as 2G or 800M, or a share of this machine's memory "
+                             "such as 50%%; default a quarter of the machine's memory, at most 1G (docs/security.md, "
+                             "'What a world may cost'); also the environment variable PHOTOTAXIS_MEMORY_BUDGET")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -74,6 +88,8 @@ def _dispatch(argv: list[str], only: str | None) -> int:
         parser.print_help()
         return 2
     try:
+        if getattr(args, "memory_budget", None) is not None:
+            _set_budget(args.memory_budget)
         return int(args.func(args) or 0)
     except (UserError, ConfigError, ShapeError) as exc:
         print(f"phototaxis {args.command}: error: {exc}", file=sys.stderr)
@@ -81,3 +97,14 @@ def _dispatch(argv: list[str], only: str | None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+
+
+def _set_budget(text: str) -> None:
+    """--memory-budget, for this command and the processes it starts (they read the environment)."""
+    from sandbox.cli import UserError
+    from sandbox.model import budget
+
+    try:
+        budget.set_budget(text)
+    except ValueError as exc:
+        raise UserError(f"--memory-budget: {exc}") from None

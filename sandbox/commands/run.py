@@ -162,6 +162,7 @@ def run_command(args: argparse.Namespace) -> int:
         "cycles": sim.cycle,
         "outline": sim.goal.family,
         "outline_reason": sim.goal.family_reason,
+        "goal_simplified": sim.goal.simplified,
         "controller": spec or paper_controller_name(config),
         "senses": sorted(sim.senses),
         "light_energy": round(sim.light_energy, 3),
@@ -183,6 +184,8 @@ def run_command(args: argparse.Namespace) -> int:
         print(f"  mean distance of the rest: {final.mean_outside_distance:.3f} m")
         print(f"  boxes escaped:             {final.boxes_escaped}")
         print(f"  outline:                   {sim.goal.family} ({sim.goal.family_reason})")
+        if sim.goal.simplified:
+            print(f"  goal:                      {sim.goal.simplified}")
         if design is not None:
             said = "yes" if result["replayed_exactly"] else "NO: the final state differs from the recorded one"
             print(f"  replayed exactly:          {said}")

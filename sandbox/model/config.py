@@ -336,7 +336,13 @@ class Config:
         if abs(cells - round(cells)) > 1e-6:
             raise ConfigError(
                 f"arena_size ({self.arena_size}) must be a whole number of light_pitch ({self.light_pitch})")
+        if self.light_window == "cells" and math.floor(self.light_range / self.light_pitch + 1e-9) < 1:
+            # The program's window reaches floor(light_range / pitch) cells each way: none, and no light
+            # would reach the floor (building the field failed with a traceback).
+            raise ConfigError(f"light_range ({self.light_range:g}) must be at least light_pitch ({self.light_pitch:g}) "
+                              f"with light_window 'cells': a light reaches light_range / light_pitch cells each way")
         self._check_populations()
+        self._check_budget()
 
     def _check_populations(self) -> None:
         """Refuse populations that cannot be placed: robots in the spawn square
@@ -352,6 +358,14 @@ class Config:
         if self.boxes > self.max_boxes:
             raise ConfigError(f"boxes: {self.boxes:,} boxes of {self.box_size_is} {self.box_size:g} m do not fit in the "
                               f"{self.construction_size:g} m construction area; at most {self.max_boxes:,} do")
+
+    def _check_budget(self) -> None:
+        """Refuse settings whose world would need more memory than the budget (sandbox.model.budget):
+        here, so that no configuration a command, a file or the page makes can bypass it."""
+        from sandbox.model import budget  # it reads Config: imported when the class exists
+
+        if budget.budget_checked():
+            budget.check_settings(self)
 
     # Derived quantities -------------------------------------------------
     @property

@@ -146,12 +146,26 @@ def _min_distance_to_closed_polyline(points: np.ndarray, vertices: np.ndarray) -
 _compiled_min_distance = compiled_at_first_use(_min_distance_to_closed_polyline)
 
 
+#: points_in_polygon works on at most this many (point, edge) pairs at once: its temporaries stay
+#: near 8 MB each however many points and edges (the offset outline asks 16,641 points of the spawn
+#: square against a 500-vertex goal: 330 MB at once).
+_PAIRS_AT_ONCE = 1 << 20
+
+
 def points_in_polygon(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
-    """Even-odd test for each point (m, 2); vectorised over points and edges."""
+    """Even-odd test for each point (m, 2); vectorised over points and edges, a block of points at a
+    time (each point's answer is the same, bit for bit, whatever the blocks)."""
     p = np.asarray(points, dtype=float)
-    x, y = p[:, 0:1], p[:, 1:2]
     a = np.asarray(vertices, dtype=float)
     b = np.roll(a, -1, axis=0)
+    rows = max(1, _PAIRS_AT_ONCE // max(len(a), 1))
+    if len(p) <= rows:
+        return _points_in_polygon(p, a, b)
+    return np.concatenate([_points_in_polygon(p[i:i + rows], a, b) for i in range(0, len(p), rows)])
+
+
+def _points_in_polygon(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    x, y = p[:, 0:1], p[:, 1:2]
     ax, ay, bx, by = a[:, 0], a[:, 1], b[:, 0], b[:, 1]
     straddles = (ay > y) != (by > y)
     with np.errstate(divide="ignore", invalid="ignore"):

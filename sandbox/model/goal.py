@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from sandbox.model import geometry
+from sandbox.model import budget, geometry
 from sandbox.model.config import Config
 from sandbox.shapes.errors import ShapeError
 
@@ -25,6 +25,13 @@ from sandbox.shapes.errors import ShapeError
 CIRCLE_DRAW_VERTICES = 96
 #: A goal is refused when, centred between the construction walls, less than this share of it lies inside.
 MOSTLY_INSIDE = 0.9
+#: Every fitted goal is simplified within this share of a light pitch: far finer than a light can show.
+SIMPLIFY_WITHIN = 1.0 / 20.0
+#: A goal with more vertices than the outlines afford (sandbox.model.budget.MAX_GOAL_VERTICES) is
+#: simplified within twice, four times... that, up to this share of a light pitch: the band's distance
+#: to a light moves by at most a quarter of the lights' spacing, so it lights the same lights, or one
+#: beside them.
+SIMPLIFY_AT_MOST = 1.0 / 4.0
 
 
 @dataclass(frozen=True)
@@ -41,6 +48,8 @@ class Goal:
     #: The outline family the band follows ('scaled' or 'offset') and why (sandbox.model.family).
     family: str = "scaled"
     family_reason: str = ""
+    #: How the goal was simplified to what the outlines afford, in words ('' when it was not).
+    simplified: str = ""
 
     @property
     def is_circle(self) -> bool:
@@ -76,7 +85,10 @@ def make_goal(config: Config, vertices: np.ndarray | None) -> Goal:
 
     The fitted outline is simplified to a twentieth of a light pitch: far
     finer than a light can show, and a 10,000-vertex file then costs what a
-    hand-drawn one does (every light and every box is measured against it)."""
+    hand-drawn one does (every light and every box is measured against it).
+    One that still has more vertices than the outlines afford is simplified
+    further, within at most a quarter of a pitch, and says so; if that is not
+    enough it is refused (:func:`affordable_outline`)."""
     # The outline family is decided on the fitted goal, which family.py measures with the outlines.
     from sandbox.model.family import settle
 
@@ -91,11 +103,63 @@ def fit_goal(config: Config, vertices: np.ndarray | None) -> Goal:
         return Goal(centre, area, None)
     vertices = np.asarray(vertices, dtype=float)
     fitted = geometry.fit_to_area(vertices, area, centre)
-    simpler = geometry.simplify(fitted, config.light_pitch / 20.0)
+    simpler, said = affordable_outline(config, fitted)
     if len(simpler) < len(fitted):
         fitted = geometry.fit_to_area(simpler, area, centre)  # simplifying nudges the area: refit
     check_fits_construction(config, fitted)
-    return Goal(centre, area, fitted, abs(geometry.signed_area(vertices)))
+    check_goal_budget(config, fitted)
+    return Goal(centre, area, fitted, abs(geometry.signed_area(vertices)), simplified=said)
+
+
+def affordable_outline(config: Config, fitted: np.ndarray) -> tuple[np.ndarray, str]:
+    """The fitted goal simplified within :data:`SIMPLIFY_WITHIN` of a light pitch, and what to say about
+    it. One with more than :data:`sandbox.model.budget.MAX_GOAL_VERTICES` vertices left is simplified
+    within twice that, four times..., up to :data:`SIMPLIFY_AT_MOST` of a pitch, until it has no more;
+    then it is refused (a ShapeError, one line). Below the bound nothing changes: a goal of the
+    paper's or any shape with fewer vertices comes out as it always did."""
+    pitch, most = config.light_pitch, budget.MAX_GOAL_VERTICES
+    tolerance = pitch * SIMPLIFY_WITHIN
+    simpler = geometry.simplify(fitted, tolerance)
+    below = tolerance
+    while len(simpler) > most and tolerance < pitch * SIMPLIFY_AT_MOST:
+        below, tolerance = tolerance, min(2.0 * tolerance, pitch * SIMPLIFY_AT_MOST)
+        simpler = geometry.simplify(fitted, tolerance)
+    if len(simpler) <= most < len(fitted) and tolerance > below:
+        tolerance, simpler = _least_tolerance(fitted, below, tolerance, simpler, most)
+    if len(simpler) > most:
+        raise ShapeError(f"the goal has {len(fitted):,} vertices, and simplified within {tolerance:.2g} m (a quarter "
+                         f"of the light pitch) still {len(simpler):,}: the outlines afford at most {most:,} (growing "
+                         f"the goal at every update costs as the square of its vertices); use a smoother outline "
+                         f"with fewer vertices")
+    if len(fitted) <= most:
+        return simpler, ""
+    return simpler, f"simplified from {len(fitted):,} to {len(simpler):,} vertices within {tolerance:.2g} m"
+
+
+def _least_tolerance(fitted: np.ndarray, too_fine: float, enough: float, simpler: np.ndarray,
+                     most: int) -> tuple[float, np.ndarray]:
+    """The goal kept as close as it can be: between a tolerance that leaves more than ``most`` vertices
+    and one that does not (``simpler``), halved eight times (within 0.4 % of the least that does)."""
+    for _ in range(8):
+        middle = 0.5 * (too_fine + enough)
+        tried = geometry.simplify(fitted, middle)
+        if len(tried) <= most:
+            enough, simpler = middle, tried
+        else:
+            too_fine = middle
+    return enough, simpler
+
+
+def check_goal_budget(config: Config, fitted: np.ndarray) -> None:
+    """Refuse (ShapeError, one line) a goal whose outlines' work would take the world over the memory
+    budget (sandbox.model.budget: its vertices grown at every update, the widths of a notched goal)."""
+    if not budget.budget_checked():
+        return
+    width, height = np.ptp(fitted, axis=0)
+    cost = budget.world_cost(config, len(fitted), float(width), float(height))
+    limit = budget.memory_budget()
+    if cost.total > limit:
+        raise ShapeError(budget.goal_refusal(config, cost, limit, len(fitted)))
 
 
 def check_fits_construction(config: Config, fitted: np.ndarray) -> None:

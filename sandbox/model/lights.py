@@ -221,6 +221,10 @@ def add_blocks(values: np.ndarray, kernel: np.ndarray, x0: np.ndarray, y0: np.nd
 compiled_add_blocks = compiled_at_first_use(add_blocks)
 
 
+#: The most points a side of :meth:`LightField.display_grid` has.
+DISPLAY_MOST = 1025
+
+
 class LightField:
     """Light intensities and the sampled luminosity field they produce."""
 
@@ -300,10 +304,12 @@ class LightField:
         f11 = f.take(flat + (n + 1)) - f00 - f10 - f01
         return f00 + fu * f10 + fv * (f01 + fu * f11)
 
-    def display_grid(self, per_pitch: int = 8) -> np.ndarray:
+    def display_grid(self, per_pitch: int = 8, most: int = DISPLAY_MOST) -> np.ndarray:
         """The field on a regular grid over the whole floor, ``per_pitch`` points
-        per light pitch plus the far edge, indexed [ix, iy] (for display)."""
+        per light pitch plus the far edge, at most ``most`` points a side, indexed
+        [ix, iy] (for display: 1,025 points a side are finer than a page shows, and
+        4 per pitch of 2,000 lights a side would be 64 million points, 5 GB)."""
         cfg = self.config
-        c = np.linspace(0.0, cfg.arena_size, cfg.lights_per_side * per_pitch + 1)
+        c = np.linspace(0.0, cfg.arena_size, min(cfg.lights_per_side * per_pitch + 1, most))
         gx, gy = np.meshgrid(c, c, indexing="ij")
         return self.sample(np.stack([gx, gy], axis=-1))

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from sandbox.model import geometry, outlines
+from sandbox.model.budget import MAX_GOAL_VERTICES
 from sandbox.model.config import Config
 from sandbox.model.goal import Goal
 from sandbox.model.outlines import Sizing
@@ -15,8 +16,9 @@ from sandbox.shapes.errors import ShapeError
 
 def goal_notes(config: Config, goal: Goal, sizing: Sizing) -> list[str]:
     """What to say about a goal before it runs (see :func:`goal_fit_notes`), its outline family
-    first when it is not the paper's: which one, why, and where the goal was moved."""
-    notes = []
+    first when it is not the paper's: which one, why, and where the goal was moved. A goal simplified to
+    what the outlines afford says so before all."""
+    notes = [f"the goal was {goal.simplified} (the outlines afford {MAX_GOAL_VERTICES:,})"] if goal.simplified else []
     if goal.family == "offset":
         notes.append(f"the band follows the goal's edge at a distance (outline: offset): {goal.family_reason}")
     if any(goal.moved):
@@ -51,15 +53,17 @@ def _shift_words(dx: float, dy: float) -> str:
     return " and ".join(parts)
 
 
-def goal_fit_notes(config: Config, sizing: Sizing) -> list[str]:
+def goal_fit_notes(config: Config, sizing: Sizing, smallest: np.ndarray | None = None,
+                   largest: np.ndarray | None = None) -> list[str]:
     """Refuse a goal whose smallest outline does not fit the arena (ShapeError);
-    return a note when only its largest does not."""
-    box = outlines.overreach(config, sizing.polygon(sizing.smallest))
+    return a note when only its largest does not. ``smallest`` and ``largest``: the
+    outlines, if the caller has them already (growing a goal of many vertices costs)."""
+    box = outlines.overreach(config, sizing.polygon(sizing.smallest) if smallest is None else smallest)
     if box is not None:
         raise ShapeError(f"the goal does not fit the arena: its smallest outline spans {outlines.describe_box(box)} "
                          f"in a {config.arena_size:g} m arena (use a rounder shape, fewer boxes or a "
                          "bigger arena)")
-    box = outlines.overreach(config, sizing.polygon(sizing.largest))
+    box = outlines.overreach(config, sizing.polygon(sizing.largest) if largest is None else largest)
     if box is None:
         return []
     x0, x1, y0, y1 = box

@@ -78,10 +78,25 @@ def square_points(centre: np.ndarray, half: float, spacing: float) -> np.ndarray
     return np.stack([gx.ravel(), gy.ravel()], axis=-1) + np.asarray(centre, dtype=float)
 
 
+#: covering_distance measures the square's points this many at a time (a 2,000 m spawn square has 64
+#: million, 3 GB of coordinates and distances at once).
+_COVER_POINTS_AT_ONCE = 1 << 18
+
+
 def covering_distance(goal: Goal, centre: np.ndarray, half: float) -> float:
     """The smallest ``d`` whose grown goal covers the square of half-side ``half`` about ``centre``:
-    the largest distance from a point of the square to the goal."""
-    return float(max(signed_distance(square_points(centre, half, _COVER_SPACING), goal).max(), 0.0))
+    the largest distance from a point of the square to the goal (the points of :func:`square_points`,
+    a block of rows at a time: the same points, the same largest distance)."""
+    n = max(int(math.ceil(2.0 * half / _COVER_SPACING)), 1) + 1
+    s = np.linspace(-half, half, n)
+    centre = np.asarray(centre, dtype=float)
+    rows = max(1, _COVER_POINTS_AT_ONCE // n)
+    farthest = -np.inf
+    for first in range(0, n, rows):
+        gx, gy = np.meshgrid(s[first:first + rows], s, indexing="ij")
+        points = np.stack([gx.ravel(), gy.ravel()], axis=-1) + centre
+        farthest = max(farthest, float(signed_distance(points, goal).max()))
+    return float(max(farthest, 0.0))
 
 
 def wall_distance(goal: Goal, arena_size: float, clearance: float) -> float:

@@ -35,6 +35,8 @@ def preview_goal(config: Config, vertices, flare: float) -> GoalPreview:
     raises the same ShapeError here."""
     goal = make_goal(config, np.asarray(vertices, dtype=float))
     sizing = outlines.sizing_for(config, goal, flare)
-    notes = goal_fit_notes(config, sizing)
-    return GoalPreview(goal.outline(), sizing.polygon(sizing.smallest), sizing.polygon(sizing.largest),
-                       goal.area, notes)
+    smallest, largest = sizing.polygon(sizing.smallest), sizing.polygon(sizing.largest)
+    notes = goal_fit_notes(config, sizing, smallest, largest)
+    if goal.simplified:
+        notes = [f"the goal was {goal.simplified}", *notes]
+    return GoalPreview(goal.outline(), smallest, largest, goal.area, notes)

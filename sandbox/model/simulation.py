@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from sandbox.model import kernels, metrics, robots, watchdog
+from sandbox.model import budget, kernels, metrics, robots, watchdog
 from sandbox.model.chase import ChaseController
 from sandbox.model.config import STRATEGY_NAMES, Config, param
 from sandbox.model.controller import Controller
@@ -94,6 +94,9 @@ class Simulation:
         cfg = config or self.config
         if seed is not None:
             cfg = cfg.replace(seed=int(seed))
+        # Every Config is checked against the memory budget when it is made; again here, where every world
+        # is built, for one that came another way (unpickled from another process, made under a larger budget).
+        budget.check_settings(cfg)
         rng = np.random.default_rng(cfg.seed)
         goal = _goal(cfg, self.shape_vertices)
         controller = self._new_controller(cfg, goal)  # first: a goal that cannot fit stops here

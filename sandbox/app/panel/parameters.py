@@ -20,7 +20,7 @@ from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.plain import plain
 from sandbox.app.panel.tips import tip
 from sandbox.app.snapshot import Snapshot
-from sandbox.model.config import STRATEGY_NAMES, Config, params
+from sandbox.model.config import STRATEGY_NAMES, Config, ConfigError, params
 
 #: Parameters that get their own controls elsewhere (or make no sense live).
 NOT_IN_PARAMETER_FOLDERS = {"shape", "steps", *STRATEGY_NAMES}
@@ -128,6 +128,14 @@ class ParametersFolder:
             # Put the control back to the value in force.
             handle.value = getattr(self.runner.latest.config, name)
 
+        # The server decides before the simulation hears of it: settings whose world would not fit the
+        # memory budget (sandbox.model.budget), or that are refused for any other reason, go no further.
+        # The simulation checks again (it knows the changes waiting for a reset that no snapshot shows yet).
+        try:
+            self.runner.latest.config.replace(**{name: value})
+        except ConfigError as exc:
+            failed(exc)
+            return
         self.runner.update_config({name: value}, on_done=done, on_error=failed)
 
     def _show_profile_values(self, settings: Config) -> None:

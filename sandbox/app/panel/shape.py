@@ -17,6 +17,7 @@ from sandbox.app import viser_seam
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.draw import DrawFolder
 from sandbox.app.snapshot import Snapshot
+from sandbox.model.goal import fit_goal
 from sandbox.shapes import (
     ShapeError,
     builtin_shape_names,
@@ -125,9 +126,10 @@ class ShapeFolder:
             self.use_shape_file(filename, content, client)
             return
         name = upload_name(filename)
+        config = self.runner.latest.world_config  # the goal is fitted to the running world, as the simulation will
 
         def read() -> None:
-            self._post(self._take_read, name, self._read(name, content), client)
+            self._post(self._take_read, name, self._read(name, content, config), client)
 
         threading.Thread(target=read, name="upload-reader", daemon=True).start()
 
@@ -136,18 +138,26 @@ class ShapeFolder:
         file must not stall anyone's scene); use it or say why not. Every refusal is told to the page.
         Waits for the reader: call it off the event thread (:meth:`take_upload` does)."""
         name = upload_name(filename)
-        return self._take_read(name, self._read(name, content), client)
+        return self._take_read(name, self._read(name, content, self.runner.latest.world_config), client)
 
     @staticmethod
-    def _read(name: str, content: bytes) -> tuple[Any, str]:
-        """(vertices, '') or (None, why not)."""
+    def _read(name: str, content: bytes, config: Any = None) -> tuple[Any, str]:
+        """(vertices, '') or (None, why not). With ``config``, the goal is also fitted as the simulation will
+        fit it, here, before the simulation hears of it: a goal with more vertices than the outlines afford
+        even simplified, or too costly for the memory budget, is refused by the server."""
         try:
-            return read_polygon_isolated(bytes(content), name), ""
+            vertices = read_polygon_isolated(bytes(content), name)
         except ShapeError as exc:
             return None, str(exc)
         except Exception as exc:  # noqa: BLE001 - whatever happened, the page hears of it and the run goes on
             log.exception("upload %r could not be read", name)
             return None, f"{name}: could not be read ({type(exc).__name__})"
+        try:
+            if config is not None:
+                fit_goal(config, vertices)
+        except ShapeError as exc:
+            return None, f"{name}: {exc}"
+        return vertices, ""
 
     def _take_read(self, name: str, read: tuple[Any, str], client: Any) -> bool:
         vertices, problem = read
