@@ -39,7 +39,7 @@ from sandbox.cli import (UserError, add_config_arguments, add_controller_argumen
                          config_from_args, controller_from_args, design_from_args, program_time_limit)
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.watchdog import DEFAULT_LIMIT
-from sandbox.processes import stop_fork_server
+from sandbox.processes import start_fork_server, stop_fork_server
 from sandbox.shapes import shape_vertices
 
 TITLE = "Phototaxis sandbox"
@@ -413,6 +413,8 @@ def _app_from_args(args: argparse.Namespace) -> App:
         raise UserError(str(exc)) from None
     controller = controller_from_args(args)[0]
     starting()  # from here on there are processes and a server to stop: a stop is acted on where it waits
+    with interruptible():  # the fork server loads the model (1-3 s): here, where a stop needs no more tidying
+        start_fork_server()
     try:
         return App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
                    playing=not (args.paused or args.classroom), whole_arena=not args.classroom,
