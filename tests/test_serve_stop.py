@@ -279,3 +279,17 @@ def test_a_simulation_process_ends_when_its_app_is_killed(tmp_path):
             os.killpg(app.pid, signal.SIGKILL)
         if simulation is not None and running(simulation):
             os.kill(simulation[0], signal.SIGKILL)
+
+
+def test_a_runner_stopped_while_its_first_world_builds_kills_it_at_once(monkeypatch):
+    """A simulation process still building its first world reads no queue: it was asked to end and
+    waited for 5 s, then killed (a serve stopped then took more than 5 s)."""
+    from sandbox.app.process import ProcessRunner
+    from sandbox.model.config import Config
+
+    monkeypatch.setenv(SLOW_BUILD, "30")
+    runner = ProcessRunner(Config(robots=12, boxes=20), shape=None, wait=False)
+    wait_until(runner.process.is_alive, timeout=30, what="the simulation process to start")
+    started = time.monotonic()
+    runner.stop()
+    assert time.monotonic() - started < 1.0 and not runner.process.is_alive()
