@@ -233,6 +233,7 @@ class ProcessRunner(SimulationRunner):
             self._take_guarded(message)
             message = child.read(timeout=START_TIMEOUT)
         if message is None:
+            child.process.join(1.0)  # its pipe closes a moment before its exit code is known
             ended = child.process.exitcode
             child.end(kill=True)
             raise SimulationCrashed(self._last_words or (_ended(ended) if ended is not None else
@@ -541,6 +542,14 @@ def _ended(exitcode: int | None) -> str:
     return f"the simulation process stopped (exit code {exitcode})"
 
 
+def _not_built(exc: Exception) -> str:
+    """Why a simulation process could not build its first world, in a line."""
+    said = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+    if isinstance(exc, MemoryError) or "bad_alloc" in said:  # numpy's, or a C++ library's (GEOS)
+        return f"the simulation process ran out of memory building the world ({said})"
+    return f"the world could not be built ({type(exc).__name__}: {said})"
+
+
 def _unpicklable(command: Command) -> BaseException | None:
     """Why ``command`` cannot be sent to the child, or None. Checked here: the queue pickles on a thread
     of its own, where a failure would only be printed, and the command's future would wait forever."""
@@ -561,9 +570,8 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
     lock = threading.Lock()
     try:
         runner = Runner(**settings)
-    except MemoryError as exc:  # its first world does not fit: say so in a line, not a traceback
-        with lock:
-            send.send(("last words", f"the simulation process ran out of memory building the world ({exc})"))
+    except Exception as exc:  # noqa: BLE001 - its first world cannot be built: say why in a line
+        send.send(("last words", _not_built(exc)))
         os._exit(1)
     sent = {"world": None, "count": 0}
 
