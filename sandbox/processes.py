@@ -32,6 +32,24 @@ def simulation_context() -> BaseContext:
     return multiprocessing.get_context("spawn")
 
 
+def start_fork_server() -> None:
+    """Start this program's fork server now and wait until it has loaded the model, which the first
+    simulation process would otherwise wait for (1-3 s): for a program that wants the wait where it
+    chooses. ``serve`` waits here where a stop may interrupt it: a simulation process interrupted while
+    it is being started would be left to start alone, and the semaphores of its queues, gone with the
+    program, make it fail with a traceback; the process started here to wait on has none."""
+    context = simulation_context()
+    if context.get_start_method() != "forkserver":
+        return
+    process = context.Process(target=_nothing, name="phototaxis-fork-server-ready")
+    process.start()  # returns once the fork server, the model loaded, has forked it
+    process.join()
+
+
+def _nothing() -> None:
+    """What the process that waits for the fork server runs."""
+
+
 def stop_fork_server() -> None:
     """End this program's fork server, if it started one, and reap it: for a program that stops.
 

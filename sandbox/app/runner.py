@@ -12,13 +12,14 @@ a slow browser never slows physics.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import queue
 import threading
 import time
 from collections import deque
 from concurrent.futures import Future
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any, Callable, Iterator
 
 import numpy as np
 
@@ -31,6 +32,8 @@ from sandbox.model.design import MAX_PATTERNS, PatternRecorder
 
 #: What lights the floor while a design's recorded light program plays (serve --design).
 DESIGN_PROGRAM = "the design's recorded light program"
+#: The goal :meth:`Runner.on_build` names for a world built around the running goal.
+SAME_GOAL = "the running goal"
 from sandbox.model import watchdog
 from sandbox.model.config import Config
 from sandbox.model.metrics import Sample
@@ -157,6 +160,7 @@ class Runner(SimulationRunner):
         self._threads: list[threading.Thread] = []
         self._cancel = threading.Event()
         self._progress_listeners: list[Callable[[float | None], None]] = []
+        self._build_listeners: list[Callable[[tuple | None], None]] = []
         self._record_series(force=True)
         self._snapshot()
 
@@ -237,6 +241,24 @@ class Runner(SimulationRunner):
     def on_progress(self, listener: Callable[[float | None], None]) -> None:
         """``listener(fraction)`` hears how far building a world has got; None when it is over."""
         self._progress_listeners.append(listener)
+
+    def on_build(self, listener: Callable[[tuple | None], None]) -> None:
+        """``listener((config, goal, seed))`` hears what a new world or goal is built from as its building
+        starts (the goal as given: vertices, None for the circle, or SAME_GOAL), and ``listener(None)``
+        when it is over, built or not: a process runner tells the settings that killed a process from
+        those that ran."""
+        self._build_listeners.append(listener)
+
+    @contextlib.contextmanager
+    def _announcing(self, config: Config, goal: Any, seed: int | None) -> Iterator[None]:
+        """Within: a world or goal is being built from these settings (see :meth:`on_build`)."""
+        for listener in list(self._build_listeners):
+            self._deliver(listener, (config, goal, seed))
+        try:
+            yield
+        finally:
+            for listener in list(self._build_listeners):
+                self._deliver(listener, None)
 
     def _building(self, fraction: float) -> None:
         if self._cancel.is_set():
@@ -377,8 +399,11 @@ class Runner(SimulationRunner):
     @handles(Reset)
     def _reset(self, command: Reset) -> int:
         self._cancel.clear()
+        settings = self.settings
+        seed = settings.seed if command.seed is None else int(command.seed)
         try:
-            self.sim.reset(command.seed, config=self.settings, progress=self._building)
+            with self._announcing(settings, SAME_GOAL, seed):
+                self.sim.reset(command.seed, config=settings, progress=self._building)
         finally:
             self._report_progress(None)
         self.pending = {}
@@ -397,14 +422,16 @@ class Runner(SimulationRunner):
 
     @handles(SetShape)
     def _set_shape(self, command: SetShape) -> list[str]:
-        notes = self.sim.set_shape(command.vertices, name=command.name)
+        with self._announcing(self.sim.config, command.vertices, self.sim.seed):
+            notes = self.sim.set_shape(command.vertices, name=command.name)
         self.shape_name = command.name
         self._goal_key += 1
         return notes
 
     @handles(SetOutline)
     def _set_outline(self, command: SetOutline) -> list[str]:
-        notes = self.sim.set_outline(command.outline)
+        with self._announcing(self.sim.config.replace(outline=command.outline), SAME_GOAL, self.sim.seed):
+            notes = self.sim.set_outline(command.outline)
         self._goal_key += 1  # an offset goal may have moved
         return notes
 
@@ -444,10 +471,11 @@ class Runner(SimulationRunner):
         from sandbox.model.design import Replay
 
         design = command.design
-        self.sim.set_shape(design.shape, name=design.config.shape)
-        self.sim.use_program(Replay(design))
-        self.pending = {}
-        self.sim.reset(design.seed, config=design.config)
+        with self._announcing(design.config, design.shape, design.seed):
+            self.sim.set_shape(design.shape, name=design.config.shape)
+            self.sim.use_program(Replay(design))
+            self.pending = {}
+            self.sim.reset(design.seed, config=design.config)
         self.shape_name = design.config.shape
         self.program_name = DESIGN_PROGRAM
         self._new_world()

@@ -10,9 +10,10 @@ Every connected browser sees the same simulation and the same panel.
 from __future__ import annotations
 
 import argparse
-import os
 import contextlib
 import io
+import os
+import re
 import socket
 import time
 from pathlib import Path
@@ -27,18 +28,18 @@ from sandbox.app.memory import return_memory_after_pages_leave
 from sandbox.app.pacing import frames_per_snapshot
 from sandbox.app.panel import Panel
 from sandbox.app.panel.framing import PRESENTER, WHOLE_ARENA
-from sandbox.app.process import ProcessRunner
+from sandbox.app.process import ProcessRunner, SimulationCrashed
 from sandbox.app.runner import Runner, wait_for
 from sandbox.app.scene import SceneView, configure_scene
 from sandbox.app.snapshot import Snapshot
-from sandbox.app.stopping import interruptible, term_stops
+from sandbox.app.stopping import interruptible, starting, term_stops
 from sandbox.app.viser_seam import ViserMismatch
 from sandbox.app.viser_seam import check as check_viser
 from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, add_design_argument,
                          config_from_args, controller_from_args, design_from_args, program_time_limit)
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.watchdog import DEFAULT_LIMIT
-from sandbox.processes import stop_fork_server
+from sandbox.processes import start_fork_server, stop_fork_server
 from sandbox.shapes import ShapeError, shape_vertices
 
 TITLE = "Phototaxis sandbox"
@@ -97,7 +98,9 @@ class App:
         try:
             read_icons_once()
             self._configure_page()
-            self.view = SceneView(self.server.scene, self.runner.latest, caption_over_construction=not whole_arena)
+            with interruptible():  # the first world may take long to build: a stop asked for meanwhile acts now
+                first = self.runner.latest
+            self.view = SceneView(self.server.scene, first, caption_over_construction=not whole_arena)
             self.comparison = Comparison(self.server, self.lockstep, make_runner,
                                          on_layout=self._reframe_all, on_crash=self._on_partner_crash,
                                          caption_over_construction=not whole_arena, events=self.events)
@@ -109,13 +112,14 @@ class App:
                                default_view=WHOLE_ARENA if whole_arena else PRESENTER, events=self.events)
         except BaseException:
             self.events.stop()
-            self.server.stop()  # do not leave a half-built server listening
+            _stop_quietly(self.server)  # do not leave a half-built server listening
             self.runner.stop()
             raise
         self.frames_drawn = 0
         self.runner.subscribe(lambda snap: self.events.post_latest("frame", self._on_frame, snap))
         if process:
             self.runner.on_crash(self._on_crash)  # delivered on the event queue
+            self.runner.on_settings_back(self.panel.show_settings)  # the panel shows the settings that stand
         # With no viewer for a while, stop stepping (a forgotten demo should not heat the room).
         self.keep_running, self.idle_pause_seconds = keep_running, idle_pause_seconds
         self.auto_paused = False  # owned by the event thread, as everything below
@@ -224,8 +228,9 @@ class App:
                 self.panel.framing.apply(client)
 
     def _on_partner_crash(self, why: str) -> None:
+        what = re.split("; (?:restarting|back to)", why)[0]  # what comes next is compare mode's end
         for client in self.server.get_clients().values():
-            client.add_notification("The compared world stopped", why[0].upper() + why[1:].split("; restarting")[0]
+            client.add_notification("The compared world stopped", what[0].upper() + what[1:]
                                     + ". Compare mode has ended; the running world goes on alone.", color="red",
                                     auto_close_seconds=20.0)
 
@@ -281,8 +286,12 @@ class App:
         self.events.stop()  # no event runs from here on: what follows owns the app's state alone
         self.comparison.end()
         self.runner.stop()
-        with contextlib.redirect_stdout(io.StringIO()):  # viser says goodbye on stdout
-            self.server.stop()
+        _stop_quietly(self.server)
+
+
+def _stop_quietly(server: Any) -> None:
+    with contextlib.redirect_stdout(io.StringIO()):  # viser says goodbye on stdout
+        server.stop()
 
 
 def free_port(host: str = "127.0.0.1") -> int:
@@ -347,23 +356,24 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 def serve_command(args: argparse.Namespace) -> int:
     """Serve until stopped. A SIGTERM or Ctrl+C at any moment, start-up included, stops what has
-    started so far (the app, its simulation process, the fork server) and exits with 0
+    started so far (the app, its simulation process, the fork server) and exits with 0 within 2 s
     (:mod:`sandbox.app.stopping`)."""
-    app = None
+    app, asked = None, False
     with term_stops():  # (the dispatcher has done so already: this is for other callers)
         try:
-            app = _app_from_args(args)  # a stop asked for meanwhile is acted on once it is built
+            app = _app_from_args(args)  # a stop asked for meanwhile: at its first world, or once it is built
             with interruptible():
                 app.start()
                 _print_address(app, args.host)
                 while True:
                     time.sleep(3600)
         except KeyboardInterrupt:
-            pass
+            asked = True  # (an app stopped while it was built stopped what it had started)
         finally:
             if app is not None:
                 app.stop()
-                stop_fork_server()  # now: it may still be loading the model, and would only end after
+            stop_fork_server()  # now: it may still be loading the model, and would only end after
+            if app is not None or asked:
                 print("stopped", flush=True)
     return 0
 
@@ -403,14 +413,20 @@ def _app_from_args(args: argparse.Namespace) -> App:
                                    trust_proxy=args.trust_proxy)
     except ValueError as exc:
         raise UserError(str(exc)) from None
+    controller = controller_from_args(args)[0]
+    starting()  # from here on there are processes and a server to stop: a stop is acted on where it waits
+    with interruptible():  # the fork server loads the model (1-3 s): here, where a stop needs no more tidying
+        start_fork_server()
     try:
         return App(config, host=args.host, port=args.port, fps=args.fps, steps_per_frame=args.steps_per_frame,
                    playing=not (args.paused or args.classroom), whole_arena=not args.classroom,
-                   keep_running=args.keep_running, controller=controller_from_args(args)[0], access=access,
+                   keep_running=args.keep_running, controller=controller, access=access,
                    program_time_limit=program_time_limit(args), compare=compare,
                    shape=design.shape if design else "from-config", design=design)
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
+    except SimulationCrashed as exc:  # its first world could not be built (out of memory, say)
+        raise UserError(f"the simulation cannot start: {exc}") from None
 
 
 def _check_goal(config: Config, vertices: Any, name: str) -> None:

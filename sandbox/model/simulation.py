@@ -101,10 +101,13 @@ class Simulation:
         goal = _goal(cfg, self.shape_vertices)
         controller = self._new_controller(cfg, goal)  # first: a goal that cannot fit stops here
         world = World(cfg, rng, progress, goal)
+        # The light field too (its largest arrays: settings too big for memory fail here, with a
+        # MemoryError, and leave the running world as it was).
+        lights = LightField(cfg)
+        centres = _read_only(light_centres(cfg))  # the pitch and arena only change with a new world
         # Built: from here on nothing can fail halfway.
         self.config, self.seed, self.world, self.goal, self.controller = cfg, cfg.seed, world, goal, controller
-        self.lights = LightField(cfg)
-        self._centres = _read_only(light_centres(cfg))  # the pitch and arena only change with a new world
+        self.lights, self._centres = lights, centres
         self._start_program()
         if self.pattern_recorder is not None:  # a new world: its light program starts afresh
             self.pattern_recorder.start(0, self.lights.intensities)

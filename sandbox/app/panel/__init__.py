@@ -111,6 +111,12 @@ class Panel:
         self.framing.forget(client_id)
         self.presenter.forget(client_id)
 
+    def show_settings(self, config: Any) -> None:
+        """The controls show ``config``: after a crash, the simulation went back to the last settings that
+        ran (sandbox.app.standing), and the panel shows the settings that stand."""
+        self.parameters.show_settings(config)
+        self.strategies.show_settings(config)
+
     def on_frame_drawn(self) -> None:
         self.record.on_frame_drawn()
 

@@ -52,6 +52,7 @@ class ParametersFolder:
         self.gui, self.runner = gui, runner
         self.controls: dict[str, Any] = {}
         self.waiting: list[str] = []  # names waiting for a reset, as the runner last said
+        self._quiet = False  # the panel itself is setting the controls (show_settings): nothing to send
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -110,7 +111,21 @@ class ParametersFolder:
 
         return handle
 
+    def show_settings(self, config: Config) -> None:
+        """Every control shows ``config``'s value, nothing waits for a reset: the settings that stand
+        after the simulation went back to the last that ran (sandbox.app.standing)."""
+        self._quiet = True
+        try:
+            for name, handle in self.controls.items():
+                handle.value = getattr(config, name)
+        finally:
+            self._quiet = False
+        self.waiting = []
+        self.pending.content = ""
+
     def _changed(self, name: str, handle: Any, client: Any) -> None:
+        if self._quiet:
+            return
         value = handle.value
 
         def done(result: tuple[list[str], Config]) -> None:

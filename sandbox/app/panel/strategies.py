@@ -111,6 +111,11 @@ class StrategiesFolder:
         self.outline.value = "auto"
         self._show_strategies(strategies)
 
+    def show_settings(self, config: Any) -> None:
+        """Show ``config``'s outline and strategies (the settings that stand after a crash went back)."""
+        self.outline.value = config.outline  # a value set here, not a pick: nothing is sent
+        self._show_strategies({s.name: float(getattr(config, s.name)) for s in STRATEGIES})
+
     def _show_strategies(self, values: dict[str, float]) -> None:
         self._quiet = True
         try:
