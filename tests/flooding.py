@@ -63,7 +63,9 @@ def client_frames(messages: list[dict]) -> bytes:
 
 def flood(port: int, kind: str, connections: int, seconds: float, headers: dict[str, str],
           uuid: str = "") -> tuple[int, int]:
-    """Flood from this process: the messages sent in all, and how many connections the server closed."""
+    """Flood from this process: the messages written to the sockets in all (the server reads what its
+    budgets allow; the rest waits in the sockets), and how many connections the server closed while
+    the flood went on."""
     clients = [RawClient(port, headers) for _ in range(connections)]
     for client in clients:
         client.say_hello()
@@ -112,7 +114,7 @@ def start_flood(port: int, kind: str, connections: int, seconds: float, headers:
 
 
 def flood_result(process: subprocess.Popen, timeout: float = 60.0) -> tuple[int, int]:
-    """(messages sent, connections the server closed) of a :func:`start_flood`."""
+    """(messages written, connections the server closed) of a :func:`start_flood`."""
     out, err = process.communicate(timeout=timeout)
     words = out.split()
     if process.returncode != 0 or len(words) != 4:

@@ -84,15 +84,16 @@ def test_controls_wait_each_its_newest_and_at_most_sixteen_wait():
 
 def test_a_page_that_presses_against_its_budget_for_five_seconds_floods():
     flow, t = Flow(controls=False, now=0.0), 0.0
-    while (delay := flow.may_read(t)) >= 0:  # a page that sends as fast as it is read
-        t += delay
+    while not flow.floods(t):  # a page that sends as fast as it is read
+        t += flow.wait_to_read(t)
         flow.reading.take(t)
     assert t == pytest.approx(FLOOD_SECONDS, abs=0.01)  # its burst spent at once, then 5 s at the rate
     paused = Flow(controls=False, now=0.0)
     for _ in range(int(rates.WATCH_READING.burst)):
         paused.reading.take(0.0)
-    assert paused.may_read(0.0) == pytest.approx(1 / 120)  # pressing since 0 ...
-    assert paused.may_read(2.0) == 0.0 and paused.pressing_since is None  # ... until it paused (its budget filled)
+    assert paused.wait_to_read(0.0) == pytest.approx(1 / 120) and paused.pressing_since == 0.0
+    assert paused.wait_to_read(2.0) == 0.0 and paused.pressing_since is None  # it paused: its budget filled
+    assert not paused.floods(6.0)
 
 
 def test_refusals_are_logged_at_most_once_a_second_per_page_with_a_count(caplog):

@@ -76,9 +76,6 @@ CONTROL_KINDS = ("GuiUpdateMessage", "GuiButtonHoldMessage", "CommandTriggerMess
                  "SceneNodeClickMessage", "SceneNodeDragMessage", "TransformControlsUpdateMessage",
                  "TransformControlsDragStartMessage", "TransformControlsDragEndMessage")
 
-_malformed = RefusalLog(log)
-
-
 class Bucket:
     """A token bucket: :meth:`take` one message's token if there is one."""
 
@@ -123,23 +120,24 @@ class Flow:
         self.waiting: dict[tuple, tuple[Bucket, Any]] = {}  # the newest of each kind and control, in order
         self.pressing_since: float | None = None
         self.counts: Counter = Counter()
+        self.refusals = RefusalLog(log)  # (its own: client ids are counted per server)
         self.handle: Callable[[Any], None] | None = None
         self._wake: asyncio.TimerHandle | None = None
 
     # --------------------------------------------------------------- reading
-    def may_read(self, now: float) -> float:
-        """Seconds to wait before reading the next message (0: now), and whether the page floods:
-        -1 when it has pressed against its budget for :data:`FLOOD_SECONDS`."""
+    def wait_to_read(self, now: float) -> float:
+        """Seconds to wait before the next message may be read (0: now). Notes since when the page has
+        pressed against its budget: until it pauses long enough for the budget to fill half again."""
         delay = self.reading.wait(now)
-        if delay == 0.0:
-            if self.reading.level >= self.reading.burst / 2:  # it paused: the budget filled again
-                self.pressing_since = None
-            return 0.0
-        if self.pressing_since is None:
+        if delay == 0.0 and self.reading.level >= self.reading.burst / 2:
+            self.pressing_since = None
+        elif delay > 0.0 and self.pressing_since is None:
             self.pressing_since = now
-        elif now - self.pressing_since >= FLOOD_SECONDS:
-            return -1.0
         return delay
+
+    def floods(self, now: float) -> bool:
+        """Whether the page has pressed against its reading budget for :data:`FLOOD_SECONDS`."""
+        return self.pressing_since is not None and now - self.pressing_since >= FLOOD_SECONDS
 
     def read(self, raw: Any, now: float) -> None:
         """A message read off the connection: decoded and applied, or waiting, or refused."""
@@ -149,7 +147,7 @@ class Flow:
             message = decode(raw)
         except Malformed as why:
             self.counts["malformed"] += 1
-            _malformed.refused(self.client_id, f"{why}")
+            self.refusals.refused(self.client_id, str(why))
             return
         self.offer(message, now)
 
@@ -200,7 +198,7 @@ class Flow:
             self._wake = None
         self.waiting.clear()
         self.handle = None
-        _malformed.forget(self.client_id)
+        self.refusals.forget(self.client_id)
 
 
 # -------------------------------------------------------------- connections
@@ -227,8 +225,9 @@ async def consume(connection: Any, handle: Callable[[Any], None], message_class:
     flow.handle = handle
     try:
         while True:
-            delay = flow.may_read(time.monotonic())
-            if delay < 0:
+            now = time.monotonic()
+            delay = flow.wait_to_read(now)
+            if flow.floods(now):
                 await _disconnect(connection, flow)
                 break
             if delay > 0:

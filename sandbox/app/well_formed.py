@@ -12,7 +12,7 @@ within :data:`LARGEST`, every list of any length at most :data:`MOST_ITEMS` long
 positive and bounded (:data:`CAMERA_BOUNDS`). msgspec decodes and checks in one pass, in C, and stops
 at the first field that is wrong; its one line says where (``Expected `int` >= 1 - at
 `$.image_height```). A message larger than :data:`LARGE_MESSAGE` may only be an upload's part (the
-only large thing a page sends), decoded as one, so a megabyte of nested lists is refused at its first
+only large thing a page sends: the app never asks a page for a render), decoded as one, so a megabyte of nested lists is refused at its first
 byte out of place rather than built. What passes becomes viser's own message object, as viser's
 decoder would have built it.
 """
@@ -70,7 +70,10 @@ def decode(raw: Any) -> Any:
     kind = type(decoded).__name__
     if kind == "ViewerCameraMessage":
         _check_camera(decoded)
-    return _VISER_CLASS[kind](**msgspec.structs.asdict(decoded))
+    try:
+        return _VISER_CLASS[kind](**msgspec.structs.asdict(decoded))
+    except (TypeError, ValueError) as why:  # (a viser class that checks more than its annotations say)
+        raise Malformed(f"{kind}: {why}") from None
 
 
 def _check_camera(camera: Any) -> None:
