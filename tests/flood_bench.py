@@ -6,7 +6,8 @@ the page's frames a second and the server's memory (RSS) for 5 s before, during 
 of it from ``CONNECTIONS`` connections at full speed) and 10 s after it ended, and what the flood sent.
 
 Kinds: ``camera`` (watchers' cameras), ``camera-zero`` (cameras with ``image_height`` 0), ``control``
-(watchers' refused control messages), ``values`` (a page with the token moving a slider), ``malformed``.
+(watchers' refused control messages), ``mixed`` (cameras and refused controls), ``values`` (a page with
+the token moving a slider), ``malformed``.
 """
 
 from __future__ import annotations
@@ -15,20 +16,24 @@ import argparse
 import os
 import subprocess
 import sys
+import tempfile
 import time
+from typing import Any
 
 from sandbox.app.server import free_port
 from tests.flooding import REPO, PacedPage, flood_result, rss, start_flood
 from tests.viser_wire import RawClient
 
 TOKEN = "flood-bench-token"
-KINDS = ("camera", "camera-zero", "control", "values", "malformed")
+KINDS = ("camera", "camera-zero", "control", "values", "malformed")  # (and "mixed", on request)
 
 
-def start_server(port: int) -> subprocess.Popen:
+def start_server(port: int, log: Any) -> subprocess.Popen:
+    """``phototaxis serve`` writing to ``log`` (a file: a pipe nobody reads would stop a server that logs
+    much)."""
     args = ["prlimit", "--as=3000000000", "--", sys.executable, "-m", "sandbox", "serve", "--port", str(port),
             "--token", TOKEN, "--keep-running"]
-    return subprocess.Popen(args, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    return subprocess.Popen(args, cwd=REPO, stdout=log, stderr=subprocess.STDOUT,
                             env={**os.environ, "PYTHONPATH": str(REPO)})
 
 
@@ -86,27 +91,27 @@ def main() -> None:
     parser.add_argument("--connections", type=int, default=4)
     parser.add_argument("--seconds", type=float, default=5.0)
     options = parser.parse_args()
-    port = free_port()
-    server = start_server(port)  # (prlimit execs the server: its pid is the server's)
+    port, log = free_port(), tempfile.TemporaryFile()
+    server = start_server(port, log)  # (prlimit execs the server: its pid is the server's)
     try:
         wait_for_server(port)
         page = PacedPage(port, {"Origin": f"http://127.0.0.1:{port}"})
         for kind in options.kinds:
-            bench(kind, port, server.pid, page, options.connections,
-                  options.seconds)
+            bench(kind, port, server.pid, page, options.connections, options.seconds)
         page.close()
     finally:
         server.terminate()
         try:
-            _, err = server.communicate(timeout=30)
+            server.wait(timeout=30)
         except subprocess.TimeoutExpired:
             server.kill()
-            _, err = server.communicate()
-        lines = err.splitlines()
-        print(f"server log: {len(lines)} lines, {len(err)} bytes; tracebacks: {err.count('Traceback')}")
+            server.wait()
+        log.seek(0)
+        text = log.read().decode(errors="replace")
+        lines = text.splitlines()
+        print(f"server log: {len(lines)} lines, {len(text)} bytes; tracebacks: {text.count('Traceback')}")
         for line in lines[:6]:
             print("  " + line[:200])
-
 
 if __name__ == "__main__":
     main()
