@@ -21,9 +21,12 @@ and :func:`start_server` refuses to start on a viser that lacks any):
 2. **Each connection's grant.** An infra-level connect callback (it runs
    before the connection's first message is read) takes the grant the
    handshake decided for that raw connection.
-3. **Incoming messages.** The server's (and each connection's) dispatch of
-   incoming messages goes through :class:`sandbox.app.inbox.Inbox` first,
-   which refuses what the grant does not allow and handles uploads itself.
+3. **Incoming messages.** Each connection's messages are read within its
+   budgets (:mod:`sandbox.app.rates`, which replaces viser's reading loop and
+   decodes them with :mod:`sandbox.app.well_formed`); the server's (and each
+   connection's) dispatch of them goes through
+   :class:`sandbox.app.inbox.Inbox` first, which refuses what the grant does
+   not allow and handles uploads itself.
 4. **The shared scene's windows.** Each connection's windows of the
    broadcast buffer pass through :class:`sandbox.app.pacing.Pacer`, which
    holds them for a page until it reports drawing the last (the report is
@@ -47,7 +50,7 @@ from typing import Any, Callable
 import viser
 import websockets
 
-from sandbox.app import viser_seam, wakeups
+from sandbox.app import rates, viser_seam, wakeups
 from sandbox.app.access import Access, Grant, address_group, redirect_target
 from sandbox.app.inbox import Inbox
 from sandbox.app.pacing import PATH as DRAWN_PATH
@@ -112,6 +115,7 @@ class Gate:
                 return connection.respond(http.HTTPStatus.NO_CONTENT if known else http.HTTPStatus.NOT_FOUND, "")
             if upgrade:
                 self._handshaken[connection] = decision.grant
+                rates.track(connection, decision.grant.controls)  # its budgets, from its first message
                 limit = CONTROL_MESSAGE_BYTES if decision.grant.controls else WATCH_MESSAGE_BYTES
                 connection.protocol.max_message_size = limit
                 return None
@@ -159,6 +163,11 @@ class Gate:
         with self._lock:
             return self._grants.get(client_id)
 
+    def flow(self, client_id: int) -> rates.Flow | None:
+        """The budgets of a page's connection, and what became of its messages."""
+        raw = viser_seam.raw_connection(self.server, client_id) if self.server is not None else None
+        return rates.flow_of(raw) if raw is not None else None
+
     def may_load_programs(self, client: Any) -> bool:
         grant = self.grant(getattr(client, "client_id", -1))
         return grant is not None and grant.controls and grant.programs
@@ -169,6 +178,9 @@ class Gate:
         with self._lock:
             if grant is not None:
                 self._grants[connection.client_id] = grant
+        flow = rates.flow_of(raw) if raw is not None else None
+        if flow is not None:
+            flow.client_id = connection.client_id  # (its refusals are logged under its id)
         if grant is None:  # not through our handshake: nothing it sends is heard
             log.warning("connection %s has no grant; closing it", connection.client_id)
             if raw is not None:
@@ -220,6 +232,7 @@ def start_server(access: Access, *, host: str, port: int, label: str, verbose: b
     global _gate_being_built
     viser_seam.check()
     viser_seam.serve_websockets_through(_gated_serve)
+    viser_seam.read_messages_through(rates.consume)
     wakeups.install()
     gate = Gate(access)
     with _building:

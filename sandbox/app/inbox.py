@@ -5,9 +5,10 @@ attribute of a control's state (its value, but also ``disabled``, its
 callbacks...), to a disabled or hidden control, with a value outside its
 options or range. :meth:`Inbox.admit` lets a message through only when the
 connection's grant allows it and, for a control, when it is a new value, in
-range, for a control that is shown and enabled. Refusals are logged (a few
-per connection, then counted) and a watching page is told once that it only
-watches.
+range, for a control that is shown and enabled. Refusals are logged (at most
+one line a second per connection, with a count:
+:class:`sandbox.app.refusals.RefusalLog`) and a watching page is told once
+that it only watches.
 
 Uploads are handled here, not by viser: an upload starts only if its
 announced size is within the limit, its parts are counted as they arrive and
@@ -42,6 +43,7 @@ from viser import (
 
 from sandbox.app import viser_seam
 from sandbox.app.access import Grant
+from sandbox.app.refusals import RefusalLog
 from sandbox.app.viser_seam import messages
 
 log = logging.getLogger("sandbox.app.inbox")
@@ -57,8 +59,6 @@ UPLOAD_PART = 512 * 1024
 UPLOAD_NOTICE_CLOSED_AFTER = (0.4, 1.5)
 #: Longest text a text field takes.
 TEXT_LIMIT = 4096
-#: Refusals logged in full per connection; later ones are counted.
-LOGGED_PER_CLIENT = 5
 
 #: What a watching page may send: its own camera.
 WATCH_MESSAGES = (messages.ViewerCameraMessage,)
@@ -99,6 +99,7 @@ class Inbox:
         self.upload_limit = int(upload_limit)
         self._transfers: dict[str, _Transfer] = {}
         self._refusals: dict[int, int] = {}
+        self._refusal_log = RefusalLog(log)
         self._told_watching: set[int] = set()
         self._lock = threading.Lock()
 
@@ -141,6 +142,7 @@ class Inbox:
                 del self._transfers[uuid]
             self._refusals.pop(client_id, None)
             self._told_watching.discard(client_id)
+        self._refusal_log.forget(client_id)
 
     # --------------------------------------------------------------- checks
     def _check_sender(self, client_id: int, grant: Grant | None, message: Any, quietly: bool = False) -> None:
@@ -318,11 +320,8 @@ class Inbox:
 
     def _refused(self, client_id: int, message: Any, why: str) -> None:
         with self._lock:
-            count = self._refusals[client_id] = self._refusals.get(client_id, 0) + 1
-        if count <= LOGGED_PER_CLIENT:
-            log.warning("refused %s from connection %s: %s", type(message).__name__, client_id, why)
-        elif count % 1000 == 0:
-            log.warning("refused %d messages from connection %s so far", count, client_id)
+            self._refusals[client_id] = self._refusals.get(client_id, 0) + 1
+        self._refusal_log.refused(client_id, f"{type(message).__name__}: {why}")
 
 
 # ------------------------------------------------------------------ values

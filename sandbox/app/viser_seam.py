@@ -64,7 +64,9 @@ class Use:
 MESSAGE_NAMES = ("RunJavascriptMessage", "GuiUpdateMessage", "GuiButtonHoldMessage", "CommandTriggerMessage",
                  "ViewerCameraMessage", "ShareUrlRequest", "ShareUrlDisconnect", "GuiFormSubmitMessage",
                  "GuiFormDirtyMessage", "FileTransferStartUpload", "FileTransferPart", "FileTransferPartAck",
-                 "RemoveNotificationMessage")
+                 "RemoveNotificationMessage", "ScenePointerMessage", "SceneNodeClickMessage", "SceneNodeDragMessage",
+                 "TransformControlsUpdateMessage", "TransformControlsDragStartMessage",
+                 "TransformControlsDragEndMessage", "GetRenderResponseMessage", "LocalStorageGetItemResponseMessage")
 
 INFRA = "viser.infra._infra"
 BUFFER = "viser.infra._async_message_buffer"
@@ -87,6 +89,10 @@ USES: tuple[Use, ...] = (
     Use("a connection's own dispatch of incoming messages",
         f"{INFRA}:WebsockClientConnection._handle_incoming_message",
         "the same checks before the page's own handlers (its camera, its own controls)", arguments=2),
+    Use("the loop that reads each connection's messages", f"{INFRA}:_message_consumer",
+        "replaced process-wide by sandbox.app.rates.consume: each connection's budget is applied before a "
+        "message is read, and a malformed message is refused in one line instead of closing the connection "
+        "with a traceback", arguments=3),
     Use("a connection's message queue", f"{INFRA}:WebsockClientConnection.queue_message",
         "scripts of ours for one page at connect, and messages for one page only", arguments=1),
     Use("a connection's client id", f"{INFRA}:WebsockClientConnection.client_id",
@@ -108,7 +114,8 @@ USES: tuple[Use, ...] = (
         "(sandbox.app.wakeups)", ASSIGNED),
     # --------------------------------------------------------------- the inbox (sandbox.app.inbox)
     Use("the message classes", "viser._messages", "the inbox tells messages apart and sends some itself; "
-        "the gate sends RunJavascriptMessage", names=MESSAGE_NAMES),
+        "the gate sends RunJavascriptMessage; sandbox.app.well_formed decodes those a page sends",
+        names=MESSAGE_NAMES),
     Use("a handle's state", "viser._assignable_props_api:AssignablePropsBase._impl",
         "its uuid, whether it is removed, and its props as the page was sent them (a button group's "
         "public disabled is always False)", ASSIGNED),
@@ -269,6 +276,17 @@ class _View:
 
     def __getattr__(self, name: str) -> Any:
         return self._overrides[name] if name in self._overrides else getattr(self._module, name)
+
+
+def read_messages_through(consume: Callable[[Any, Callable[[Any], None], Any], Any]) -> None:
+    """viser reads each connection's messages with ``consume(connection, handle, message_class)`` (a
+    coroutine: it receives from the raw websockets ``connection``, and passes each message it accepts to
+    ``handle``), process-wide, once."""
+    infra = importlib.import_module(INFRA)
+    if getattr(infra._message_consumer, "_ours", False):
+        return
+    consume._ours = True
+    infra._message_consumer = consume
 
 
 def on_connections(server: viser.ViserServer, connect: Callable, disconnect: Callable) -> None:
