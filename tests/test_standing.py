@@ -18,8 +18,8 @@ KILLED = "the simulation process was killed, most likely out of memory (exit cod
 
 
 def test_values_are_named_plainly_and_at_most_four_of_them():
-    assert values(Config(light_pitch=0.05, field_samples=64), ["light_pitch", "field_samples"]) == \
-        "light pitch 0.05, field samples 64"
+    assert values(Config(light_pitch=0.5, field_samples=64), ["light_pitch", "field_samples"]) == \
+        "light pitch 0.5, field samples 64"
     names = changed(Config(profile="paper-text"), Config())
     assert len(names) == 23 and names[:2] == ["profile", "assembly_centre"]
     assert values(Config(profile="paper-text"), names) == \
