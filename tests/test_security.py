@@ -632,3 +632,32 @@ def test_every_token_a_request_presents_must_be_well_formed(shared_app):
         status, headers = raw_request(app.port, f"GET {repeated} HTTP/1.1".encode())
         assert status == 302 and f"={TOKEN};" in headers["Set-Cookie"], repeated
     presenter_controls(app)
+
+
+def test_repeated_headers_a_browser_may_send_never_make_a_server_error(app, caplog):
+    """Left from hole G1: two Upgrade headers answered 500 (the gate asked websockets' headers for one value)
+    and two Accept-Encoding headers, which HTTP allows, answered 500 from viser's page server. Two Upgrade
+    headers are a 400 with one line; two Accept-Encoding headers are read as one list and get the page."""
+    status, _ = raw_request(app.port, b"GET / HTTP/1.1", [("Upgrade", b"websocket"), ("Upgrade", b"websocket")])
+    assert status == 400
+    said = [r.getMessage() for r in caplog.records if r.name == "sandbox.app.gate"]
+    assert any("more than one Upgrade header" in line for line in said), said
+    status, headers = raw_request(app.port, b"GET / HTTP/1.1", [("Accept-Encoding", b"identity"),
+                                                                 ("Accept-Encoding", b"gzip")])
+    assert status == 200 and headers.get("Content-Encoding") == "gzip"
+    assert not [r for r in caplog.records if r.exc_info], "a traceback was logged"
+    connected(app, RawClient(app.port, own_page(app)))
+
+
+def test_a_connection_that_closes_before_its_request_logs_one_line_not_a_traceback(app, caplog):
+    """A bare TCP connection closed before any request made websockets log 'opening handshake failed' with
+    its whole traceback: a script opening and closing sockets would fill the log. It is one line, at most
+    one a second."""
+    for _ in range(20):
+        socket.create_connection(("127.0.0.1", app.port), timeout=5).close()
+    wait_until(lambda: any("opening handshake failed" in r.getMessage() for r in caplog.records),
+               what="websockets to notice the closed connections")
+    failed = [r for r in caplog.records if "opening handshake failed" in r.getMessage()]
+    assert all(r.exc_info is None for r in failed), "a traceback was logged"
+    assert len(failed) <= 2, [r.getMessage() for r in failed]
+    connected(app, RawClient(app.port, own_page(app)))

@@ -43,6 +43,7 @@ import http
 import io
 import logging
 import threading
+import time
 import weakref
 from concurrent.futures import Future
 from typing import Any, Callable
@@ -96,38 +97,54 @@ class Gate:
         """websockets' ``process_request``: the gate's answer, else viser's (the page's files)."""
 
         def answer(connection: Any, request: Any) -> Any:
-            upgrade = request.headers.get("Upgrade", "").lower() == "websocket"
-            if not self.ready:
-                return connection.respond(http.HTTPStatus.SERVICE_UNAVAILABLE, "starting; try again\n")
-            peer = _peer(connection)
-            decision = self.access.decide(request.headers, request.path, peer, websocket=upgrade,
-                                          server_address=_server_address(connection))
-            if decision.refused:
-                log.warning("refused %s %s from %s: %s", "websocket" if upgrade else "request",
-                            request.path.split("?")[0], peer, decision.reason)
-                return connection.respond(decision.status, decision.reason + "\n")
-            no_room = self._no_room_for(decision.grant) if upgrade else ""
-            if no_room:
-                log.warning("refused websocket from %s: %s", decision.grant.address, no_room)
-                return connection.respond(http.HTTPStatus.SERVICE_UNAVAILABLE, no_room + "\n")
-            if not upgrade and request.path.startswith(DRAWN_PATH):  # a page drew a frame
-                known = self.pacer.drawn(request.path[len(DRAWN_PATH):])
-                return connection.respond(http.HTTPStatus.NO_CONTENT if known else http.HTTPStatus.NOT_FOUND, "")
-            if upgrade:
-                self._handshaken[connection] = decision.grant
-                rates.track(connection, decision.grant.controls)  # its budgets, from its first message
-                limit = CONTROL_MESSAGE_BYTES if decision.grant.controls else WATCH_MESSAGE_BYTES
-                connection.protocol.max_message_size = limit
-                return None
-            if decision.store_token:  # keep the token in a cookie and take it out of the address bar
-                response = connection.respond(http.HTTPStatus.FOUND, "")
-                response.headers["Location"] = redirect_target(request.path)  # ours: never another site
-                response.headers["Set-Cookie"] = self.access.set_cookie_header()
-                response.headers["Cache-Control"] = "no-store"
-                return response
-            return viser_answer(connection, request) if viser_answer else None
+            try:
+                return self._answer(connection, request, viser_answer)
+            except Exception as exc:  # a request nothing here foresaw: one line and a 400, never a 500
+                log.warning("refused a malformed request %s from %s: %s: %s", request.path.split("?")[0][:80],
+                            _peer(connection), type(exc).__name__, str(exc)[:200])
+                return connection.respond(http.HTTPStatus.BAD_REQUEST, "malformed request\n")
 
         return answer
+
+    def _answer(self, connection: Any, request: Any, viser_answer: Callable | None) -> Any:
+        """The gate's answer to one request (None lets websockets upgrade it), else viser's."""
+        upgrades = request.headers.get_all("Upgrade")
+        if len(upgrades) > 1:  # websockets' headers refuse to pick one: say so rather than fail
+            log.warning("refused %s from %s: more than one Upgrade header", request.path.split("?")[0][:80],
+                        _peer(connection))
+            return connection.respond(http.HTTPStatus.BAD_REQUEST,
+                                      "this request has more than one Upgrade header; send one\n")
+        upgrade = bool(upgrades) and upgrades[0].lower() == "websocket"
+        if not self.ready:
+            return connection.respond(http.HTTPStatus.SERVICE_UNAVAILABLE, "starting; try again\n")
+        peer = _peer(connection)
+        decision = self.access.decide(request.headers, request.path, peer, websocket=upgrade,
+                                      server_address=_server_address(connection))
+        if decision.refused:
+            log.warning("refused %s %s from %s: %s", "websocket" if upgrade else "request",
+                        request.path.split("?")[0], peer, decision.reason)
+            return connection.respond(decision.status, decision.reason + "\n")
+        no_room = self._no_room_for(decision.grant) if upgrade else ""
+        if no_room:
+            log.warning("refused websocket from %s: %s", decision.grant.address, no_room)
+            return connection.respond(http.HTTPStatus.SERVICE_UNAVAILABLE, no_room + "\n")
+        if not upgrade and request.path.startswith(DRAWN_PATH):  # a page drew a frame
+            known = self.pacer.drawn(request.path[len(DRAWN_PATH):])
+            return connection.respond(http.HTTPStatus.NO_CONTENT if known else http.HTTPStatus.NOT_FOUND, "")
+        if upgrade:
+            self._handshaken[connection] = decision.grant
+            rates.track(connection, decision.grant.controls)  # its budgets, from its first message
+            limit = CONTROL_MESSAGE_BYTES if decision.grant.controls else WATCH_MESSAGE_BYTES
+            connection.protocol.max_message_size = limit
+            return None
+        if decision.store_token:  # keep the token in a cookie and take it out of the address bar
+            response = connection.respond(http.HTTPStatus.FOUND, "")
+            response.headers["Location"] = redirect_target(request.path)  # ours: never another site
+            response.headers["Set-Cookie"] = self.access.set_cookie_header()
+            response.headers["Cache-Control"] = "no-store"
+            return response
+        _one_list(request.headers, "Accept-Encoding")  # HTTP allows it twice; viser reads one value
+        return viser_answer(connection, request) if viser_answer else None
 
     def _no_room_for(self, grant: Grant) -> str:
         """Why a new connection with ``grant`` finds no room (empty when it does): at most
@@ -153,6 +170,7 @@ class Gate:
         """Hook the built server's connections and dispatch, then open the gate."""
         self.server, self.inbox = server, inbox
         self.access.port = server.get_port()
+        quiet_handshakes()
         viser_seam.on_connections(server, self._on_connect, self._on_disconnect)
         viser_seam.guard_messages(server, lambda client_id, message:
                                   inbox.admit(client_id, self.grant(client_id), message))
@@ -250,6 +268,56 @@ def start_server(access: Access, *, host: str, port: int, label: str, verbose: b
         server.stop()
         raise
     return server, gate
+
+
+def _one_list(headers: Any, name: str) -> None:
+    """A header sent more than once, as one comma-separated list (HTTP allows a list header to be split;
+    websockets' headers refuse to give one value for it, and viser asks for one)."""
+    values = headers.get_all(name)
+    if len(values) > 1:
+        del headers[name]
+        headers[name] = ", ".join(values)
+
+
+class QuietHandshakes(logging.Filter):
+    """websockets logs "opening handshake failed" with a whole traceback for each connection that closes or
+    sends something other than HTTP before its request: a script opening sockets would fill the log. This
+    makes it one warning naming the last reason, at most one a second, with a count of the ones not said."""
+
+    def __init__(self, every: float = 1.0):
+        super().__init__()
+        self.every, self._said_at, self._unsaid = every, float("-inf"), 0
+        self._lock = threading.Lock()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.msg != "opening handshake failed":
+            return True
+        reason = _last_reason(record.exc_info)
+        record.exc_info, record.exc_text, record.stack_info = None, None, None
+        now = time.monotonic()
+        with self._lock:
+            if now - self._said_at < self.every:
+                self._unsaid += 1
+                return False
+            unsaid, self._said_at, self._unsaid = self._unsaid, now, 0
+        record.levelno, record.levelname = logging.WARNING, "WARNING"
+        record.msg, record.args = "opening handshake failed: %s%s", (
+            reason, f" ({unsaid} more since the last line)" if unsaid else "")
+        return True
+
+
+def _last_reason(exc_info: Any) -> str:
+    """The innermost cause of a logged exception, in one line."""
+    exc = exc_info[1] if exc_info else None
+    while exc is not None and exc.__cause__ is not None:
+        exc = exc.__cause__
+    return f"{type(exc).__name__}: {str(exc)[:200]}" if exc is not None else "no reason given"
+
+
+def quiet_handshakes(logger: logging.Logger = logging.getLogger("websockets.server")) -> None:
+    """Put :class:`QuietHandshakes` on websockets' server logger, once per process."""
+    if not any(isinstance(f, QuietHandshakes) for f in logger.filters):
+        logger.addFilter(QuietHandshakes())
 
 
 def _peer(connection: Any) -> str:
