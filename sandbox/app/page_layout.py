@@ -20,6 +20,12 @@ top third of the screen until closed.
   follows the panel's: *Give the light back*), *Challenge* opens the
   drawer at the Challenge folder. They act through the panel's controls,
   so the server checks them as it checks the panel.
+- **A folder brought to the page.** ``window.__phototaxisOpenFolder(title,
+  inside)`` opens a folder of the panel (the drawer first, on a phone) and
+  scrolls its title to the panel's top: the Challenge shortcut's, and what
+  the server asks of one page (:mod:`sandbox.app.page_open`: the Result
+  folder after a run to the end). viser 1.1.1 opens a folder only when it
+  is first built (``expand_by_default``), and for every page at once.
 - **The notice goes.** The software-rendering notice closes after
   :data:`NOTICE_SECONDS`, on every width.
 - **Lists fit the screen.** A dropdown's list opens as a sheet along the
@@ -83,18 +89,23 @@ LAYOUT_JS = """(() => {
     if (sheetOpen(paper)) handleOf(paper).click();  // closed: the arena whole until the drawer is opened
   };
 
-  // Be the light and Challenge, one tap away on a phone.
-  const openChallenge = () => {
+  // A folder opened (the drawer first) and its title scrolled to the panel's top; ``inside``: the labels
+  // of a button it holds, shown once it is open (a click on the title of an open folder would close it).
+  const openFolder = (name, inside) => {
     const paper = sheet();
     if (paper && !sheetOpen(paper)) handleOf(paper).click();
     setTimeout(() => {
       const title = [...document.querySelectorAll(".mantine-Paper-root")].find(  // a folder's label: text, chevron
-        (e) => e.firstChild?.nodeType === Node.TEXT_NODE && e.firstChild.textContent.trim() === CHALLENGE);
+        (e) => e.firstChild?.nodeType === Node.TEXT_NODE && e.firstChild.textContent.trim() === name);
       if (!title) return;
-      if (!shown(button([START]))) title.click();
+      if (!shown(button(inside))) title.click();
       setTimeout(() => title.scrollIntoView({block: "start", behavior: "smooth"}), 350);
     }, 350);
   };
+  window.__phototaxisOpenFolder = openFolder;  // for the server's scripts to one page (sandbox.app.page_open)
+
+  // Be the light and Challenge, one tap away on a phone.
+  const openChallenge = () => openFolder(CHALLENGE, [START]);
   const shortcuts = () => {
     let bar = document.getElementById(BAR);
     if (!NARROW.matches) {
