@@ -435,6 +435,27 @@ def test_flare_under_chase_says_what_it_still_changes(app, page):
     dismiss_notifications(page)
 
 
+def test_on_the_offset_outline_the_strategies_that_do_nothing_are_greyed_out(app, page):
+    """Issue 56, item 8: flare, switch and no corners do nothing on the offset outline; the page greys
+    them out, says why, and gives them back with the scaled outline (the server's refusal of a tick sent
+    anyway: tests/test_inert_strategies.py)."""
+    if app.runner.latest.shape_name != "square":
+        use_shape(app, page, "square")
+    flare = page.get_by_label("Flare", exact=True)
+    assert flare.is_enabled()
+    choose(page, "Outline", "offset")
+    wait_until(lambda: app.runner.latest.family == "offset", what="the offset outline")
+    wait_until(lambda: flare.is_disabled(), what="flare greyed out in the page")
+    assert page.get_by_label("Switch to circle", exact=True).is_disabled()
+    assert page.get_by_label("No corners", exact=True).is_disabled()
+    assert page.get_by_label("Chase stray boxes", exact=True).is_enabled()
+    page.get_by_text("Greyed out, as they do nothing with the offset outline", exact=False).first.wait_for()
+    choose(page, "Outline", "auto")
+    wait_until(lambda: flare.is_enabled(), what="flare back in the page")
+    assert page.get_by_text("Greyed out, as they do nothing", exact=False).count() == 0
+    dismiss_notifications(page)
+
+
 def test_drawing_by_clicks_creates_a_valid_goal(app, page):
     dismiss_notifications(page)
     open_folder(page, "Draw")

@@ -54,6 +54,21 @@ def open_folder(page, name: str) -> None:
     folder.click()
 
 
+def in_view(locator) -> bool:
+    """Whether the element is shown whole on the screen: inside the window and every scrolling box
+    around it (the panel), not folded away or scrolled below the fold."""
+    return locator.evaluate("""el => {
+        const r = el.getBoundingClientRect();
+        if (r.height === 0 || r.top < 0 || r.bottom > innerHeight) return false;
+        for (let a = el.parentElement; a; a = a.parentElement) {
+            if (!/(auto|scroll|hidden)/.test(getComputedStyle(a).overflowY)) continue;
+            const box = a.getBoundingClientRect();
+            if (r.top < box.top - 1 || r.bottom > box.bottom + 1) return false;
+        }
+        return true;
+    }""")
+
+
 def press(page, name: str, folder: str | None = None) -> None:
     """Click a button, opening its ``folder`` first if the button is not shown."""
     button = page.get_by_role("button", name=name, exact=True)
@@ -108,12 +123,14 @@ def test_run_to_the_end_then_the_result_explained(app, page):
     start = paused_step(app.runner)
     seen: list[int] = []
     app.runner.subscribe(lambda snap: seen.append(snap.step))
+    explain = page.get_by_role("button", name="Explain the result", exact=True)
+    assert not explain.is_visible()  # the Result folder starts closed, below the fold
     press(page, "Run to the end", folder="Run")
     wait_until(lambda: app.runner.latest.step >= target, what="the end step")
     page.get_by_text("of the boxes in the goal", exact=False).first.wait_for()  # the notice
-    if not page.get_by_text("perfect packing", exact=False).first.is_visible():
-        open_folder(page, "Result")
+    # Issue 56, item 4: the Result folder opens by itself on this page, scrolled into view.
     page.get_by_text("perfect packing", exact=False).first.wait_for()
+    wait_until(lambda: in_view(explain), what="the Result folder open and in view")
     assert app.panel.result.highlight.value and app.panel.result.rings is not None
     assert not [step for step in seen if start < step < target], "no frame on the way: drawing nothing"
     shot(page, "3-result")
@@ -130,6 +147,31 @@ def test_download_design_saves_a_file_that_replays(app, page, tmp_path):
     design = load(path)
     assert path.name.endswith("-design.npz") and design.config.shape == app.runner.latest.shape_name
     assert design.steps_run >= 2_000 and design.patterns.shape[1:] == (64, 64)
+
+
+def test_use_and_run_to_the_end_opens_the_result_folder_too(app, page):
+    """Issue 56, item 4, from the Draw folder: *Use and run to the end* ends with the Result folder open
+    and in view on this page, even when the designer had closed it. The world it leaves is past the end
+    step (the last test ran it to 2,000 steps and more): the new world runs all the same (it was told
+    "Already there" by the old world's last frame)."""
+    assert app.runner.latest.step > 1500
+    explain = page.get_by_role("button", name="Explain the result", exact=True)
+    if explain.is_visible():
+        open_folder(page, "Result")  # closed again, as a designer may leave it
+    wait_until(lambda: not explain.is_visible(), what="the Result folder closed")
+    field = page.get_by_label("Run to step", exact=True)
+    field.scroll_into_view_if_needed()
+    field.fill("1500")
+    field.press("Tab")
+    wait_until(lambda: app.panel.run.end_step.value == 1500, what="the target step")
+    press(page, "Edit this goal", folder="Draw")  # the running goal as points: a goal to use
+    wait_until(lambda: len(app.panel.shape.draw.points) >= 3, what="the goal as points")
+    world = app.runner.latest.world_key
+    press(page, "Use and run to the end", folder="Draw")
+    wait_until(lambda: app.runner.latest.world_key != world and app.runner.latest.step >= 1500,
+               what="a new world run to step 1,500")
+    wait_until(lambda: in_view(explain), what="the Result folder open and in view")
+    shot(page, "4-result-after-draw")
 
 
 def test_the_advisor_speaks_plainly_and_says_the_time_left(app, page, monkeypatch):

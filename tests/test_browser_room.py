@@ -49,6 +49,21 @@ def shot(page, name: str) -> None:
         page.screenshot(path=os.path.join(folder, name))
 
 
+def test_a_phones_title_card_says_tap_play_not_space(app, browser):
+    """Issue 56, item 14: a phone (390 x 844, touch) has no space bar: its card says "Tap Play to start."
+    A desktop page keeps the keyboard's words (the next test)."""
+    context = browser.new_context(viewport={"width": 390, "height": 844}, has_touch=True, is_mobile=True)
+    try:
+        page = context.new_page()
+        page.goto(f"http://127.0.0.1:{app.port}/?token={TOKEN}")
+        dialog = page.get_by_role("dialog")
+        dialog.get_by_text("Tap Play to start.").wait_for()
+        assert "Press Play (space)" not in dialog.inner_text()
+        assert app.runner.latest.step == 0 and not app.runner.playing  # a card, not a run: nothing was pressed
+    finally:
+        context.close()
+
+
 def test_the_presenters_first_visit_and_play_from_the_title_card(app, browser):
     teacher = student = None
     try:

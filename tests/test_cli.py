@@ -80,6 +80,46 @@ def test_same_seed_same_result_from_the_cli():
     assert a["mean_outside_distance"] == b["mean_outside_distance"]
 
 
+#: A short world whose cycle is 211 steps (update every step, hold one update: by hand, a contraction of 105
+#: updates, a hold of 1 and a dilation of 105): 500 steps go through 2 whole cycles.
+CYCLING = ["--robots", "10", "--boxes", "20", "--update-every", "1", "--hold-steps", "1", "--steps", "500",
+           "--no-progress"]
+
+
+def test_a_replay_prints_the_cycles_its_design_went_through_not_0(tmp_path):
+    """Issue 56, item 6: a replay never advances the paper's controller, so it printed '0 cycles'. The
+    design records the count; a design that does not (a light program lit it, or an older file) says what
+    it holds instead, and JSON's cycles is null."""
+    path = tmp_path / "circle.npz"
+    made = json.loads(phototaxis("run", *CYCLING, "--json", "--save-design", str(path)).stdout)
+    assert made["cycles"] == 2
+    replay = phototaxis("run", "--design", str(path))
+    assert replay.returncode == 0, replay.stderr
+    assert "500 steps, 2 cycles (as recorded in the design)," in replay.stdout
+    assert json.loads(phototaxis("run", "--design", str(path), "--json", "--no-progress").stdout)["cycles"] == 2
+
+    from sandbox.model.design import load
+    from tests.test_design import altered
+
+    older = altered(path, tmp_path / "older.npz", edit=lambda header: header["result"].pop("cycles"))
+    patterns = len(load(older).steps)  # the pattern changed at most once a step: fewer than 500
+    said = phototaxis("run", "--design", str(older)).stdout
+    assert f"500 steps, {patterns} light patterns (the design records no cycle count)," in said
+    assert " 0 cycles" not in said
+    assert json.loads(phototaxis("run", "--design", str(older), "--json", "--no-progress").stdout)["cycles"] is None
+
+
+def test_a_light_program_of_your_own_has_no_cycle_count_said_or_recorded(tmp_path):
+    ring = Path(__file__).resolve().parent.parent / "examples" / "shrinking_ring.py"
+    path = tmp_path / "ring.npz"
+    out = phototaxis("run", *CYCLING, "--controller", f"{ring}:ShrinkingRing", "--save-design", str(path))
+    assert out.returncode == 0, out.stderr
+    assert "500 steps, cycles not counted (a light program of your own)," in out.stdout
+    from sandbox.model.design import load
+
+    assert load(path).result["cycles"] is None and load(path).cycles is None
+
+
 @pytest.mark.parametrize("args, words", [
     (["--robots", "many"], "whole number"),
     (["--robots", "-3"], "outside the allowed range"),

@@ -85,6 +85,21 @@ def test_a_reset_starts_the_recorded_program_afresh_and_a_late_start_is_refused(
         late.design(sim)
 
 
+def test_a_design_records_its_cycles_only_when_one_paper_controller_lit_it_all():
+    """The controller's cycle is the run's only while it lit the floor from the start: a light program
+    taking over (and handing back), or a new goal's controller counting from 0, leave it uncounted."""
+    config = QUICK.replace(update_every=1, hold_steps=1)  # a cycle of 211 steps
+    sim, recorder = recorded(config, 250)
+    assert recorder.design(sim).cycles == 1
+    sim.use_program(Dimmer())
+    sim.use_program(None)
+    assert recorder.design(sim).result["cycles"] is None
+    sim.reset()
+    assert recorder.design(sim).cycles == 0  # a new world: counted afresh
+    sim.set_shape(None, name="circle")
+    assert recorder.design(sim).cycles is None
+
+
 # ------------------------------------------------------------------ replay
 @pytest.mark.parametrize("case, chase", [("star-switch", 0.0), ("star-switch", 2.0), ("circle", 2.0)])
 def test_a_replay_rebuilds_the_run_bit_for_bit(case, chase):

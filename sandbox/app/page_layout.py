@@ -20,8 +20,19 @@ top third of the screen until closed.
   follows the panel's: *Give the light back*), *Challenge* opens the
   drawer at the Challenge folder. They act through the panel's controls,
   so the server checks them as it checks the panel.
+- **A folder brought to the page.** ``window.__phototaxisOpenFolder(title,
+  inside)`` opens a folder of the panel (the drawer first, on a phone) and
+  scrolls its title to the panel's top: the Challenge shortcut's, and what
+  the server asks of one page (:mod:`sandbox.app.page_open`: the Result
+  folder after a run to the end). viser 1.1.1 opens a folder only when it
+  is first built (``expand_by_default``), and for every page at once.
 - **The notice goes.** The software-rendering notice closes after
   :data:`NOTICE_SECONDS`, on every width.
+- **Tap, not space.** On a page with a touch screen (a coarse pointer) or a
+  phone's width, the title card's last line (:mod:`sandbox.app.panel.presenter`)
+  says :data:`TAP_PLAY` instead of :data:`PRESS_PLAY`: a phone has no space
+  bar. Only the page knows it is touched; the server sends every card the
+  keyboard's words, which a desktop page keeps.
 - **Lists fit the screen.** A dropdown's list opens as a sheet along the
   screen's bottom, the screen's width (8 px margins), at most half its
   height. viser's lists are placed for the 20em sheet and do not flip: at
@@ -45,11 +56,17 @@ CHALLENGE = "Challenge"
 START_ROUND = "Start a round"
 #: The id of the shortcuts' bar (tests find it by it).
 SHORTCUTS_ID = "phototaxis-shortcuts"
+#: The title card's last line for a controlling page: as sent (a keyboard), and as a touch page shows it.
+PRESS_PLAY = "Press Play (space) to start."
+TAP_PLAY = "Tap Play to start."
+#: A page touched rather than pointed at: its primary pointer is a finger.
+TOUCH = "(pointer: coarse)"
 
 LAYOUT_JS = """(() => {
   if (window.__phototaxisLayout) return;  // a page that reconnects keeps one observer
   window.__phototaxisLayout = true;
-  const NARROW = window.matchMedia(%(narrow)s);
+  const NARROW = window.matchMedia(%(narrow)s), TOUCH = window.matchMedia(%(touch)s);
+  const PRESS_PLAY = %(press)s, TAP_PLAY = %(tap)s;
   const NOTICE = %(notice)s, NOTICE_MS = %(notice_ms)d;
   const LAMP = %(lamp)s, CHALLENGE = %(challenge)s, START = %(start)s, BAR = %(bar)s;
   const closing = new WeakSet(), drawers = new WeakSet();
@@ -83,18 +100,23 @@ LAYOUT_JS = """(() => {
     if (sheetOpen(paper)) handleOf(paper).click();  // closed: the arena whole until the drawer is opened
   };
 
-  // Be the light and Challenge, one tap away on a phone.
-  const openChallenge = () => {
+  // A folder opened (the drawer first) and its title scrolled to the panel's top; ``inside``: the labels
+  // of a button it holds, shown once it is open (a click on the title of an open folder would close it).
+  const openFolder = (name, inside) => {
     const paper = sheet();
     if (paper && !sheetOpen(paper)) handleOf(paper).click();
     setTimeout(() => {
       const title = [...document.querySelectorAll(".mantine-Paper-root")].find(  // a folder's label: text, chevron
-        (e) => e.firstChild?.nodeType === Node.TEXT_NODE && e.firstChild.textContent.trim() === CHALLENGE);
+        (e) => e.firstChild?.nodeType === Node.TEXT_NODE && e.firstChild.textContent.trim() === name);
       if (!title) return;
-      if (!shown(button([START]))) title.click();
+      if (!shown(button(inside))) title.click();
       setTimeout(() => title.scrollIntoView({block: "start", behavior: "smooth"}), 350);
     }, 350);
   };
+  window.__phototaxisOpenFolder = openFolder;  // for the server's scripts to one page (sandbox.app.page_open)
+
+  // Be the light and Challenge, one tap away on a phone.
+  const openChallenge = () => openFolder(CHALLENGE, [START]);
   const shortcuts = () => {
     let bar = document.getElementById(BAR);
     if (!NARROW.matches) {
@@ -129,6 +151,18 @@ LAYOUT_JS = """(() => {
     bar.style.visibility = paper && sheetOpen(paper) ? "hidden" : "visible";  // under the open drawer
   };
 
+  // The title card's words for this page: a finger taps Play, a keyboard has space (and a desktop window
+  // narrowed, then widened again, gets its keyboard's words back).
+  const cardWords = () => {
+    const [from, to] = TOUCH.matches || NARROW.matches ? [PRESS_PLAY, TAP_PLAY] : [TAP_PLAY, PRESS_PLAY];
+    for (const card of document.querySelectorAll("[role='dialog']")) {
+      const texts = document.createTreeWalker(card, NodeFilter.SHOW_TEXT);
+      for (let text = texts.nextNode(); text; text = texts.nextNode()) {
+        if (text.nodeValue.trim() === from) text.nodeValue = to;
+      }
+    }
+  };
+
   // A dropdown's list on a narrow page: a sheet along the bottom of the screen (it wins over the inline
   // place viser's page computes, which is off the screen in the drawer).
   const lists = document.createElement("style");
@@ -141,6 +175,7 @@ LAYOUT_JS = """(() => {
     closeNotice();
     if (NARROW.matches) makeDrawer();
     shortcuts();
+    cardWords();
   };
   let queued = false;
   new MutationObserver(() => {
@@ -149,8 +184,10 @@ LAYOUT_JS = """(() => {
     requestAnimationFrame(() => { queued = false; look(); });
   }).observe(document.body, {childList: true, subtree: true, characterData: true});
   NARROW.addEventListener("change", look);
+  TOUCH.addEventListener("change", look);
   setInterval(() => { if (NARROW.matches) look(); }, 500);  // the drawer opened or closed (a style, unobserved)
   look();
 })();""" % {"narrow": json.dumps(NARROW), "notice": json.dumps(SOFTWARE_NOTICE),
             "notice_ms": round(1000 * NOTICE_SECONDS), "lamp": json.dumps(list(LAMP_LABELS)),
-            "challenge": json.dumps(CHALLENGE), "start": json.dumps(START_ROUND), "bar": json.dumps(SHORTCUTS_ID)}
+            "challenge": json.dumps(CHALLENGE), "start": json.dumps(START_ROUND), "bar": json.dumps(SHORTCUTS_ID),
+            "touch": json.dumps(TOUCH), "press": json.dumps(PRESS_PLAY), "tap": json.dumps(TAP_PLAY)}

@@ -121,6 +121,25 @@ def run_trial(config: Config, *, progress: bool = False, on_sample=None, program
     return sim, final, wall
 
 
+def cycles_of(sim: Simulation, design: designs.Design | None) -> int | None:
+    """The contract-hold-dilate cycles the run went through, None where nothing here counted them. The
+    simulation's count is the paper's controller's, which neither a replay nor a light program of the
+    user's advances: a replay has the count its design recorded (None in a design made under a light
+    program, or older than the count)."""
+    if design is not None:
+        return design.cycles
+    return None if sim.user_program is not None else sim.cycle
+
+
+def cycles_said(cycles: int | None, design: designs.Design | None) -> str:
+    """The cycles for the summary line, or why they are not known and what is instead."""
+    if cycles is not None:
+        return f"{cycles} cycles" + (" (as recorded in the design)" if design is not None else "")
+    if design is not None:
+        return f"{len(design.steps)} light patterns (the design records no cycle count)"
+    return "cycles not counted (a light program of your own)"
+
+
 def run_command(args: argparse.Namespace) -> int:
 
     watchdog.on_stuck = watchdog.exit_on_stuck("phototaxis run")
@@ -150,6 +169,7 @@ def run_command(args: argparse.Namespace) -> int:
     finally:
         if handle:
             handle.close()
+    cycles = cycles_of(sim, design)
     result = {
         "case": case_name(config, args.case),
         "seed": config.seed,
@@ -159,7 +179,7 @@ def run_command(args: argparse.Namespace) -> int:
         "fraction_in_goal": final.fraction_in_goal,
         "mean_outside_distance": final.mean_outside_distance,
         "boxes_escaped": final.boxes_escaped,
-        "cycles": sim.cycle,
+        "cycles": cycles,
         "outline": sim.goal.family,
         "outline_reason": sim.goal.family_reason,
         "goal_simplified": sim.goal.simplified,
@@ -178,7 +198,7 @@ def run_command(args: argparse.Namespace) -> int:
         json.dump(result, sys.stdout)
         sys.stdout.write("\n")
     else:
-        print(f"case {result['case']}, seed {config.seed}: {sim.steps_done} steps, {sim.cycle} cycles, "
+        print(f"case {result['case']}, seed {config.seed}: {sim.steps_done} steps, {cycles_said(cycles, design)}, "
               f"{wall:.1f} s ({result['steps_per_second']} steps/s)")
         print(f"  boxes in goal:             {final.fraction_in_goal:.3f}")
         print(f"  mean distance of the rest: {final.mean_outside_distance:.3f} m")

@@ -63,8 +63,9 @@ MAX_FILE_BYTES = 64_000_000
 #: Characters a name may not hold: it is shown on one line.
 _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 
-#: What a design keeps of its run's end (the header's ``result``).
-RESULT_KEYS = ("fraction_in_goal", "mean_outside_distance", "state_digest")
+#: What a design keeps of its run's end (the header's ``result``): ``cycles`` is null when the paper's
+#: controller did not light the whole run (a light program's cycles are its own), absent in older files.
+RESULT_KEYS = ("fraction_in_goal", "mean_outside_distance", "state_digest", "cycles")
 #: Other files a design file may be taken for, by their first bytes (to say what it is instead).
 _MAGIC = {b"\x89PNG": "a PNG image", b"\xff\xd8\xff": "a JPEG image", b"GIF8": "a GIF image",
           b"%PDF": "a PDF document", b"\x93NUMPY": "a single NumPy array (.npy)", b"\x1f\x8b": "a gzip file"}
@@ -91,8 +92,16 @@ class Design:
     controller: str = ""
     #: The goal fitted on the floor, in metres: ``vertices`` (None for the circle), ``centre``, ``radius``.
     goal: dict = field(default_factory=dict)
-    #: The run's end: ``fraction_in_goal``, ``mean_outside_distance``, ``state_digest``.
+    #: The run's end: ``fraction_in_goal``, ``mean_outside_distance``, ``state_digest``, ``cycles``.
     result: dict = field(default_factory=dict)
+
+    @property
+    def cycles(self) -> int | None:
+        """The contract-hold-dilate cycles the run went through, as recorded: None when they were not
+        counted (a light program of the user's, a goal changed mid-run) or the file is older than the count.
+        A replay cannot count them itself: its patterns have no cycle."""
+        cycles = self.result.get("cycles")
+        return cycles if isinstance(cycles, int) and not isinstance(cycles, bool) and cycles >= 0 else None
 
     @property
     def seed(self) -> int:
@@ -158,6 +167,8 @@ class PatternRecorder:
         with intensities other than 0 and 1); past it the recorder stops, and :meth:`design` says so."""
         self.most = min(most, MAX_PATTERNS)
         self.full = False
+        #: Whether one paper's controller lit the floor since the start, so that its cycle is the run's.
+        self.cycles_counted = True
         self._steps: list[int] = []
         self._kept: list[tuple[bool, np.ndarray]] = []  # (on / off only?, packed bits or the intensities)
         self._shape: tuple[int, int] = (0, 0)
@@ -165,14 +176,21 @@ class PatternRecorder:
 
     def attach(self, sim: Any) -> "PatternRecorder":
         sim.pattern_recorder = self
-        self.start(sim.steps_done, sim.lights.intensities)
+        self.start(sim.steps_done, sim.lights.intensities, paper=sim.user_program is None)
         return self
 
-    def start(self, step: int, pattern: np.ndarray) -> None:
-        """A light program starts here (a new world): forget what came before."""
+    def start(self, step: int, pattern: np.ndarray, paper: bool = True) -> None:
+        """A light program starts here (a new world): forget what came before. ``paper``: whether the
+        paper's controller lights it (its cycles are then counted)."""
         self._steps, self._kept, self._shape = [], [], tuple(pattern.shape)
         self.full = self._dimmed = False
+        self.cycles_counted = paper
         self.change(step, pattern)
+
+    def cycles_lost(self) -> None:
+        """The controller's cycle no longer covers the whole run: another program took the floor, or a
+        new goal brought a new controller, counting from 0, mid-run."""
+        self.cycles_counted = False
 
     def change(self, step: int, pattern: np.ndarray) -> None:
         """The lit pattern became ``pattern`` at ``step`` (before that world step is computed)."""
@@ -224,7 +242,8 @@ class PatternRecorder:
                             "radius": goal.radius},
                       result={"fraction_in_goal": _number(sample.fraction_in_goal),
                               "mean_outside_distance": _number(sample.mean_outside_distance),
-                              "state_digest": sim.state_digest()})
+                              "state_digest": sim.state_digest(),
+                              "cycles": int(sim.cycle) if self.cycles_counted else None})
 
 
 # -------------------------------------------------------------------- replay

@@ -8,10 +8,12 @@ import numpy as np
 
 from sandbox.model import geometry, outlines
 from sandbox.model.budget import MAX_GOAL_VERTICES
-from sandbox.model.config import Config
+from sandbox.model.config import STRATEGIES, Config
 from sandbox.model.goal import Goal
 from sandbox.model.outlines import Sizing
 from sandbox.shapes.errors import ShapeError
+
+STRATEGY_LABELS = {s.name: s.label for s in STRATEGIES}
 
 
 def goal_notes(config: Config, goal: Goal, sizing: Sizing) -> list[str]:
@@ -72,6 +74,26 @@ def goal_fit_notes(config: Config, sizing: Sizing, smallest: np.ndarray | None =
             f"where there are no lights: it is cut short there"]
 
 
+#: The strategies that do nothing with the offset outline, and why (the advisor leaves them out there too).
+OFFSET_INERT = {
+    "flare": "its band already rounds every corner at the same distance as the edges",
+    "switch": "far from the goal its band is nearly a circle already",
+    "no_corners": "its band has no convex corners to darken",
+}
+
+
+def inert_strategies(family: str) -> dict[str, str]:
+    """The strategies that do nothing, whatever their amount, on an outline of this family ('scaled' or
+    'offset'), each with why (a clause); the page greys them out."""
+    return dict(OFFSET_INERT) if family == "offset" else {}
+
+
+def inert_note(name: str, family: str) -> str:
+    """Why strategy ``name`` does nothing on this outline family, in a sentence ('' when it does something)."""
+    why = inert_strategies(family).get(name)
+    return f"{STRATEGY_LABELS[name]} does nothing with the {family} outline: {why}." if why else ""
+
+
 def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | None, chase: float = 0.0,
                          family: str = "scaled") -> str:
     """Why a strategy at this amount will change nothing on this goal ('' when it will).
@@ -83,13 +105,9 @@ def strategy_effect_note(name: str, amount: float, goal_vertices: np.ndarray | N
     how far it grows."""
     if amount <= 0:
         return ""
-    if family == "offset" and name in ("flare", "switch", "no_corners"):
-        return {"flare": "Flare does nothing with the offset outline: its band already rounds every corner at "
-                         "the same distance as the edges.",
-                "switch": "Switch to circle does nothing with the offset outline: far from the goal its band "
-                          "is nearly a circle already.",
-                "no_corners": "No corners does nothing with the offset outline: its band has no convex corners "
-                              "to darken."}[name]
+    inert = inert_note(name, family)
+    if inert:
+        return inert
     if name == "flare" and chase > 0 and goal_vertices is not None:
         return ("With chase on, the band follows the goal grown by the same distance all round, not a flared "
                 "outline: flare changes only the largest size it grows to.")

@@ -110,7 +110,7 @@ class Simulation:
         self.lights, self._centres = lights, centres
         self._start_program()
         if self.pattern_recorder is not None:  # a new world: its light program starts afresh
-            self.pattern_recorder.start(0, self.lights.intensities)
+            self.pattern_recorder.start(0, self.lights.intensities, paper=self.user_program is None)
         self._layout = kernels.sample_layout(self.lights)
         self._robot_params = kernels.robot_params(cfg)
         n = cfg.robots
@@ -210,6 +210,8 @@ class Simulation:
             self.user_program = previous
             self._start_program()
             raise
+        if (previous is not None or program is not None) and self.pattern_recorder is not None:
+            self.pattern_recorder.cycles_lost()  # the controller's cycle no longer counts the whole run
 
     def _start_program(self) -> None:
         program = self.program
@@ -313,6 +315,8 @@ class Simulation:
         controller = self._new_controller(config, goal)
         controller.set_strategies(**{name_: getattr(config, name_) for name_ in STRATEGY_NAMES})
         self.shape_vertices, self.config, self.goal, self.controller = shape, config, goal, controller
+        if self.pattern_recorder is not None:
+            self.pattern_recorder.cycles_lost()  # the new controller counts its cycles from 0
         self._start_program()
         return controller.notes
 

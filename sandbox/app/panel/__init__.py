@@ -121,8 +121,8 @@ class Panel:
         self.record.on_frame_drawn()
 
     def _to_the_end(self, client: Any) -> None:
-        """Run to the Run folder's end step (the world as it is)."""
-        self.run.skip_ahead(int(self.run.end_step.value), client)
+        """Run the world just built (a goal used, the advisor's best) to the Run folder's end step."""
+        self.run.skip_ahead(int(self.run.end_step.value), client, new_world=True)
 
     def _afresh_to_the_end(self, client: Any) -> None:
         """A new world with the same seed (the settings just given), run to the Run folder's end step."""

@@ -4,8 +4,10 @@ floor's side of the panel, for a room.
 - **The title card.** A page that arrives while the world waits at step 0
   (``serve --classroom`` or ``--paused``: a class before the lesson starts)
   gets a card of three lines: what the class is looking at, what to watch
-  for, and "press Play (space)". Any page's Play (the card's, the bar's, the
-  panel's or the space key) closes every page's card. It is a viser modal: it
+  for, and "press Play (space)" ("tap Play" on a touch screen or at a
+  phone's width: the page's layout script, :mod:`sandbox.app.page_layout`,
+  swaps the words). Any page's Play (the card's, the bar's, the panel's or
+  the space key) closes every page's card. It is a viser modal: it
   has no close button of its own (viser closes modals from the server only),
   so a watching page, which cannot press Play, keeps it until the presenter
   does, and its third line says so.
@@ -35,6 +37,7 @@ from typing import Any, Callable
 
 import viser
 
+from sandbox.app.page_layout import PRESS_PLAY
 from sandbox.app.panel.plain import plain
 from sandbox.app.snapshot import Snapshot, case_name
 
@@ -57,7 +60,7 @@ def title_lines(snap: Snapshot, compared: Snapshot | None, controls: bool) -> tu
         looking = (f"The same start twice: {plain(case_name(snap.shape_name, snap.strategies))} and "
                    f"{plain(case_name(compared.shape_name, compared.strategies))}.")
         watch = "Watch which one gets more boxes into its goal: the large share under each."
-    act = "**Press Play (space) to start.**" if controls else "The presenter starts it with Play."
+    act = f"**{PRESS_PLAY}**" if controls else "The presenter starts it with Play."  # a touch page taps
     return looking, watch, act
 
 

@@ -5,6 +5,10 @@
 construction area, against its wall, elsewhere), what 100 % would mean, and
 which outline and strategies ran; and it rings the boxes outside the goal on
 the floor, following them, until it is turned off or a new world starts.
+
+After a run to the end the folder explains the result by itself and opens on
+the page that asked, scrolled into view (:mod:`sandbox.app.page_open`): the
+answer is not left below the fold in a closed folder (issue 56, item 4).
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
+from sandbox.app import page_open
 from sandbox.app.commands import Arrival
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.plain import plain
@@ -26,6 +31,8 @@ from sandbox.model.explain import PERFECT_PACKING, place_strays, strays_in_words
 #: The rings around the boxes outside the goal: orange, under the boxes, wider than them.
 RING_COLOUR = (255, 140, 0)
 Z_RING = 0.015  # between the lit cells (0.01) and the boxes (0.02)
+#: The folder's title, and the button that shows once it is open (the page script tells open from closed by it).
+TITLE, EXPLAIN = "Result", "Explain the result"
 
 
 def design_file_name(design: Any) -> str:
@@ -57,9 +64,9 @@ class ResultFolder:
         self._explain_at: tuple[int, int, Any] | None = None  # (world, step, page): explain the first frame there
 
     def build(self, snap: Snapshot) -> None:
-        with self.gui.add_folder("Result", expand_by_default=False):
+        with self.gui.add_folder(TITLE, expand_by_default=False):
             self.text = self.gui.add_markdown("Where the boxes outside the goal lie, and what 100 % would mean.")
-            self.explain_button = self.gui.add_button("Explain the result", icon=viser.Icon.HELP,
+            self.explain_button = self.gui.add_button(EXPLAIN, icon=viser.Icon.HELP,
                                                       hint="Say where the boxes outside the goal lie and ring "
                                                            "them on the floor")
             self.highlight = self.gui.add_checkbox("Ring boxes outside the goal", False,
@@ -114,6 +121,7 @@ class ResultFolder:
                 notify(client, "Run to the end", f"Step {snap.step:,}: {100 * snap.sample.fraction_in_goal:.1f} % of "
                        "the boxes in the goal. The Result folder says where the others lie (ringed in orange).",
                        "green")
+                page_open.open_folder(client, TITLE, EXPLAIN)  # the answer in view on the page that asked
                 return
         if self.highlight.value and self._world is not None and snap.world_key != self._world:
             self.highlight.value = False  # a new world: the old explanation no longer holds

@@ -113,12 +113,14 @@ class RunFolder:
         self.pause()
         self.lockstep.step_once(self.runner.latest.world_config.update_every)
 
-    def skip_ahead(self, step: int, client: Any) -> None:
-        """*Run to the end*: the world (both, in compare mode) to ``step`` without frames, then the result."""
+    def skip_ahead(self, step: int, client: Any, new_world: bool = False) -> None:
+        """*Run to the end*: the world (both, in compare mode) to ``step`` without frames, then the result.
+        ``new_world``: a world just built, at step 0 (*Use and run to the end*): the latest frame may
+        still be the old world's, so its step says nothing about where this one is."""
         if self._skipping is not None:
             notify_error(client, "Already running to the end", "Wait for it, or press Cancel.")
             return
-        if step <= self.runner.latest.step:
+        if not new_world and step <= self.runner.latest.step:
             notify(client, "Already there", f"The world is at step {self.runner.latest.step:,}, past {step:,}.")
             return
         self._skipping = (int(step), time.monotonic())

@@ -4,7 +4,13 @@ generated from their declaration (:data:`sandbox.model.config.STRATEGIES`).
 
 Picking a paper case starts it: a new world (the same seed) with the case's
 goal and strategies, from step 0, so cases compare from the same start. The
-dropdown always shows the case that runs, or ``custom``."""
+dropdown always shows the case that runs, or ``custom``.
+
+A strategy that does nothing on the outline the band follows (flare, switch
+and no corners on the offset outline: :func:`sandbox.model.notes.inert_strategies`)
+is greyed out, its checkbox and amount, with a hint and a line under *Band
+follows* that say why; it comes back when the outline does. Greyed out, it is
+disabled for the server too: the inbox refuses a click on it from any page."""
 
 from __future__ import annotations
 
@@ -17,7 +23,7 @@ from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.plain import plain
 from sandbox.app.snapshot import Snapshot, running_case
 from sandbox.model.config import CASES, STRATEGIES, param
-from sandbox.model.notes import strategy_effect_note
+from sandbox.model.notes import inert_note, inert_strategies, strategy_effect_note
 from sandbox.shapes import shape_vertices
 
 #: What the Paper case dropdown shows when the goal, the strategies or the outline are not one of the seven.
@@ -34,6 +40,7 @@ class StrategiesFolder:
         #: A case picked and on its way to the simulation: the dropdown keeps showing it meanwhile.
         self._starting: str | None = None
         self._case_shown = ""  # what this panel last set the Paper case dropdown to show
+        self._inert_family: str | None = None  # the outline family the strategies were last greyed out for
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -55,6 +62,7 @@ class StrategiesFolder:
                 self.controls[s.name] = (on, amount)
                 on.on_update(lambda event, n=s.name: self._changed(n, event.client))
                 amount.on_update(lambda event, n=s.name: self._changed(n, event.client))
+        self._grey_out_inert(snap.family)
 
         @self.case.on_update
         def _(event: viser.GuiEvent) -> None:
@@ -74,6 +82,7 @@ class StrategiesFolder:
         text = self._outline_text(snap)
         if text != self._outline_shown:
             self.outline_status.content = self._outline_shown = text
+        self._grey_out_inert(snap.family)
         # Never over a viewer's pick on its way (as the shape's dropdown): viser sets the value, then runs
         # the callback in a thread of its own, which would read what a refresh put back in between.
         running = self._running(snap)
@@ -87,11 +96,28 @@ class StrategiesFolder:
     def _running(snap: Snapshot) -> str:
         return running_case(snap.shape_name, snap.strategies, snap.family) or CUSTOM
 
+    def _grey_out_inert(self, family: str) -> None:
+        """Disable the strategies that do nothing on this outline family (their hint says why), and enable
+        the others, once per change of family."""
+        if family == self._inert_family:
+            return
+        self._inert_family = family
+        for s in STRATEGIES:
+            on, amount = self.controls[s.name]
+            why = inert_note(s.name, family)
+            on.disabled = amount.disabled = bool(why)
+            on.hint = amount.hint = f"Greyed out. {why}" if why else (s.tip or s.help)
+
     @staticmethod
     def _outline_text(snap: Snapshot) -> str:
         reason = snap.family_reason.split(": ", 1)[-1] if snap.family_reason else ""
         follows = "the goal grown by a distance" if snap.family == "offset" else "the goal scaled"
-        return f"**Band follows:** {follows} ({snap.family}){' - ' + plain(reason) if reason else ''}"
+        text = f"**Band follows:** {follows} ({snap.family}){' - ' + plain(reason) if reason else ''}"
+        inert = inert_strategies(snap.family)
+        if inert:
+            why = [f"{s.label.lower()} ({inert[s.name]})" for s in STRATEGIES if s.name in inert]
+            text += f"  \n*Greyed out, as they do nothing with the {snap.family} outline: {_listed(why)}.*"
+        return text
 
     def use(self, outline: str, strategies: dict[str, float], client: Any) -> None:
         """An outline and the strategies' amounts (those not given off), shown and applied."""
@@ -181,3 +207,8 @@ class StrategiesFolder:
         note = strategy_effect_note(name, value, snap.goal_vertices, chase, snap.family)
         if note:  # applied all the same: the goal may change to one it acts on
             notify(client, "No visible effect", note, "yellow")
+
+
+def _listed(words: list[str]) -> str:
+    """'a, b and c'."""
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
