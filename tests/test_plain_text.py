@@ -85,6 +85,8 @@ OURS = {
     ("panel/inspector.py", "zip(names, pal.SENSOR_COLOUR_NAMES, r.sensors)"):
         "the photocells' names (model/robots.py), their dots' colours (palette.py) and readings",
     ("panel/strategies.py", "snap.family"): "'scaled' or 'offset', the model's",
+    ("panel/strategies.py", "words"): "the strategies' labels and the model's clauses on why each is inert "
+                                      "(model/notes.py OFFSET_INERT)",
     ("sandbox/experiments/advise.py", "r.candidate.label"): "an outline and strategies, named by advise.py",
     ("sandbox/experiments/advise.py", "a.candidate.label"): "an outline and strategies, named by advise.py",
     ("sandbox/experiments/advise.py", "b.candidate.label"): "an outline and strategies, named by advise.py",
