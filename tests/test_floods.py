@@ -18,19 +18,15 @@ import pytest
 import viser.infra
 
 from sandbox.app import rates
-from sandbox.app.access import Access
 from sandbox.app.rates import CAMERA, CONTROLS, FLOOD_SECONDS, Bucket, Budget, Flow
 from sandbox.app.refusals import RefusalLog
 from sandbox.app.viser_seam import messages
 from sandbox.app.well_formed import LARGE_MESSAGE, Malformed, decode
-from sandbox.model.config import Config
 from tests.flooding import CAMERA as HELLO
 from tests.flooding import PacedPage, flood_result, rss, start_flood
+from tests.test_security import TOKEN, app, connected, own_page, shared_app  # noqa: F401 - fixtures
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until, wait_until_steady
-
-SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
-TOKEN = "classroom-secret-42"
 
 
 def encoded(**fields) -> bytes:
@@ -158,38 +154,6 @@ def test_only_an_uploads_part_may_be_large_and_a_text_frame_is_no_message():
 
 
 # ------------------------------------------------------------------ over the network
-def make_app(**kwargs):
-    from sandbox.app.server import App, free_port
-
-    return App(SMALL, port=free_port(), fps=30, steps_per_frame=2, process=False, **kwargs).start()
-
-
-@pytest.fixture
-def app():
-    a = make_app()
-    yield a
-    a.stop()
-
-
-@pytest.fixture
-def shared_app():
-    """Control needs the token (as --host 0.0.0.0): pages without it watch."""
-    a = make_app(access=Access.for_server("127.0.0.1", token=TOKEN))
-    yield a
-    a.stop()
-
-
-def own_page(app) -> dict[str, str]:
-    return {"Origin": f"http://127.0.0.1:{app.port}"}
-
-
-def connected(app, client: RawClient) -> int:
-    before = set(app.server.get_clients())
-    client.say_hello()
-    new = wait_until(lambda: set(app.server.get_clients()) - before, what="the page to count as connected")
-    return next(iter(new))
-
-
 def tracebacks(caplog) -> list[str]:
     return [r.getMessage() for r in caplog.records if r.exc_info or "Traceback" in r.getMessage()]
 
