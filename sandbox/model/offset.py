@@ -70,32 +70,28 @@ def signed_distance(points: np.ndarray, goal: Goal) -> np.ndarray:
     return out.reshape(p.shape[:-1])
 
 
-def square_points(centre: np.ndarray, half: float, spacing: float) -> np.ndarray:
-    """Points filling the square of half-side ``half`` about ``centre`` (edges included), ``spacing`` apart."""
+def square_point_blocks(centre: np.ndarray, half: float, spacing: float, at_most: int):
+    """Points filling the square of half-side ``half`` about ``centre`` (edges included), ``spacing``
+    apart, in blocks of whole rows of at most ``at_most`` points (one row at least): a 2,000 m square
+    has 64 million, 3 GB of coordinates and distances at once."""
     n = max(int(math.ceil(2.0 * half / spacing)), 1) + 1
     s = np.linspace(-half, half, n)
-    gx, gy = np.meshgrid(s, s, indexing="ij")
-    return np.stack([gx.ravel(), gy.ravel()], axis=-1) + np.asarray(centre, dtype=float)
+    centre = np.asarray(centre, dtype=float)
+    rows = max(1, at_most // n)
+    for first in range(0, n, rows):
+        gx, gy = np.meshgrid(s[first:first + rows], s, indexing="ij")
+        yield np.stack([gx.ravel(), gy.ravel()], axis=-1) + centre
 
 
-#: covering_distance measures the square's points this many at a time (a 2,000 m spawn square has 64
-#: million, 3 GB of coordinates and distances at once).
+#: covering_distance measures the square's points this many at a time.
 _COVER_POINTS_AT_ONCE = 1 << 18
 
 
 def covering_distance(goal: Goal, centre: np.ndarray, half: float) -> float:
     """The smallest ``d`` whose grown goal covers the square of half-side ``half`` about ``centre``:
-    the largest distance from a point of the square to the goal (the points of :func:`square_points`,
-    a block of rows at a time: the same points, the same largest distance)."""
-    n = max(int(math.ceil(2.0 * half / _COVER_SPACING)), 1) + 1
-    s = np.linspace(-half, half, n)
-    centre = np.asarray(centre, dtype=float)
-    rows = max(1, _COVER_POINTS_AT_ONCE // n)
-    farthest = -np.inf
-    for first in range(0, n, rows):
-        gx, gy = np.meshgrid(s[first:first + rows], s, indexing="ij")
-        points = np.stack([gx.ravel(), gy.ravel()], axis=-1) + centre
-        farthest = max(farthest, float(signed_distance(points, goal).max()))
+    the largest distance from a point of the square to the goal, taken a block of points at a time."""
+    blocks = square_point_blocks(centre, half, _COVER_SPACING, _COVER_POINTS_AT_ONCE)
+    farthest = max(float(signed_distance(points, goal).max()) for points in blocks)
     return float(max(farthest, 0.0))
 
 
