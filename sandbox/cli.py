@@ -34,12 +34,18 @@ def flag_name(name: str) -> str:
 
 
 def add_config_arguments(parser: argparse.ArgumentParser, *, with_case: bool = True) -> None:
-    """Add one flag per declared parameter, plus --config and --case.
+    """Add one flag per declared parameter, plus --config, --case and --memory-budget (every command
+    that builds worlds takes its settings here; the dispatcher applies the budget before it runs).
 
     Flags default to None so that only values the user typed override the
     config file and the case.
     """
     parser.add_argument("--config", metavar="FILE", help="TOML or JSON file of parameter values")
+    parser.add_argument("--memory-budget", metavar="SIZE", default=None,
+                        help="the memory a world may need, estimated from its settings before it is built (settings "
+                             "over it are refused): a size such as 2G or 800M, or a share of this machine's memory "
+                             "such as 50%%; default a quarter of the machine's memory, at most 1G (docs/security.md, "
+                             "'What a world may cost'); also the environment variable PHOTOTAXIS_MEMORY_BUDGET")
     if with_case:
         parser.add_argument("--case", choices=list(CASES), help="one of the paper's seven cases (SPEC §7); flags override it")
     groups: dict[str, argparse._ArgumentGroup] = {}

@@ -49,21 +49,7 @@ def build_parser(only: str | None = None) -> Parser:
     for name, module in SUBCOMMANDS.items():
         if only is None or name == only:
             importlib.import_module(module).add_parser(sub)
-            if name in BUILDS_WORLDS:
-                add_budget_argument(sub.choices[name])
     return parser
-
-
-#: The commands that build worlds, which take --memory-budget.
-BUILDS_WORLDS = ("run", "bench", "serve", "record", "sweep", "advise")
-
-
-def add_budget_argument(parser) -> None:
-    parser.add_argument("--memory-budget", metavar="SIZE", default=None,
-                        help="the memory a world may need, estimated from its settings before it is built (settings "
-                             "over it are refused): a size such as 2G or 800M, or a share of this machine's memory "
-                             "such as 50%%; default a quarter of the machine's memory, at most 1G (docs/security.md, "
-                             "'What a world may cost'); also the environment variable PHOTOTAXIS_MEMORY_BUDGET")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
