@@ -54,7 +54,7 @@ MAX_PATTERN_BYTES = MAX_PATTERNS * _DEFAULT.lights_per_side ** 2
 #: Characters of its JSON header: the goal as given and as fitted, each of an upload's most vertices
 #: (10,000) at up to 52 characters a vertex, is 1.04 million; the rest is 2,000.
 MAX_HEADER_CHARS = 1_500_000
-#: Characters of a name shown in the page (the goal's, the settings' shape), as an uploaded file's name.
+#: Characters of a name shown in the page (the goal's, the settings' shape); an uploaded file's name is cut to it.
 MAX_NAME_CHARS = 80
 #: Characters of what lit the floor (a light program's file and class): longer is cut when recorded.
 MAX_CONTROLLER_CHARS = 1_000

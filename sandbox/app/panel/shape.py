@@ -17,6 +17,7 @@ from sandbox.app import viser_seam
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.draw import DrawFolder
 from sandbox.app.snapshot import Snapshot
+from sandbox.model.design import MAX_NAME_CHARS
 from sandbox.model.goal import fit_goal
 from sandbox.shapes import (
     ShapeError,
@@ -30,8 +31,9 @@ from sandbox.shapes.isolated import read_polygon_isolated
 CUSTOM_SHAPE = "(drawn or uploaded)"
 #: The title of a refused upload: viser's own notice beside it says the file arrived, which it did.
 UPLOAD_REFUSED = "File received, shape not used"
-#: Longest file name shown and kept for an uploaded shape (its extension is kept whole).
-NAME_LIMIT = 80
+#: Longest file name shown and kept for an uploaded shape (its extension is kept whole): the longest goal
+#: name a design holds, so that the goal it names can be downloaded as a design and opened again.
+NAME_LIMIT = MAX_NAME_CHARS
 #: What a file name may not hold: control characters (a NUL among them) and halves of surrogate pairs.
 _UNPRINTABLE = re.compile(r"[\x00-\x1f\x7f-\x9f\ud800-\udfff]")
 
