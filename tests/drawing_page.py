@@ -37,9 +37,13 @@ def designer_app():
     app.stop()
 
 
-def open_page(app, browser, width: int, height: int):
+def open_page(app, browser, width: int, height: int, prepare=None):
+    """A new page on ``app``, loaded and counted by its server: (context, page, its client).
+    ``prepare(page)`` runs before the page loads (a handler that must see everything, dialogs included)."""
     context = browser.new_context(viewport={"width": width, "height": height})
     page = context.new_page()
+    if prepare is not None:
+        prepare(page)
     before = set(app.server.get_clients())
     page.goto(f"http://127.0.0.1:{app.port}/")
     page.get_by_text("Goal shape", exact=True).wait_for()

@@ -14,6 +14,7 @@ import pytest
 
 from sandbox.experiments import advise as experiments_advice
 from tests.browsing import BROWSER_MARKS, playwright_api, small_app  # noqa: F401 - playwright_api: skips without it
+from tests.drawing_page import open_page
 from tests.test_browser_app import choose
 from tests.waiting import paused_step, wait_until
 
@@ -31,13 +32,7 @@ def app():
 
 @pytest.fixture(scope="module")
 def page(app, browser):
-    context = browser.new_context(viewport={"width": 1600, "height": 1000})
-    page = context.new_page()
-    before = set(app.server.get_clients())
-    page.goto(f"http://127.0.0.1:{app.port}/")
-    page.get_by_text("Goal shape", exact=True).wait_for()
-    page.client = wait_until(lambda: next((c for k, c in app.server.get_clients().items() if k not in before),
-                                          None), what="the page to connect")
+    context, page, page.client = open_page(app, browser, 1600, 1000)
     yield page
     context.close()
 

@@ -15,6 +15,7 @@ import pytest
 
 from sandbox.app.panel.plain import WORD_JOINER
 from tests.browsing import BROWSER_MARKS, playwright_api  # noqa: F401 - playwright_api: skips without it
+from tests.drawing_page import open_page
 from tests.waiting import wait_until
 
 pytestmark = BROWSER_MARKS
@@ -64,15 +65,11 @@ def app(hostile_design):
 
 @pytest.fixture(scope="module")
 def page(app, browser):
-    context = browser.new_context(viewport={"width": 1600, "height": 1000})
-    page = context.new_page()
-    page.dialogs = []
-    page.on("dialog", lambda dialog: (page.dialogs.append(dialog.message), dialog.dismiss()))
-    before = set(app.server.get_clients())
-    page.goto(f"http://127.0.0.1:{app.port}/")
-    page.get_by_text("Goal shape", exact=True).wait_for()
-    page.client = wait_until(lambda: next((c for k, c in app.server.get_clients().items() if k not in before),
-                                          None), what="the page to connect")
+    def count_dialogs(page) -> None:  # from the first load on: a name's script would run as the page loads
+        page.dialogs = []
+        page.on("dialog", lambda dialog: (page.dialogs.append(dialog.message), dialog.dismiss()))
+
+    context, page, page.client = open_page(app, browser, 1600, 1000, prepare=count_dialogs)
     yield page
     context.close()
 
