@@ -23,6 +23,7 @@ from typing import Any
 from sandbox.app.server import free_port
 from tests.flooding import REPO, PacedPage, flood_result, rss, start_flood
 from tests.viser_wire import RawClient
+from tests.waiting import wait_until
 
 TOKEN = "flood-bench-token"
 KINDS = ("camera", "camera-zero", "control", "values", "malformed")  # (and "mixed", on request)
@@ -38,14 +39,14 @@ def start_server(port: int, log: Any) -> subprocess.Popen:
 
 
 def wait_for_server(port: int, timeout: float = 120.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+    def answers() -> bool:
         try:
             RawClient(port, {"Origin": f"http://127.0.0.1:{port}"}).close()
-            return
+            return True
         except Exception:  # noqa: BLE001 - not listening yet
-            time.sleep(0.3)
-    raise SystemExit("the server did not start")
+            return False
+
+    wait_until(answers, timeout=timeout, what="the server to start", poll=0.3)
 
 
 def slider_uuid(port: int, label: str = "Steps per frame") -> str:
@@ -87,10 +88,14 @@ def bench(kind: str, port: int, pid: int, page: PacedPage, connections: int, sec
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("kinds", nargs="*", default=list(KINDS))
+    parser.add_argument("kinds", nargs="*", default=list(KINDS), metavar="KIND",
+                        help=f"floods to measure, of {', '.join(KINDS)} and mixed (default: all but mixed)")
     parser.add_argument("--connections", type=int, default=4)
     parser.add_argument("--seconds", type=float, default=5.0)
     options = parser.parse_args()
+    unknown = [kind for kind in options.kinds if kind not in (*KINDS, "mixed")]
+    if unknown:  # (argparse's choices refuse a list default with nargs="*" on Python 3.11)
+        parser.error(f"no flood of {', '.join(map(repr, unknown))}: choose from {', '.join(KINDS)} or mixed")
     port, log = free_port(), tempfile.TemporaryFile()
     server = start_server(port, log)  # (prlimit execs the server: its pid is the server's)
     try:
