@@ -6,7 +6,10 @@ what the outlines afford and says so, or is refused."""
 from __future__ import annotations
 
 import math
+import os
 import resource
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -197,6 +200,17 @@ def test_the_memory_budget_flag_raises_the_budget_for_the_command():
                      "--memory-budget", "60M", "--json")
     assert out.returncode == 2 and "over the 60 MB budget" in out.stderr
     assert "--memory-budget: memory budget 'lots'" in phototaxis("run", "--memory-budget", "lots").stderr
+
+
+def test_a_malformed_budget_in_the_environment_is_one_line_from_a_fresh_process():
+    """A module makes a Config as it loads (design.py's defaults), so PHOTOTAXIS_MEMORY_BUDGET=zz was a
+    traceback from the import in a fresh process; the dispatcher reads the budget before any import."""
+    env = {**os.environ, "PHOTOTAXIS_MEMORY_BUDGET": "zz"}
+    out = subprocess.run([sys.executable, "-m", "sandbox", "run", "--steps", "1"], env=env, capture_output=True,
+                         text=True, timeout=60)
+    assert out.returncode == 2 and out.stderr.strip().splitlines() == [
+        "phototaxis: error: PHOTOTAXIS_MEMORY_BUDGET: memory budget 'zz': give a size such as 2G, 800M or 50% "
+        "(of the machine's memory)"]
 
 
 def test_a_needle_c_is_refused_at_once_from_the_command_line(tmp_path):

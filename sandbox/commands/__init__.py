@@ -68,6 +68,13 @@ def _dispatch(argv: list[str], only: str | None) -> int:
     from sandbox.model.config import ConfigError
     from sandbox.shapes import ShapeError
 
+    from sandbox.model import budget
+
+    try:  # read before any module makes a Config (some make one as they load), so a bad value is one line
+        budget.memory_budget()
+    except ConfigError as exc:
+        print(f"phototaxis: error: {exc}", file=sys.stderr)
+        return 2
     parser = build_parser(only)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
