@@ -76,6 +76,7 @@ CONTROL_KINDS = ("GuiUpdateMessage", "GuiButtonHoldMessage", "CommandTriggerMess
                  "SceneNodeClickMessage", "SceneNodeDragMessage", "TransformControlsUpdateMessage",
                  "TransformControlsDragStartMessage", "TransformControlsDragEndMessage")
 
+
 class Bucket:
     """A token bucket: :meth:`take` one message's token if there is one."""
 
