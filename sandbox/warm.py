@@ -13,7 +13,7 @@ import signal
 
 signal.signal(signal.SIGINT, signal.SIG_IGN)
 
-from sandbox.app import process  # noqa: E402,F401  (the child's entry point, and the runner)
+from sandbox.app.world import child  # noqa: E402,F401  (the child's entry point, and the runner)
 from sandbox.model import kernels, simulation, undamped  # noqa: E402,F401
 
 kernels.warm_up()

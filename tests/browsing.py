@@ -8,7 +8,7 @@ import os
 
 import pytest
 
-from sandbox.app.live_bench import chromium_path
+from sandbox.commands.live_bench import chromium_path
 
 CHROMIUM = chromium_path()
 BROWSER_MARKS = [pytest.mark.browser,
@@ -49,7 +49,7 @@ def small_app():
     a second: quick to build and to draw on a loaded machine), started; the caller stops it.
     PHOTOTAXIS_TEST_WORLD=default gives the default world instead (`serve`'s), to measure a bar set for
     it (the one-minute designer's loop, docs/testing.md)."""
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
     from sandbox.model.config import Config
 
     if os.environ.get("PHOTOTAXIS_TEST_WORLD") == "default":

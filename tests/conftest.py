@@ -63,7 +63,7 @@ def pytest_collection_modifyitems(config, items) -> None:
 @pytest.fixture(scope="module")
 def browser():
     """One headless Chromium for a browser test module (see tests/browsing.py)."""
-    from sandbox.app.live_bench import CHROMIUM_ARGS
+    from sandbox.commands.live_bench import CHROMIUM_ARGS
     from tests.browsing import CHROMIUM, PatientBrowser, playwright_api
 
     with playwright_api.sync_playwright() as pw:

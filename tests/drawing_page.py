@@ -98,7 +98,7 @@ def canvas_box(page) -> dict:
 
 def camera_settled(client, config) -> bool:
     """The page's camera framed the arena from above (the server does it once the page says its size)."""
-    from sandbox.app.scene import top_down_camera
+    from sandbox.app.view.scene import top_down_camera
 
     aspect = client.camera.aspect
     position, _, _ = top_down_camera(config, aspect)

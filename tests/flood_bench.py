@@ -20,7 +20,7 @@ import tempfile
 import time
 from typing import Any
 
-from sandbox.app.server import free_port
+from sandbox.commands.serve import free_port
 from tests.flooding import REPO, PacedPage, flood_result, rss, start_flood
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until

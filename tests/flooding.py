@@ -3,7 +3,7 @@ the frames it gets meanwhile.
 
 - :class:`PacedPage`: a raw websocket page that behaves as a browser's does: it says hello, and after
   each window of the scene it gets it reports a drawn frame at ``/__drawn/<token>`` (the address the
-  page's script is given, :mod:`sandbox.app.pacing`), so the server paces it as it paces a browser. It
+  page's script is given, :mod:`sandbox.app.web.pacing`), so the server paces it as it paces a browser. It
   keeps the time of every window that carries a frame (the scene's node updates).
 - :func:`start_flood`: ``connections`` websocket connections, in a process of their own (so that the
   flood does not share this process's interpreter lock with the server under test), each sending one

@@ -6,7 +6,7 @@ defines it before the page loads (``page.add_init_script``), keeps the scenes,
 and, while recording, samples the nodes the sandbox draws each time a scene
 is about to be rendered: the state of every frame the viewer sees.
 
-Nodes are found by their height above the floor (sandbox.app.scene's Z_*
+Nodes are found by their height above the floor (sandbox.app.view.scene's Z_*
 constants, three.js's y in the page), which is unique per kind of node.
 """
 
@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from sandbox.app import scene
+from sandbox.app.view import scene
 
 #: Height -> name of the nodes the probe reads (point clouds and batched meshes).
 NODES = {"lit": scene.Z_LIT, "boxes": scene.Z_BOXES, "robots": scene.Z_ROBOTS}

@@ -97,7 +97,7 @@ def test_advise_from_the_command_line_prints_a_ranked_table_and_json(capsys):
 
 def test_the_pages_advice_runs_beside_the_simulation_and_its_best_is_used():
     from sandbox.app.panel.advice import AdviceFolder
-    from sandbox.app.runner import Runner
+    from sandbox.app.world.runner import Runner
 
     runner = Runner(TINY.replace(shape="l-shape"), fps=30, steps_per_frame=2).start()
     used = []

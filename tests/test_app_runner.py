@@ -9,8 +9,8 @@ import time
 import numpy as np
 import pytest
 
-from sandbox.app import palette
-from sandbox.app.runner import Runner, frames_owed, next_frame_due
+from sandbox.app.view import palette
+from sandbox.app.world.runner import Runner, frames_owed, next_frame_due
 from sandbox.model.config import Config
 from tests.waiting import frames_pass, paused_step, wait_until
 
@@ -169,7 +169,7 @@ def test_a_new_world_starts_on_the_clock_and_owes_nothing_for_its_build():
 
 
 def test_a_world_shown_every_third_frame_keeps_its_speed():
-    # sandbox.app.pacing: when every page draws fewer frames than are sent, the world takes a snapshot
+    # sandbox.app.web.pacing: when every page draws fewer frames than are sent, the world takes a snapshot
     # at every k-th frame only; it steps on the same schedule. Counted by the loop's own counters (a
     # command, as the reading itself, shows its effect at once: one snapshot more).
     r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2).start()
@@ -227,7 +227,7 @@ def test_closed_segments_join_the_last_vertex_to_the_first():
 
 
 def test_floor_point():
-    from sandbox.app.panel import floor_point
+    from sandbox.app.view.floor import floor_point
 
     assert floor_point((1, 2, 10), (0, 0, -1)) == (1.0, 2.0)
     x, y = floor_point((0, 0, 10), (1, 1, -10))
@@ -255,7 +255,7 @@ class FakeClient:
 
 @pytest.fixture
 def app():
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     # The simulation in this process: what these tests check does not depend on where it runs
     # (test_the_simulation_runs_in_another_process does), and a child costs 1.3 s of CPU to start.
@@ -429,7 +429,7 @@ def where_am_i(sim) -> int:
 
 @pytest.fixture(scope="module")
 def process_runner():
-    from sandbox.app.process import ProcessRunner
+    from sandbox.app.world.child import ProcessRunner
 
     r = ProcessRunner(SMALL, shape=None, fps=60, steps_per_frame=2)
     r.start()
@@ -520,7 +520,7 @@ def test_a_crashed_simulation_process_is_reported_and_restarted(process_runner):
 
 
 def test_with_no_viewer_for_a_while_the_app_pauses_and_a_viewer_resumes_it():
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     a = App(SMALL, port=free_port(), fps=60, steps_per_frame=2, idle_pause_seconds=1.0, process=False)
     a.start()
@@ -609,8 +609,8 @@ def test_classroom_waits_at_step_0_and_lays_pages_out_for_a_projector():
     layout (its panel folded, the construction area framed with the legend on its floor); the View
     buttons lay one page out as the construction area, the whole arena or the presenter's."""
     from sandbox.app.panel.framing import CONSTRUCTION, PRESENTER, WHOLE_ARENA
-    from sandbox.app.scene import presenter_camera, top_down_camera
-    from sandbox.app.server import App, free_port
+    from sandbox.app.view.scene import presenter_camera, top_down_camera
+    from sandbox.commands.serve import App, free_port
     from tests.viser_wire import RawClient
 
     app = App(SMALL, port=free_port(), fps=60, steps_per_frame=2, playing=False, whole_arena=False,
@@ -711,7 +711,7 @@ def test_parameter_tooltips_are_short_plain_words():
 
 def test_the_inspector_says_which_dot_is_which_photocell_and_what_doing_means(runner):
     """Issue 24, item 8: the panel maps the four dots on the floor to the photocells, in their order."""
-    from sandbox.app import palette as pal
+    from sandbox.app.view import palette as pal
     from sandbox.app.panel.inspector import InspectorFolder
 
     runner.follow([0])
@@ -836,8 +836,8 @@ def test_a_run_to_the_end_shows_the_world_it_starts_from(app):
 def test_a_live_worlds_design_downloads_and_plays_back_bit_for_bit():
     """Issue 40, item 6: the page's design of a live world (its light program as it ran) replays it
     exactly: the same state at the same step (serve --design plays it the same way)."""
-    from sandbox.app.commands import DesignOf, PlayDesign, SetLamp
-    from sandbox.app.runner import DESIGN_PROGRAM
+    from sandbox.app.world.orders import DesignOf, PlayDesign, SetLamp
+    from sandbox.app.world.runner import DESIGN_PROGRAM
 
     live = Runner(SMALL.replace(chase=0.5), shape=None, seed=4)
     live.advance(0)

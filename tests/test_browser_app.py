@@ -155,7 +155,7 @@ def cameras_seen(app) -> list[str]:
 def test_page_loads_and_draws_the_arena(app, page):
     from PIL import Image
 
-    from sandbox.app import palette
+    from sandbox.app.view import palette
 
     canvas = scene_canvas(page)
     box = canvas.bounding_box()
@@ -297,7 +297,7 @@ def test_run_controls(app, page):
     thumb.press("ArrowRight", delay=200)  # held like a hand holds it: viser's camera turns 50 degrees a second
     thumb.press("ArrowRight", delay=200)
     wait_until(lambda: runner.steps_per_frame == speed + 2, what="the speed to change")
-    # The arrows moved the slider, and only the slider: the view is not turned (sandbox.app.page_keys).
+    # The arrows moved the slider, and only the slider: the view is not turned (sandbox.app.web.page_keys).
     client = next(iter(app.server.get_clients().values()))
     wait_until_steady(lambda: tuple(np.round(client.camera.position, 3)), quiet=1.0, timeout=30)
     assert abs(turned_degrees(client)) < 1.0, cameras_seen(app)
@@ -324,7 +324,7 @@ def test_the_keyboard_runs_the_sandbox(app, page):
     looking_at = tuple(client.camera.look_at)
     page.keyboard.press("s", delay=200)  # held like a hand holds it: viser's camera backs away while s is down
     wait_until(lambda: runner.latest.step == before + runner.latest.world_config.update_every, what="s to step")
-    # s stepped, and only stepped: the view did not move (sandbox.app.page_keys).
+    # s stepped, and only stepped: the view did not move (sandbox.app.web.page_keys).
     wait_until_steady(lambda: tuple(np.round(client.camera.look_at, 3)), quiet=1.0, timeout=30)
     assert np.allclose(client.camera.look_at, looking_at, atol=1e-3), cameras_seen(app)
     page.keyboard.press("r")
@@ -625,7 +625,7 @@ def test_light_program_from_the_page(app, page, tmp_path):
 
 def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
     """Issue 25, item 2: the student's clicks, not the controller, light the floor; robots charge there."""
-    from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
+    from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 
     runner = app.runner
     runner.set_playing(True)
@@ -711,7 +711,7 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
 
 def test_a_challenge_round_is_scored_against_the_paper(app, page):
     """Issue 25, item 3: a round from the page, its score beside the paper's, the best kept by name."""
-    from sandbox.app.snapshot import PAPER_PROGRAM
+    from sandbox.app.world.snapshot import PAPER_PROGRAM
 
     folder = app.panel.challenge
     folder.round_steps = 300  # a short round (the page says 20,000)
@@ -858,8 +858,8 @@ def test_second_browser_and_disconnect(app, browser, page):
 
 
 def test_a_page_gets_no_more_frames_than_it_draws(app, browser):
-    """Issue 24, item 2 (sandbox.app.pacing): a page that draws slowly gets fewer frames, not a backlog."""
-    from sandbox.app.pacing import MOST_WAIT
+    """Issue 24, item 2 (sandbox.app.web.pacing): a page that draws slowly gets fewer frames, not a backlog."""
+    from sandbox.app.web.pacing import MOST_WAIT
 
     pacer = app.gate.pacer
     before = set(app.server.get_clients())

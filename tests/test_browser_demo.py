@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from sandbox.app.hexagons import ANGLE_TOLERANCE
+from sandbox.app.view.hexagons import ANGLE_TOLERANCE
 from tests import scene_probe
 from tests.browsing import BROWSER_MARKS
 from tests.waiting import wait_until
@@ -34,7 +34,7 @@ class SentFrames:
     about the arena's centre, sorted; and their angles)."""
 
     def __init__(self, app):
-        from sandbox.app.scene import SceneView
+        from sandbox.app.view.scene import SceneView
 
         self._points = SceneView._points
         self.by_robots: dict[bytes, dict] = {}
@@ -76,7 +76,7 @@ def cell_centres(lit: np.ndarray, config) -> np.ndarray:
 
 
 def hexagons_turned(drawn: np.ndarray, angles: np.ndarray) -> float:
-    from sandbox.app.hexagons import turned
+    from sandbox.app.view.hexagons import turned
 
     return max((turned(np.array([d]), np.array([a])) for d, a in zip(drawn, angles)), default=0.0)
 
@@ -97,8 +97,8 @@ def test_the_lights_are_drawn_with_the_robots_of_the_same_step(browser):
     step, so the lit band and the robots on it are where the simulation had them: the band's distance
     to the robots riding it, as drawn, is never more than one light cell from what it was (the drift).
     The page once showed an older light pattern, 2-5 cells away."""
-    from sandbox.app.runner import FASTEST
-    from sandbox.app.server import App, free_port
+    from sandbox.app.world.runner import FASTEST
+    from sandbox.commands.serve import App, free_port
     from sandbox.model.config import Config
 
     config = Config()  # the default world: circle, 200 robots, 500 boxes

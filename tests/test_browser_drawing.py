@@ -113,7 +113,7 @@ def test_draw_a_plus_from_typed_points(app, page):
     print("\n" + "\n".join(f"{name} designed and in use in {seconds:.1f} s" for name, seconds in TIMES.items()))
 
 
-# A phone (390 x 844) now gets the panel as a closed drawer (sandbox.app.page_layout; tests/test_browser_phone.py);
+# A phone (390 x 844) now gets the panel as a closed drawer (sandbox.app.web.page_layout; tests/test_browser_phone.py);
 # drawing on a phone's drawer is not driven here yet.
 @pytest.mark.parametrize("width, height", [(1024, 768)])
 def test_small_viewports_show_the_tools(app, browser, width, height):

@@ -76,7 +76,7 @@ CLICKS_IN_ONE_TURN_JS = """(points) => {
 
 
 def test_three_clicks_the_page_handles_at_once_give_three_points(app, page):
-    """The lost click of the thirty (sandbox.app.page_sends): three clicks handled within 20 ms gave the
+    """The lost click of the thirty (sandbox.app.web.page_sends): three clicks handled within 20 ms gave the
     first and the last, the middle one merged into the last by viser's throttle."""
     draw = app.panel.shape.draw
     clear(page, draw)
@@ -89,7 +89,7 @@ def test_three_clicks_the_page_handles_at_once_give_three_points(app, page):
 
 
 def test_a_click_on_an_edge_inserts_a_point_and_delete_removes_the_selected_one(app, page):
-    from sandbox.app.draw_view import SELECTED_COLOUR
+    from sandbox.app.view.sketch import SELECTED_COLOUR
 
     draw = app.panel.shape.draw
     el = start_drawing_on_an_l(page, draw)

@@ -1,6 +1,6 @@
 """A real page's own messages pass the budgets and the decoding untouched (issue 54, F): the camera
 turned by a drag, a slider held by its arrow keys, buttons clicked. None of them is malformed, none
-waits for a budget or is dropped (sandbox.app.rates, sandbox.app.well_formed): the budgets are above
+waits for a budget or is dropped (sandbox.app.web.rates, sandbox.app.web.well_formed): the budgets are above
 what viser's client sends, and the structures match what it sends."""
 
 from __future__ import annotations

@@ -53,7 +53,7 @@ def hostile_design(tmp_path_factory):
 @pytest.fixture(scope="module")
 def app(hostile_design):
     """``phototaxis serve --design FILE``, as the command line builds it."""
-    from sandbox.app.server import _app_from_args, free_port
+    from sandbox.commands.serve import _app_from_args, free_port
     from sandbox.commands import build_parser
 
     args = build_parser().parse_args(["serve", "--design", str(hostile_design), "--port", str(free_port()),

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sandbox.app.page_layout import SHORTCUTS_ID, SOFTWARE_NOTICE
-from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
+from sandbox.app.web.page_layout import SHORTCUTS_ID, SOFTWARE_NOTICE
+from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 from tests.browsing import BROWSER_MARKS
 from tests.waiting import wait_until
 
@@ -23,7 +23,7 @@ PHONE = {"width": 390, "height": 844}
 
 @pytest.fixture(scope="module")
 def app():
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
     from sandbox.model.config import Config
 
     app = App(Config(robots=40, boxes=80, update_every=20, hold_steps=5), port=free_port(), steps_per_frame=4,

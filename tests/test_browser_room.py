@@ -20,8 +20,8 @@ TOKEN = "room-token-41"
 
 @pytest.fixture(scope="module")
 def app():
-    from sandbox.app.access import Access
-    from sandbox.app.server import App, free_port
+    from sandbox.app.web.access import Access
+    from sandbox.commands.serve import App, free_port
     from sandbox.model.config import Config
 
     config = Config(robots=40, boxes=80, update_every=20, hold_steps=5)
@@ -176,9 +176,9 @@ def test_compare_mode_on_a_projector_shows_every_caption_and_readout_uncovered(b
     the difference in the canvas, none under a notice (viser's own included) or the on-screen panels."""
     import numpy as np
 
-    from sandbox.app.compare import side_config
-    from sandbox.app.scene import caption_box, compare_camera, difference_box, readout_box, shifted
-    from sandbox.app.server import App, free_port
+    from sandbox.app.world.lockstep import side_config
+    from sandbox.app.view.scene import caption_box, compare_camera, difference_box, readout_box, shifted
+    from sandbox.commands.serve import App, free_port
     from sandbox.model.config import Config
 
     base = Config(robots=40, boxes=80)

@@ -17,7 +17,7 @@ pytestmark = BROWSER_MARKS
 
 @pytest.fixture(scope="module")
 def app():
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
     from sandbox.model.config import Config
 
     app = App(Config(robots=12, boxes=20), port=free_port(), steps_per_frame=2, fps=15, process=False)
@@ -31,7 +31,7 @@ def other_site(app):
     """A page on another origin (another port) whose script opens the sandbox's websocket."""
     import viser
 
-    from sandbox.app.server import free_port
+    from sandbox.commands.serve import free_port
 
     script = f"""<!doctype html><title>waiting</title><script>
       const ws = new WebSocket("ws://127.0.0.1:{app.port}/", ["viser-v{viser.__version__}"]);

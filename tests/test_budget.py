@@ -339,7 +339,7 @@ def test_a_goal_that_would_take_the_world_over_the_budget_is_refused(monkeypatch
 @pytest.fixture(params=[False, pytest.param(True, marks=pytest.mark.slow)], ids=["in-process", "own-process"])
 def app(request):
     """The app, its simulation in this process, and (slow) in its own process as ``serve`` runs it."""
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     a = App(Config(robots=12, boxes=20, update_every=10, hold_steps=3), port=free_port(), fps=30, steps_per_frame=2,
             process=request.param).start()

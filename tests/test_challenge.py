@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.panel.challenge import HINT, ChallengeFolder
-from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
+from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 from sandbox.model.challenge import Gain, lamp_start, paper_gain
 from sandbox.model.config import Config
 

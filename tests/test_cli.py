@@ -162,7 +162,7 @@ def test_bench_scale_grows_the_world():
 
 @pytest.mark.slow
 def test_bench_live_without_a_browser_measures_what_its_websocket_viewer_receives():
-    from sandbox.app import live_bench
+    from sandbox.commands import live_bench
     from sandbox.model.config import Config
 
     r = live_bench.run(Config(robots=20, boxes=30), 1.0, warmup=0.5, viewers=1, browser=False)
@@ -196,7 +196,7 @@ def test_the_web_server_imports_no_simulation_engine():
     """The server draws; its simulation runs in a process of its own. Importing numba (and the scipy
     it pulls in), pymunk or matplotlib took a third of its start (docs/code.md)."""
     heavy = ("numba", "scipy", "pymunk", "matplotlib")
-    code = f"import sys, sandbox.app.server; print([m for m in {heavy!r} if m in sys.modules])"
+    code = f"import sys, sandbox.commands.serve; print([m for m in {heavy!r} if m in sys.modules])"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sandbox.app.compare import COMPARE_CASES, LEAD_FRAMES, SAME, Lockstep, partner_config, side_config
-from sandbox.app.runner import Runner
-from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
+from sandbox.app.world.lockstep import COMPARE_CASES, LEAD_FRAMES, SAME, Lockstep, partner_config, side_config
+from sandbox.app.world.runner import Runner
+from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 from sandbox.model.config import CASES, Config, ConfigError
 from tests.shown import shown
 from tests.waiting import wait_until
@@ -162,7 +162,7 @@ def test_playing_worlds_stay_within_the_lead_and_pause_on_the_same_step(pair):
 
 
 def test_worlds_shown_every_third_frame_go_on_in_step(pair):
-    # Both worlds' snapshots thinned (sandbox.app.pacing: every page draws slowly): each frame of either
+    # Both worlds' snapshots thinned (sandbox.app.web.pacing: every page draws slowly): each frame of either
     # still raises the target, so neither stalls for the other's rarer frames, and a pause lands both on
     # one step.
     lockstep, main, partner = pair
@@ -199,7 +199,7 @@ def test_unpaired_the_running_world_goes_on_alone(pair):
 # ------------------------------------------------------------------ in the app
 @pytest.fixture
 def comparing_app():
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     app = App(SMALL.replace(shape="star"), port=free_port(), fps=60, steps_per_frame=5, process=False,
               compare=(partner_config(SMALL, "star-switch"), "star-switch")).start()
@@ -254,7 +254,7 @@ def test_learns_show_me_runs_the_case_without_and_with_the_strategy(comparing_ap
 
 
 def test_compare_with_the_same_world_under_the_papers_lights():
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     app = App(SMALL, port=free_port(), fps=60, steps_per_frame=5, process=False).start()
     try:
@@ -293,7 +293,7 @@ def test_when_the_compared_worlds_process_dies_compare_mode_ends_and_says_so():
     import os
     import signal
 
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     app = App(SMALL, port=free_port(), fps=30, steps_per_frame=5, keep_running=True,
               compare=(partner_config(SMALL, "square-flare"), "square-flare")).start()
@@ -315,7 +315,7 @@ def test_when_the_compared_worlds_process_dies_compare_mode_ends_and_says_so():
 def test_a_challenge_round_in_compare_mode_plays_the_paper_beside_the_player():
     """Issue 25, item 3: the round's world and the paper's, side by side from the round's seed; both
     stop together at the round's end."""
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
     from sandbox.model.challenge import ROUND_SEED
 
     app = App(SMALL, port=free_port(), fps=60, steps_per_frame=5, process=False).start()
@@ -373,7 +373,7 @@ def test_a_pick_survives_a_panel_refresh_before_its_callback():
     """Under two test suites at once, a refresh between viser's setting of the value and the callback put
     the old value back; the callback read it, and the pick was lost (Compare with... started no second
     world; Paper case restarted the running case). Both dropdowns now keep a pick on its way."""
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     app = App(SMALL, port=free_port(), fps=30, steps_per_frame=2, process=False).start()
     try:

@@ -4,7 +4,7 @@ Field samples 64 and light pitch 0.05, then *Reset*: the simulation process was 
 memory, restarted "from the last settings" and killed again every 15-20 s, never reaching the five
 crashes in a minute that gave up; setting the values back was refused ("not changed: the simulation
 process stopped"). Here a world is made to kill its process deterministically, without exhausting
-memory: the test-only fault ``PHOTOTAXIS_TEST_CRASH_BUILD`` (sandbox/app/faults.py, read from the
+memory: the test-only fault ``PHOTOTAXIS_TEST_CRASH_BUILD`` (sandbox/app/world/faults.py, read from the
 environment each time a simulation process starts; no page reaches it) kills the process that builds a
 world whose light pitch is 0.5, as the out-of-memory killer does.
 """
@@ -17,8 +17,8 @@ from concurrent.futures import Future
 
 import pytest
 
-from sandbox.app.faults import CRASH_BUILD
-from sandbox.app.process import ProcessRunner, SimulationCrashed
+from sandbox.app.world.faults import CRASH_BUILD
+from sandbox.app.world.child import ProcessRunner, SimulationCrashed
 from sandbox.model.config import Config
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until
@@ -140,7 +140,7 @@ def notification(client: RawClient, title: str, seconds: float = 60.0) -> dict:
 @pytest.mark.slow
 def test_the_page_says_what_failed_and_its_panel_shows_the_settings_that_stand(monkeypatch):
     """Over the network, as the teacher's page: light pitch 0.5 and field samples 16, then Reset."""
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     monkeypatch.setenv(CRASH_BUILD, "light_pitch=0.5")
     app = App(SMALL, port=free_port(), fps=30, steps_per_frame=2).start()

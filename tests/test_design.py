@@ -269,7 +269,7 @@ def test_save_design_refuses_a_place_it_could_not_write_before_running(tmp_path)
 
 
 def test_serve_opens_the_designs_goal_settings_and_seed(star_design, monkeypatch):
-    from sandbox.app import server
+    from sandbox.commands import serve as server
 
     opened = {}
 

@@ -386,7 +386,7 @@ def test_run_design_refuses_a_hostile_file_at_once_in_little_memory(tmp_path, wr
 
 
 def test_serve_design_refuses_a_hostile_file_before_any_server_starts(tmp_path, monkeypatch):
-    from sandbox.app import server
+    from sandbox.commands import serve as server
 
     def app(*args, **kwargs):  # the server is never built: it would start on the design
         raise AssertionError("serve built its App for a refused design")

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.panel.draw import PICK_TEMPLATE, status_text
-from sandbox.app.draw_view import DIM_OPACITY, SELECTED_COLOUR  # noqa: I001 - after the panel, which imports it first
+from sandbox.app.view.sketch import DIM_OPACITY, SELECTED_COLOUR  # noqa: I001 - after the panel, which imports it first
 from sandbox.model.geometry import signed_area
 from sandbox.shapes.templates import template_vertices
 from tests.shown import shown
@@ -271,7 +271,7 @@ def test_a_dragged_handle_follows_every_update_without_a_new_preview(draw, monke
 
 
 def test_clicks_that_come_while_the_event_thread_is_busy_all_land_in_order(app, draw, page, monkeypatch):
-    """Every click on the floor is an event on the app's one queue (sandbox.app.events): clicks that
+    """Every click on the floor is an event on the app's one queue (sandbox.app.web.events): clicks that
     come while it is busy wait their turn; none is merged with another or dropped."""
     import threading
 

@@ -1,4 +1,4 @@
-"""The app's one event queue (sandbox/app/events.py): one thread, in order, timers on it too."""
+"""The app's one event queue (sandbox/app/web/events.py): one thread, in order, timers on it too."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import time
 
 import pytest
 
-from sandbox.app.events import EventQueue, QueueStopped
+from sandbox.app.web.events import EventQueue, QueueStopped
 from tests.waiting import wait_until
 
 

@@ -17,11 +17,11 @@ import msgspec
 import pytest
 import viser.infra
 
-from sandbox.app import rates
-from sandbox.app.rates import CAMERA, CONTROLS, FLOOD_SECONDS, Bucket, Budget, Flow
-from sandbox.app.refusals import RefusalLog
-from sandbox.app.viser_seam import messages
-from sandbox.app.well_formed import LARGE_MESSAGE, Malformed, decode
+from sandbox.app.web import rates
+from sandbox.app.web.rates import CAMERA, CONTROLS, FLOOD_SECONDS, Bucket, Budget, Flow
+from sandbox.app.web.refusals import RefusalLog
+from sandbox.app.web.viser_seam import messages
+from sandbox.app.web.well_formed import LARGE_MESSAGE, Malformed, decode
 from tests.flooding import CAMERA as HELLO
 from tests.flooding import PacedPage, flood_result, rss, start_flood
 from tests.test_security import TOKEN, app, connected, own_page, shared_app  # noqa: F401 - fixtures
@@ -178,7 +178,7 @@ def test_a_camera_with_no_height_is_refused_in_one_line_and_the_pages_go_on(shar
         drawn = app.frames_drawn
         wait_until(lambda: app.frames_drawn >= drawn + 10, what="ten more frames")
         assert app.gate.flow(wid).counts["malformed"] == 5 and not app.events.errors and not tracebacks(caplog)
-        lines = [r.getMessage() for r in caplog.records if r.name == "sandbox.app.rates"]
+        lines = [r.getMessage() for r in caplog.records if r.name == "sandbox.app.web.rates"]
         assert lines == [f"refused a message from connection {wid}: Expected `float` > 0.0 - at `$.fov`"]
     watcher.close()
     other.close()
@@ -199,7 +199,7 @@ def test_a_malformed_message_keeps_its_connection_and_a_line_of_log(app, caplog)
         wait_until(lambda: app.runner.steps_per_frame == 7, what="the page's value after the malformed ones")
     assert app.gate.flow(cid).counts["malformed"] == 6
     assert not tracebacks(caplog) and not app.events.errors
-    assert [r.getMessage() for r in caplog.records if r.name == "sandbox.app.rates"] == [
+    assert [r.getMessage() for r in caplog.records if r.name == "sandbox.app.web.rates"] == [
         f"refused a message from connection {cid}: Object contains unknown field `extra`"]
     client.close()
 

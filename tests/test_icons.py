@@ -1,8 +1,8 @@
-"""viser's icons read from an archive opened once (sandbox/app/icons.py) are the icons viser reads."""
+"""viser's icons read from an archive opened once (sandbox/app/web/icons.py) are the icons viser reads."""
 
 from __future__ import annotations
 
-from sandbox.app.icons import read_icons_once
+from sandbox.app.web.icons import read_icons_once
 
 
 def test_icons_read_once_are_visers_own_and_indexed_once():
@@ -15,6 +15,6 @@ def test_icons_read_once_are_visers_own_and_indexed_once():
     mine = [reader(name) for name in names]
     assert mine == [reader.viser_reader(name) for name in names]
     assert all(svg.lstrip().startswith("<svg") for svg in mine)
-    from sandbox.app.icons import _archive
+    from sandbox.app.web.icons import _archive
 
     assert _archive.cache_info().currsize == 1  # indexed once; viser's own reader: once per new name

@@ -24,7 +24,7 @@ def test_the_model_says_which_strategies_do_nothing_on_each_outline():
 
 @pytest.fixture
 def square_app():
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     app = App(SMALL.replace(shape="square"), port=free_port(), fps=30, steps_per_frame=2, process=False).start()
     yield app

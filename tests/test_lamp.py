@@ -64,8 +64,8 @@ def test_the_lamp_radius_stays_within_what_the_page_offers():
 
 
 def test_the_runner_hands_the_lights_to_the_lamp_and_back():
-    from sandbox.app.runner import Runner
-    from sandbox.app.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
+    from sandbox.app.world.runner import Runner
+    from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
     from tests.waiting import wait_until
 
     config = Config(robots=20, boxes=30)
@@ -125,7 +125,7 @@ def test_with_every_light_off_nothing_moves_so_a_round_scores_at_most_its_start(
 def test_a_round_is_scored_against_the_paper_in_the_same_world_and_steps():
     """A round from the page's folder: the player's share at the round's end, and the paper's
     controller's in the same world after the same steps (computed again here, the same number)."""
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
     from sandbox.model.challenge import ROUND_SEED, paper_gain
     from tests.waiting import wait_until
 

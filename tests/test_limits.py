@@ -7,7 +7,7 @@ import threading
 import numpy as np
 import pytest
 
-from sandbox.app.runner import BuildCancelled, Runner
+from sandbox.app.world.runner import BuildCancelled, Runner
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.simulation import Simulation
 from sandbox.model.world import World

@@ -1,9 +1,9 @@
-"""Freed memory is handed back once a burst of departures is over (sandbox.app.memory), at unit level:
+"""Freed memory is handed back once a burst of departures is over (sandbox.app.web.memory), at unit level:
 a fake clock's timers and a counting trim. The whole server's growth is test_page_memory's."""
 
 from __future__ import annotations
 
-from sandbox.app.memory import FreedMemoryReturn
+from sandbox.app.web.memory import FreedMemoryReturn
 
 
 class Timers:

@@ -1,4 +1,4 @@
-"""Each page gets the shared scene no faster than it draws it (sandbox.app.pacing, issue 24 item 2),
+"""Each page gets the shared scene no faster than it draws it (sandbox.app.web.pacing, issue 24 item 2),
 and the address a page reports at is behind the gate like the page itself."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from sandbox.app.pacing import CALM, MOST_WAIT, PATH, Pacer, drawing_rate, frames_per_snapshot
+from sandbox.app.web.pacing import CALM, MOST_WAIT, PATH, Pacer, drawing_rate, frames_per_snapshot
 from tests.test_security import app, connected, http_status, own_page, shared_app  # noqa: F401 - fixtures
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until

@@ -58,7 +58,7 @@ def test_bad_starts_are_refused_with_a_reason():
 def test_the_app_keeps_its_world_when_a_packed_start_cannot_be_built():
     import threading
 
-    from sandbox.app.runner import Runner
+    from sandbox.app.world.runner import Runner
 
     runner = Runner(Config(robots=10, boxes=20), shape=None, playing=False)
     runner.start()

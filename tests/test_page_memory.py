@@ -3,7 +3,7 @@
 20 pages connecting and dropping, 5 rounds: the server grew about 6 MB a round with no plateau. The
 departed connections' coroutines stayed in reference cycles (with the last window of messages each
 had sent) until Python's next full collection, and glibc's malloc kept what was freed
-(:mod:`sandbox.app.memory`). Here the app serves the paper's default world, as ``serve`` does, with
+(:mod:`sandbox.app.web.memory`). Here the app serves the paper's default world, as ``serve`` does, with
 its simulation in its own process; the pages are raw websocket clients in a process of their own,
 so that what is measured is the server.
 """
@@ -61,7 +61,7 @@ def resident_mb() -> float:
 @pytest.mark.slow
 @pytest.mark.skipif(sys.platform != "linux", reason="reads the resident size from /proc")
 def test_twenty_pages_coming_and_going_five_times_leave_no_memory_behind():
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     app = App(Config(), port=free_port(), keep_running=True).start()
     pages = subprocess.Popen([sys.executable, "-c", PAGES_PROCESS, str(app.port), str(PAGES)], cwd=ROOT,

@@ -1,12 +1,12 @@
 """The scripts a page gets at connect for what viser lacks (issue 41, item 5): a finger clicks as a
-mouse does (sandbox.app.page_touch), a phone's panel is a drawer and viser's software-rendering notice
-goes (sandbox.app.page_layout). What they do is tested in the real page (tests/test_browser_phone.py);
+mouse does (sandbox.app.web.page_touch), a phone's panel is a drawer and viser's software-rendering notice
+goes (sandbox.app.web.page_layout). What they do is tested in the real page (tests/test_browser_phone.py);
 here, that every page gets them, once, as the gate sends them."""
 
 from __future__ import annotations
 
-from sandbox.app.page_layout import LAYOUT_JS, NOTICE_SECONDS, SOFTWARE_NOTICE
-from sandbox.app.page_touch import LAMP_LIT_LABEL, TOUCH_JS
+from sandbox.app.web.page_layout import LAYOUT_JS, NOTICE_SECONDS, SOFTWARE_NOTICE
+from sandbox.app.web.page_touch import LAMP_LIT_LABEL, TOUCH_JS
 from sandbox.app.panel import lamp
 from tests.test_security import app, connected, own_page  # noqa: F401 - the fixture
 from tests.viser_wire import RawClient

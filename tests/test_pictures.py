@@ -7,8 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sandbox.app import learn, legend
-from sandbox.app import palette as pal
+from sandbox.app.panel import learn
+from sandbox.app.view import legend
+from sandbox.app.view import palette as pal
 from sandbox.model.config import Config
 
 
@@ -78,8 +79,8 @@ def test_box_mesh_colours_are_what_the_page_needs_to_show_the_box_colours():
 @pytest.mark.parametrize("name", sorted(learn.PICTURES))
 def test_the_stored_learn_pictures_are_what_the_engine_draws(name):
     """The server shows the stored pictures; the engine draws the same (text may differ by a few
-    pixels where another Pillow renders its font). Run ``python -m sandbox.app.learn`` when this fails."""
+    pixels where another Pillow renders its font). Run ``python -m sandbox.app.panel.learn`` when this fails."""
     drawn, stored = learn.PICTURES[name](), learn.stored_picture(name)
     assert drawn.shape == stored.shape, f"{name}: drawn {drawn.shape}, stored {stored.shape}"
     differ = (np.abs(drawn.astype(int) - stored.astype(int)).max(axis=-1) > 40).mean()
-    assert differ < 0.01, f"{name}: {100 * differ:.1f} % of the pixels differ; python -m sandbox.app.learn"
+    assert differ < 0.01, f"{name}: {100 * differ:.1f} % of the pixels differ; python -m sandbox.app.panel.learn"

@@ -173,7 +173,7 @@ def test_run_ends_a_program_stuck_where_python_cannot_stop_it(programs):
 
 # ------------------------------------------------------------------ live app
 def test_the_app_hands_the_lights_back_when_a_program_overruns(programs):
-    from sandbox.app.runner import Runner
+    from sandbox.app.world.runner import Runner
 
     runner = Runner(SMALL, shape=None, fps=60, steps_per_frame=2, program_time_limit=0.3).start()
     try:
@@ -191,7 +191,7 @@ def test_the_app_hands_the_lights_back_when_a_program_overruns(programs):
 def test_a_program_that_cannot_be_stopped_or_crashes_costs_its_process_not_the_app(programs):
     """Stuck in C, then a crash: each time a new simulation process starts with the paper's controller,
     and the crash listeners hear which program did what."""
-    from sandbox.app.process import ProcessRunner
+    from sandbox.app.world.child import ProcessRunner
 
     runner = ProcessRunner(SMALL, shape=None, fps=30, steps_per_frame=2, program_time_limit=0.3)
     runner.restart_pause = 0.05
@@ -213,7 +213,7 @@ def test_a_program_that_cannot_be_stopped_or_crashes_costs_its_process_not_the_a
 
 @pytest.mark.slow
 def test_the_app_survives_a_raising_callback_a_kill_while_building_and_gives_up_after_crashes_in_a_row():
-    from sandbox.app.process import ProcessRunner
+    from sandbox.app.world.child import ProcessRunner
 
     runner = ProcessRunner(SMALL, shape=None, fps=30, steps_per_frame=2)
     runner.restart_pause, runner.crashes_before_giving_up = 0.05, 2
@@ -261,7 +261,7 @@ def test_after_a_restart_the_next_program_failure_is_announced_again(programs):
     from types import SimpleNamespace
 
     from sandbox.app.panel.program import ProgramFolder
-    from sandbox.app.process import ProcessRunner
+    from sandbox.app.world.child import ProcessRunner
 
     told: list[str] = []
     page = SimpleNamespace(add_notification=lambda title, body, **kw: told.append(f"{title}: {body}"))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sandbox.app.record import frames, record
+from sandbox.commands.record import frames, record
 from sandbox.commands import main
 from sandbox.model.config import Config
 

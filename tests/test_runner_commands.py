@@ -1,4 +1,4 @@
-"""Typed commands (sandbox.app.commands): each carried out in one place, every future settled.
+"""Typed commands (sandbox.app.world.orders): each carried out in one place, every future settled.
 
 Whoever submits a command gets a future that resolves or fails: a stopped runner fails what it had not
 carried out, a crashed child fails what it owed, and a command sent while the child is swapped reaches
@@ -17,10 +17,10 @@ from concurrent.futures import wait
 
 import pytest
 
-from sandbox.app import commands
-from sandbox.app.commands import Command, Control, RunnerStopped, Setting
-from sandbox.app.process import ProcessRunner, SimulationCrashed
-from sandbox.app.runner import HANDLERS, Runner
+from sandbox.app.world import orders as commands
+from sandbox.app.world.orders import Command, Control, RunnerStopped, Setting
+from sandbox.app.world.child import ProcessRunner, SimulationCrashed
+from sandbox.app.world.runner import HANDLERS, Runner
 from sandbox.model.config import Config
 from tests.waiting import wait_until
 

@@ -1,4 +1,4 @@
-"""Both runners follow one contract, written once (sandbox.app.contract), and a chart never joins two worlds."""
+"""Both runners follow one contract, written once (sandbox.app.world.contract), and a chart never joins two worlds."""
 
 from __future__ import annotations
 
@@ -6,9 +6,9 @@ import inspect
 
 import pytest
 
-from sandbox.app.contract import FramePublisher, SimulationRunner
-from sandbox.app.process import ProcessRunner
-from sandbox.app.runner import Runner
+from sandbox.app.world.contract import FramePublisher, SimulationRunner
+from sandbox.app.world.child import ProcessRunner
+from sandbox.app.world.runner import Runner
 from sandbox.model.config import Config
 
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)

@@ -7,9 +7,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from sandbox.app.runner import Runner
-from sandbox.app.scene import POINT_GRID, CompactSender, SceneView, compare_camera, compare_offset, top_down_camera
-from sandbox.app.snapshot import caption, case_name
+from sandbox.app.world.runner import Runner
+from sandbox.app.view.scene import POINT_GRID, CompactSender, SceneView, compare_camera, compare_offset, top_down_camera
+from sandbox.app.world.snapshot import caption, case_name
 from sandbox.model.config import Config
 
 
@@ -84,7 +84,7 @@ def test_points_are_half_precision_on_a_grid_exact_to_the_walls():
 
 def test_colours_and_counts_use_the_same_charge_classes():
     """Issue 24, item 3: a robot is drawn green, amber or red by the classes the page counts."""
-    from sandbox.app import palette as pal
+    from sandbox.app.view import palette as pal
 
     capacity = 20.0
     charges = np.array([0.0, 1e-6, 5.0, 10.0, 10.01, 20.0])
@@ -123,7 +123,7 @@ def test_caption_names_the_case_and_the_step(snapshot):
     # Another program lights the floor: the caption says so instead of the paper's phase.
     from dataclasses import replace
 
-    from sandbox.app.snapshot import LAMP_PROGRAM
+    from sandbox.app.world.snapshot import LAMP_PROGRAM
 
     assert "| lit by your lamp |" in caption(replace(snapshot, program=LAMP_PROGRAM))
     assert "| lit by ShrinkingRing |" in caption(replace(snapshot, program="examples/ring.py:ShrinkingRing"))
@@ -135,7 +135,7 @@ def test_caption_names_the_case_and_the_step(snapshot):
 def test_lit_lights_are_points_sent_with_the_bodies(snapshot):
     """The lit lights travel as points in the frame's own messages (a texture is decoded later
     than the points it came with), in the grid picture's colours."""
-    from sandbox.app import palette as pal
+    from sandbox.app.view import palette as pal
 
     scene = FakeScene()
     view = SceneView(scene, snapshot)
@@ -160,7 +160,7 @@ def test_lit_lights_are_points_sent_with_the_bodies(snapshot):
 
 # ------------------------------------------------------------------ hexagons
 def test_a_box_is_the_recordings_hexagon():
-    from sandbox.app.hexagons import hexagon, wxyz
+    from sandbox.app.view.hexagons import hexagon, wxyz
 
     vertices, faces = hexagon(0.25)
     assert vertices.shape == (7, 3) and faces.shape == (6, 3)
@@ -175,7 +175,7 @@ def test_a_box_is_the_recordings_hexagon():
 def test_boxes_are_chunked_by_distance_and_resting_chunks_send_nothing():
     """Issue 24, item 6: hexagons cost 31 bytes a box where a disc cost 9, so a chunk that rests sends
     nothing, and a box turned less than the tolerance is not sent again."""
-    from sandbox.app.hexagons import ANGLE_TOLERANCE, CHUNK, REGROUP, Hexagons
+    from sandbox.app.view.hexagons import ANGLE_TOLERANCE, CHUNK, REGROUP, Hexagons
 
     rng = np.random.default_rng(3)
     m = 4 * CHUNK + 7
@@ -312,7 +312,7 @@ def test_compare_framing_shows_every_caption_and_readout_apart(snapshot, canvas,
     asks for (below on a page taller than wide). On a projector, none lies where viser stacks its notices
     (the canvas's top-left 310 x 150 px)."""
     from sandbox.app.panel.compare import TALL
-    from sandbox.app.scene import (caption_box, compare_camera, compare_legend_box, construction_box,
+    from sandbox.app.view.scene import (caption_box, compare_camera, compare_legend_box, construction_box,
                                    difference_box, readout_box, shifted)
 
     config = snapshot.world_config

@@ -20,8 +20,8 @@ import viser
 import websockets.exceptions
 import websockets.sync.client
 
-from sandbox.app.access import Access, Grant
-from sandbox.app.gate import MAX_CONNECTIONS, TOKEN_RESERVE, WATCHERS_PER_ADDRESS, WRITTEN_FOR
+from sandbox.app.web.access import Access, Grant
+from sandbox.app.web.gate import MAX_CONNECTIONS, TOKEN_RESERVE, WATCHERS_PER_ADDRESS, WRITTEN_FOR
 from sandbox.model.config import Config
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until, wait_until_steady
@@ -32,7 +32,7 @@ TRIANGLE = b"0 0\n6 0\n3 5\n"
 
 
 def make_app(**kwargs):
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     return App(SMALL, port=free_port(), fps=30, steps_per_frame=2, process=False, **kwargs).start()
 
@@ -79,7 +79,7 @@ def http_status(port: int, host_header: str, path: str = "/", headers: dict | No
 
 
 def test_the_gate_was_written_for_the_installed_viser():
-    assert viser.__version__ == WRITTEN_FOR, "sandbox/app/gate.py wraps viser's internals: re-check them"
+    assert viser.__version__ == WRITTEN_FOR, "sandbox/app/web/gate.py wraps viser's internals: re-check them"
 
 
 def test_a_page_of_another_origin_cannot_open_the_websocket(app):
@@ -557,7 +557,7 @@ def test_behind_a_proxy_a_page_is_this_machines_only_when_the_proxy_is_trusted()
 
 
 def test_serve_trust_proxy_reaches_the_servers_rules_and_a_bad_token_is_one_line(monkeypatch, capsys):
-    from sandbox.app import server
+    from sandbox.commands import serve as server
     from sandbox.commands import main
 
     seen: dict = {}
@@ -602,7 +602,7 @@ def test_a_duplicated_host_or_origin_is_refused_with_403_never_a_server_error(ap
             ws_headers = [("Host", own_host)] if what == "the same Host twice" else ws_headers
         status = refused_websocket_status(app.port, ws_headers)
         assert status == 403, f"websocket with {what}: answered {status}"
-    said = [r.getMessage() for r in caplog.records if r.name == "sandbox.app.gate"]
+    said = [r.getMessage() for r in caplog.records if r.name == "sandbox.app.web.gate"]
     assert sum("more than one" in line for line in said) == 2 * len(twice), said
     assert raw_request(app.port, b"GET / HTTP/1.1", [("Origin", own_origin.encode())])[0] == 200
     connected(app, RawClient(app.port, own_page(app)))
@@ -640,7 +640,7 @@ def test_repeated_headers_a_browser_may_send_never_make_a_server_error(app, capl
     headers are a 400 with one line; two Accept-Encoding headers are read as one list and get the page."""
     status, _ = raw_request(app.port, b"GET / HTTP/1.1", [("Upgrade", b"websocket"), ("Upgrade", b"websocket")])
     assert status == 400
-    said = [r.getMessage() for r in caplog.records if r.name == "sandbox.app.gate"]
+    said = [r.getMessage() for r in caplog.records if r.name == "sandbox.app.web.gate"]
     assert any("more than one Upgrade header" in line for line in said), said
     status, headers = raw_request(app.port, b"GET / HTTP/1.1", [("Accept-Encoding", b"identity"),
                                                                  ("Accept-Encoding", b"gzip")])

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import pytest
 
-from sandbox.app.faults import SLOW_BUILD
+from sandbox.app.world.faults import SLOW_BUILD
 from tests.waiting import wait_until
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -162,7 +162,7 @@ MOMENTS = {
     "its fork server started": lambda s: s.fork_server() is not None,
     "its simulation process started": Server.simulation_running,
     "serving": Server.serving,
-    # With a first world that takes a minute to build (sandbox/app/faults.py): issue 54, E.
+    # With a first world that takes a minute to build (sandbox/app/world/faults.py): issue 54, E.
     "building its first world": lambda s: s.simulating_for(3.0) and not s.serving(),
     "listening while its first world builds": lambda s: s.listening() and not s.serving(),
 }
@@ -258,7 +258,7 @@ def test_a_simulation_process_ends_when_its_app_is_killed(tmp_path):
     """An app killed outright (SIGKILL: nothing can tidy up) leaves no simulation process behind,
     even one not yet told to start. Its parent is the fork server, which stays as long as the child
     does: the child watches the app's process itself (the fork server is no sign of it)."""
-    code = ("from sandbox.app.process import ProcessRunner; from sandbox.model.config import Config; import time; "
+    code = ("from sandbox.app.world.child import ProcessRunner; from sandbox.model.config import Config; import time; "
             "r = ProcessRunner(Config(robots=30, boxes=60), shape=None); print(r.process.pid, flush=True); "
             "time.sleep(600)")
     guard = ["setpriv", "--pdeathsig", "KILL", "--"] if shutil.which("setpriv") else []
@@ -284,7 +284,7 @@ def test_a_simulation_process_ends_when_its_app_is_killed(tmp_path):
 def test_a_runner_stopped_while_its_first_world_builds_kills_it_at_once(monkeypatch):
     """A simulation process still building its first world reads no queue: it was asked to end and
     waited for 5 s, then killed (a serve stopped then took more than 5 s)."""
-    from sandbox.app.process import ProcessRunner
+    from sandbox.app.world.child import ProcessRunner
     from sandbox.model.config import Config
 
     monkeypatch.setenv(SLOW_BUILD, "30")

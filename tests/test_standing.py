@@ -1,4 +1,4 @@
-"""Which settings a crashed simulation is started again from (sandbox.app.standing), issue 54 B.
+"""Which settings a crashed simulation is started again from (sandbox.app.world.standing), issue 54 B.
 
 Settings that killed the simulation process were restarted from as they were, and killed it again every
 15-20 s for as long as the server ran. Here the rule alone, without processes: what stands, what a crash
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.app.standing import Settings, Standing, changed, gone_back, values
+from sandbox.app.world.standing import Settings, Standing, changed, gone_back, values
 from sandbox.model.config import Config
 
 FIRST = Settings(Config(), "from-config", None)

@@ -33,7 +33,7 @@ GROWTH = 50 * 1024 * 1024
 
 @pytest.fixture
 def app():
-    from sandbox.app.server import App, free_port
+    from sandbox.commands.serve import App, free_port
 
     a = App(SMALL, port=free_port(), fps=30, steps_per_frame=2, process=False).start()
     yield a

@@ -1,4 +1,4 @@
-"""One seam to viser (sandbox/app/viser_seam.py): only it names viser's private code, its table covers
+"""One seam to viser (sandbox/app/web/viser_seam.py): only it names viser's private code, its table covers
 every use, a missing piece refuses the start in one line, and viser's callbacks can be routed."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from pathlib import Path
 import viser
 
 SANDBOX = Path(__file__).resolve().parent.parent / "sandbox"
-SEAM = SANDBOX / "app" / "viser_seam.py"
+SEAM = SANDBOX / "app" / "web" / "viser_seam.py"
 #: getattr and friends: a private name in a string is still a private name.
 ATTRIBUTE_BUILTINS = {"getattr", "setattr", "hasattr", "delattr"}
 
@@ -118,12 +118,12 @@ def test_only_the_seam_names_visers_private_code():
     private = visers_private_names()
     found = {str(path.relative_to(SANDBOX.parent)): where for path in sorted(SANDBOX.rglob("*.py")) if path != SEAM
              for where in [trespasses(path.read_text(encoding="utf-8"), private)] if where}
-    assert not found, f"viser's private code outside sandbox/app/viser_seam.py: {found}"
+    assert not found, f"viser's private code outside sandbox/app/web/viser_seam.py: {found}"
 
 
 # ------------------------------------------------------------------ the table and its check
 def test_the_installed_viser_has_every_piece_of_the_table():
-    from sandbox.app import viser_seam
+    from sandbox.app.web import viser_seam
 
     assert viser_seam.missing() == []
     for use in viser_seam.USES:
@@ -132,7 +132,7 @@ def test_the_installed_viser_has_every_piece_of_the_table():
 
 
 def test_each_way_of_checking_finds_a_missing_piece():
-    from sandbox.app.viser_seam import ASSIGNED, FIELDS, KEYS, Use, missing
+    from sandbox.app.web.viser_seam import ASSIGNED, FIELDS, KEYS, Use, missing
 
     rows = {
         Use("-", "viser._no_such_module", "-"): "viser._no_such_module",
@@ -172,10 +172,10 @@ def test_routed_callbacks_of_a_click_a_page_of_its_own_and_a_connect_go_through_
     import contextlib
     import io
 
-    from sandbox.app import viser_seam
-    from sandbox.app.access import Access
-    from sandbox.app.gate import start_server
-    from sandbox.app.server import free_port
+    from sandbox.app.web import viser_seam
+    from sandbox.app.web.access import Access
+    from sandbox.app.web.gate import start_server
+    from sandbox.commands.serve import free_port
     from tests.viser_wire import RawClient
     from tests.waiting import wait_until
 
@@ -212,8 +212,8 @@ def test_a_callback_the_stopping_app_will_not_run_ends_quietly():
     """A page's last messages arrive while the app stops: viser would log each failed callback as
     "Task failed with exception". A callback the stopped queue refuses ends with None; any other
     failure is still the callback's."""
-    from sandbox.app.events import EventQueue
-    from sandbox.app.viser_seam import _Routed
+    from sandbox.app.web.events import EventQueue
+    from sandbox.app.web.viser_seam import _Routed
 
     events = EventQueue().open()
     routed = _Routed(events.submit, concurrent.futures.ThreadPoolExecutor(1))

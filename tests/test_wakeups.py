@@ -1,4 +1,4 @@
-"""viser's message buffers are woken safely from the frame thread (sandbox/app/wakeups.py)."""
+"""viser's message buffers are woken safely from the frame thread (sandbox/app/web/wakeups.py)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import threading
 
 import pytest
 
-from sandbox.app import wakeups
+from sandbox.app.web import wakeups
 from viser.infra._async_message_buffer import AsyncMessageBuffer
 
 

@@ -5,7 +5,7 @@ Each subcommand lives in the module that holds its idea and offers
 callable taking the parsed arguments and returning an exit code.
 
 - ``run``, ``bench``: :mod:`.run`, :mod:`.bench` (headless)
-- ``serve``, ``record``: :mod:`sandbox.app.server`, :mod:`sandbox.app.record`
+- ``serve``, ``record``: :mod:`sandbox.commands.serve`, :mod:`sandbox.commands.record`
 - ``sweep``, ``report``, ``advise``: :mod:`sandbox.experiments.sweep`, :mod:`sandbox.experiments.report`,
   :mod:`sandbox.experiments.advise`
 
@@ -20,7 +20,7 @@ import importlib
 import sys
 from typing import Sequence
 
-from sandbox.app.stopping import term_stops
+from sandbox.app.web.stopping import term_stops
 
 # sandbox.cli and the error classes are imported where used: they load numpy and shapely, a second and
 # more on a busy machine, and ``serve`` should take a SIGTERM as a clean stop before that (main).
@@ -29,8 +29,8 @@ from sandbox.app.stopping import term_stops
 SUBCOMMANDS = {
     "run": "sandbox.commands.run",
     "bench": "sandbox.commands.bench",
-    "serve": "sandbox.app.server",
-    "record": "sandbox.app.record",
+    "serve": "sandbox.commands.serve",
+    "record": "sandbox.commands.record",
     "sweep": "sandbox.experiments.sweep",
     "report": "sandbox.experiments.report",
     "advise": "sandbox.experiments.advise",

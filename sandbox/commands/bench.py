@@ -19,8 +19,8 @@ from typing import Any
 
 from tqdm import tqdm
 
-from sandbox.app import live_bench
-from sandbox.app.compare import COMPARE_CASES
+from sandbox.commands import live_bench
+from sandbox.app.world.lockstep import COMPARE_CASES
 from sandbox.cli import UserError, add_config_arguments, config_from_args
 from sandbox.model.config import Config
 from sandbox.model.simulation import Simulation

@@ -9,7 +9,7 @@ Each step lights the action's pattern for ``steps_per_action`` world steps
 (the configuration's ``update_every``, 100, by default): one controller
 update. The world, the reward (the gain in the fraction of boxes in the goal
 over the step) and the truncation (after ``config.steps`` world steps; it
-never terminates earlier) are :class:`sandbox.model.env.LightFieldEnv`'s,
+never terminates earlier) are :class:`sandbox.model.light_field_env.LightFieldEnv`'s,
 which this wraps; what it adds is Gymnasium's spaces, seeding and a compact
 observation.
 
@@ -40,7 +40,7 @@ import numpy as np
 from gymnasium import spaces
 
 from sandbox.model.config import Config
-from sandbox.model.env import LightFieldEnv
+from sandbox.model.light_field_env import LightFieldEnv
 from sandbox.rl.features import feature_names, observe
 from sandbox.rl.outline import KNOBS, Knobs, OutlinePainter
 

@@ -1,7 +1,7 @@
 """The control panel: one small class per folder, each with ``build(snap)``
 and ``update(snap)``, in the order the page shows them.
 
-Every callback runs on the app's event thread (:mod:`sandbox.app.events`),
+Every callback runs on the app's event thread (:mod:`sandbox.app.web.events`),
 one at a time, as do the frames' updates. None of them touches the simulation:
 they go through the runner (commands, controls). The parameter folders are
 generated from the model's declaration.
@@ -14,10 +14,12 @@ from typing import Any, Callable
 
 import viser
 
-from sandbox.app import learn, legend
-from sandbox.app.compare import Comparison
+from sandbox.app.panel import learn
+from sandbox.app.view import legend
+from sandbox.app.view.partner import Comparison
 from sandbox.app.panel.advice import AdviceFolder
-from sandbox.app.panel.common import PANEL_HZ, floor_point
+from sandbox.app.panel.common import PANEL_HZ
+from sandbox.app.view.floor import floor_point
 from sandbox.app.panel.challenge import ChallengeFolder
 from sandbox.app.panel.compare import CompareFolder
 from sandbox.app.panel.framing import WHOLE_ARENA, Framing
@@ -32,7 +34,7 @@ from sandbox.app.panel.result import ResultFolder
 from sandbox.app.panel.run import RunFolder
 from sandbox.app.panel.shape import ShapeFolder
 from sandbox.app.panel.strategies import StrategiesFolder
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.world.snapshot import Snapshot
 
 
 class Panel:
@@ -41,9 +43,9 @@ class Panel:
 
     def __init__(self, server: Any, runner: Any, view: Any, comparison: Comparison, *, allow_programs: bool = True,
                  may_load_programs: Any = None, default_view: str = WHOLE_ARENA, events: Any = None):
-        """``comparison``: compare mode's second world (:mod:`sandbox.app.compare`); play, pause, step,
-        reset and speed act on its :class:`~sandbox.app.compare.Lockstep`. ``events``: the app's event
-        queue (:mod:`sandbox.app.events`), where work done in threads of its own puts its results."""
+        """``comparison``: compare mode's second world (:mod:`sandbox.app.world.lockstep`); play, pause, step,
+        reset and speed act on its :class:`~sandbox.app.world.lockstep.Lockstep`. ``events``: the app's event
+        queue (:mod:`sandbox.app.web.events`), where work done in threads of its own puts its results."""
         gui = server.gui
         post = events.post if events is not None else (lambda fn, *args: fn(*args))
         self.runner = runner
@@ -113,7 +115,7 @@ class Panel:
 
     def show_settings(self, config: Any) -> None:
         """The controls show ``config``: after a crash, the simulation went back to the last settings that
-        ran (sandbox.app.standing), and the panel shows the settings that stand."""
+        ran (sandbox.app.world.standing), and the panel shows the settings that stand."""
         self.parameters.show_settings(config)
         self.strategies.show_settings(config)
 

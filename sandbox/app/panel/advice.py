@@ -16,7 +16,7 @@ from typing import Any, Callable
 import viser
 
 from sandbox.app.panel.common import notify, notify_error
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.world.snapshot import Snapshot
 from sandbox.experiments import advise as advice
 
 #: Below this share of its speed before the advice, the page says the advice slows the simulation.

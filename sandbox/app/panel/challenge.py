@@ -23,7 +23,7 @@ import viser
 
 from sandbox.app.panel.common import notify_error
 from sandbox.app.panel.plain import plain
-from sandbox.app.snapshot import LAMP_PROGRAM, Snapshot
+from sandbox.app.world.snapshot import LAMP_PROGRAM, Snapshot
 from sandbox.model.challenge import ROUND_SEED, ROUND_STEPS, Gain, lamp_start, paper_gain
 from sandbox.processes import simulation_context
 

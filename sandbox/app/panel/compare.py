@@ -1,5 +1,5 @@
 """The Compare folder: a second world beside the running one (issue 25, item 1; see
-:mod:`sandbox.app.compare`)."""
+:mod:`sandbox.app.world.lockstep`)."""
 
 from __future__ import annotations
 
@@ -8,12 +8,13 @@ from typing import Any, Callable
 
 import viser
 
-from sandbox.app.compare import COMPARE_CASES, SAME, Comparison, partner_config, side_name
+from sandbox.app.view.partner import Comparison
+from sandbox.app.world.lockstep import COMPARE_CASES, SAME, partner_config, side_name
 from sandbox.app.panel.common import notify_error
 from sandbox.app.panel.plain import plain
-from sandbox.app.runner import wait_for
-from sandbox.app.scene import PHONE_ASPECT
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.world.runner import wait_for
+from sandbox.app.view.scene import PHONE_ASPECT
+from sandbox.app.world.snapshot import Snapshot
 
 NOTHING = "nothing"
 #: A page narrower than this (width / height) gets the second world below the first, not beside it: a phone

@@ -11,7 +11,7 @@ polygon) a dashed preview of the goal at the size it will be built with the
 smallest and largest outlines of its light band; a line of text says what
 *Close and use* and the other buttons are waiting for.
 
-Every callback runs on the app's event thread (:mod:`sandbox.app.events`), in order.
+Every callback runs on the app's event thread (:mod:`sandbox.app.web.events`), in order.
 """
 
 from __future__ import annotations
@@ -23,10 +23,10 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
-from sandbox.app.draw_view import DrawView
+from sandbox.app.view.sketch import DrawView
 from sandbox.app.panel.common import notify_error
 from sandbox.app.panel.plain import plain
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.world.snapshot import Snapshot
 from sandbox.model.preview import GoalPreview, preview_goal
 from sandbox.shapes import ShapeError, validate_polygon
 from sandbox.shapes.drawing import (

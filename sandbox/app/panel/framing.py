@@ -20,8 +20,8 @@ from __future__ import annotations
 import threading
 from typing import Any, Callable
 
-from sandbox.app.legend import legend_picture
-from sandbox.app.scene import (PHONE_ASPECT, add_floor_legend, aim_camera, compare_camera, compare_legend_box,
+from sandbox.app.view.legend import legend_picture
+from sandbox.app.view.scene import (PHONE_ASPECT, add_floor_legend, aim_camera, compare_camera, compare_legend_box,
                                frame_arena, presenter_camera)
 
 CONSTRUCTION = "Construction area"

@@ -10,7 +10,7 @@ like its camera: following a robot in one tab changes nothing in another.
 
 The followed robot's disc is drawn again in the viewer's own scene, in the
 same message as its ring: the shared scene reaches a page that draws slowly
-in windows (:mod:`sandbox.app.pacing`), its own messages at once, so the
+in windows (:mod:`sandbox.app.web.pacing`), its own messages at once, so the
 shared disc could lag a frame or two behind the ring and sit outside it."""
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
-from sandbox.app import palette as pal
-from sandbox.app.scene import Z_TOP
-from sandbox.app.snapshot import RobotView, Snapshot
+from sandbox.app.view import palette as pal
+from sandbox.app.view.scene import Z_TOP
+from sandbox.app.world.snapshot import RobotView, Snapshot
 from sandbox.model.robots import PHOTOCELLS
 
 HELP = "Click a robot on the floor to follow it (key f: any robot). Each viewer follows its own."

@@ -19,7 +19,7 @@ from typing import Any
 import viser
 
 from sandbox.app.panel.common import notify_error
-from sandbox.app.snapshot import LAMP_PROGRAM, Snapshot
+from sandbox.app.world.snapshot import LAMP_PROGRAM, Snapshot
 from sandbox.model.lamp import DEFAULT_RADIUS, ERASE, LAMP, LARGEST_RADIUS, PAINT, SMALLEST_RADIUS
 
 HELP = ("Press *Be the light*, then click the floor: the lights there come on. Robots that see them "

@@ -11,10 +11,10 @@ import numpy as np
 import viser
 import viser.uplot
 
-from sandbox.app import palette as pal
-from sandbox.app.compare import side_name
+from sandbox.app.view import palette as pal
+from sandbox.app.world.lockstep import side_name
 from sandbox.app.panel.plain import plain
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.world.snapshot import Snapshot
 from sandbox.model.metrics import SampleWriter
 
 #: A chart is about 300 px wide: more points than this are not seen, only sent.

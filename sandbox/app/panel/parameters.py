@@ -19,7 +19,7 @@ import viser
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.plain import plain
 from sandbox.app.panel.tips import tip
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.world.snapshot import Snapshot
 from sandbox.model.config import STRATEGY_NAMES, Config, ConfigError, params
 
 #: Parameters that get their own controls elsewhere (or make no sense live).
@@ -113,7 +113,7 @@ class ParametersFolder:
 
     def show_settings(self, config: Config) -> None:
         """Every control shows ``config``'s value, nothing waits for a reset: the settings that stand
-        after the simulation went back to the last that ran (sandbox.app.standing)."""
+        after the simulation went back to the last that ran (sandbox.app.world.standing)."""
         self._quiet = True
         try:
             for name, handle in self.controls.items():

@@ -5,7 +5,7 @@ floor's side of the panel, for a room.
   (``serve --classroom`` or ``--paused``: a class before the lesson starts)
   gets a card of three lines: what the class is looking at, what to watch
   for, and "press Play (space)" ("tap Play" on a touch screen or at a
-  phone's width: the page's layout script, :mod:`sandbox.app.page_layout`,
+  phone's width: the page's layout script, :mod:`sandbox.app.web.page_layout`,
   swaps the words). Any page's Play (the card's, the bar's, the panel's or
   the space key) closes every page's card. It is a viser modal: it
   has no close button of its own (viser closes modals from the server only),
@@ -37,9 +37,9 @@ from typing import Any, Callable
 
 import viser
 
-from sandbox.app.page_layout import PRESS_PLAY
+from sandbox.app.web.page_layout import PRESS_PLAY
 from sandbox.app.panel.plain import plain
-from sandbox.app.snapshot import Snapshot, case_name
+from sandbox.app.world.snapshot import Snapshot, case_name
 
 #: How long the Start over offer stays (s): a loaded classroom laptop may take half a minute to show it.
 OFFER_SECONDS = 120.0

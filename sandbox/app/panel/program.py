@@ -6,7 +6,7 @@ stays; one that fails while running (an exception, a pattern of the wrong
 shape) hands the lights back to the paper's controller and every viewer is
 told why. Loading runs a Python file on the server, so the server decides
 who may: a page opened on the server's own machine, or any controlling page
-with ``serve --allow-programs`` (:mod:`sandbox.app.access`). The controls are
+with ``serve --allow-programs`` (:mod:`sandbox.app.web.access`). The controls are
 the same on every page (viser's panel is shared), so a page that may not is
 told why when it asks. Going back to the paper's controller is always
 allowed to a controlling page.
@@ -21,10 +21,10 @@ import viser
 
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.plain import plain
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.world.snapshot import Snapshot
 
 
-#: What a page that may not load programs is told (the rule: sandbox.app.access.Access.local_page).
+#: What a page that may not load programs is told (the rule: sandbox.app.web.access.Access.local_page).
 REFUSED = ("Loading light programs is not allowed from this page: only a page opened on the server's own "
            "machine may load them (not through a proxy, unless the server was started with --trust-proxy), "
            "or any page with the token if the server was started with --allow-programs.")

@@ -11,8 +11,8 @@ from typing import Any
 
 import viser
 
-from sandbox.app.scene import add_floor_legend
-from sandbox.app.snapshot import Snapshot, running_case
+from sandbox.app.view.scene import add_floor_legend
+from sandbox.app.world.snapshot import Snapshot, running_case
 
 MAX_RECORD_SECONDS = 120.0
 

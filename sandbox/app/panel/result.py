@@ -7,7 +7,7 @@ which outline and strategies ran; and it rings the boxes outside the goal on
 the floor, following them, until it is turned off or a new world starts.
 
 After a run to the end the folder explains the result by itself and opens on
-the page that asked, scrolled into view (:mod:`sandbox.app.page_open`): the
+the page that asked, scrolled into view (:mod:`sandbox.app.web.page_open`): the
 answer is not left below the fold in a closed folder (issue 56, item 4).
 """
 
@@ -20,11 +20,11 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
-from sandbox.app import page_open
-from sandbox.app.commands import Arrival
+from sandbox.app.web import page_open
+from sandbox.app.world.orders import Arrival
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.plain import plain
-from sandbox.app.snapshot import Snapshot, case_name
+from sandbox.app.world.snapshot import Snapshot, case_name
 from sandbox.model.design import file_bytes
 from sandbox.model.explain import PERFECT_PACKING, place_strays, strays_in_words
 

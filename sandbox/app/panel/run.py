@@ -8,12 +8,12 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
-from sandbox.app.commands import Arrival
+from sandbox.app.world.orders import Arrival
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.framing import VIEWS, Framing
 from sandbox.app.panel.plain import plain
-from sandbox.app.runner import FASTEST
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.world.runner import FASTEST
+from sandbox.app.world.snapshot import Snapshot
 
 #: Where *Run to the end* stops by default: the paper's runs are 100,000 steps.
 DEFAULT_END = 100_000

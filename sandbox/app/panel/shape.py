@@ -13,10 +13,10 @@ from typing import Any, Callable
 
 import viser
 
-from sandbox.app import viser_seam
+from sandbox.app.web import viser_seam
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.draw import DrawFolder
-from sandbox.app.snapshot import Snapshot
+from sandbox.app.world.snapshot import Snapshot
 from sandbox.model.design import MAX_NAME_CHARS
 from sandbox.model.goal import fit_goal
 from sandbox.shapes import (

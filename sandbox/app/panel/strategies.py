@@ -21,7 +21,7 @@ import viser
 
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.plain import plain
-from sandbox.app.snapshot import Snapshot, running_case
+from sandbox.app.world.snapshot import Snapshot, running_case
 from sandbox.model.config import CASES, STRATEGIES, param
 from sandbox.model.notes import inert_note, inert_strategies, strategy_effect_note
 from sandbox.shapes import shape_vertices
