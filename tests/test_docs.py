@@ -2,7 +2,7 @@
 table in docs/cli.md is the declaration's, MODEL.md's table of where the
 profiles differ holds exactly the parameters whose two profile values differ,
 with those values, and every relative link in README.md, MODEL.md and docs/
-(and the design log and reports under static/) reaches a file, and a heading
+(and the reports under static/, and the design notes in docs/) reaches a file, and a heading
 where it names one."""
 
 from __future__ import annotations

@@ -5,7 +5,9 @@ Each subcommand lives in the module that holds its idea and offers
 callable taking the parsed arguments and returning an exit code.
 
 - ``run``, ``bench``: :mod:`.run`, :mod:`.bench` (headless)
-- ``serve``, ``record``: :mod:`sandbox.commands.serve`, :mod:`sandbox.commands.record`
+- ``regenerate``: :mod:`.regenerate`, from the table of what the repository commits that a command
+  generates (:mod:`.generated`)
+- ``serve``, ``record``: :mod:`.serve`, :mod:`.record`
 - ``sweep``, ``report``, ``advise``: :mod:`sandbox.experiments.sweep`, :mod:`sandbox.experiments.report`,
   :mod:`sandbox.experiments.advise`
 
@@ -34,6 +36,7 @@ SUBCOMMANDS = {
     "sweep": "sandbox.experiments.sweep",
     "report": "sandbox.experiments.report",
     "advise": "sandbox.experiments.advise",
+    "regenerate": "sandbox.commands.regenerate",
 }
 
 

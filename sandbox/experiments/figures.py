@@ -5,15 +5,20 @@
 - :func:`plot_layouts`: the final box layout of one representative trial
   per case (Figures 6 and 7).
 
-Each writes a PNG and an SVG and returns the PNG's path.
+Each writes a PNG and an SVG and returns the PNG's path. The layouts' PNG is
+the one figure ``report.md`` shows, and the one the repository keeps of each
+committed evaluation, so it is written compact (:func:`compact_png`); the SVG
+keeps every detail.
 """
 
 from __future__ import annotations
 
+import io
 import math
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
@@ -30,11 +35,41 @@ def _colours(n: int) -> list:
     return [cmap(i % cmap.N) for i in range(n)]
 
 
-def _save(fig: Figure, path: Path) -> Path:
+#: The compact PNG: at most this wide, in a palette of this many colours, and narrower until it fits in
+#: this many bytes (never narrower than the last). The layouts use a handful of flat colours, so the
+#: palette loses nothing a reader sees; 1000 px keeps a 4-column grid's captions legible.
+COMPACT_WIDTH, COMPACT_COLOURS, COMPACT_BYTES, COMPACT_NARROWEST = 1000, 32, 150_000, 600
+
+
+def _save(fig: Figure, path: Path, *, compact: bool = False) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path.with_suffix(".png"), dpi=150, bbox_inches="tight")
+    png = path.with_suffix(".png")
+    if compact:
+        buffer = io.BytesIO()
+        fig.savefig(buffer, format="png", dpi=150, bbox_inches="tight")
+        buffer.seek(0)
+        compact_png(Image.open(buffer), png)
+    else:
+        fig.savefig(png, dpi=150, bbox_inches="tight")
     fig.savefig(path.with_suffix(".svg"), bbox_inches="tight")
-    return path.with_suffix(".png")
+    return png
+
+
+def compact_png(image: Image.Image, path: Path) -> int:
+    """Write ``image`` as a small PNG (see COMPACT_WIDTH): scaled down, palette-coded; its size in bytes."""
+    image = image.convert("RGB")
+    width = min(COMPACT_WIDTH, image.width)
+    while True:
+        scaled = image if width == image.width else image.resize(
+            (width, round(image.height * width / image.width)), Image.Resampling.LANCZOS)
+        buffer = io.BytesIO()
+        scaled.quantize(COMPACT_COLOURS, method=Image.Quantize.FASTOCTREE, dither=Image.Dither.NONE).save(
+            buffer, format="PNG", optimize=True)
+        if buffer.tell() <= COMPACT_BYTES or width <= COMPACT_NARROWEST:
+            break
+        width = max(COMPACT_NARROWEST, int(width * 0.85))
+    path.write_bytes(buffer.getvalue())
+    return buffer.tell()
 
 
 #: The paper plots its square/circle cases and its star cases apart.
@@ -134,4 +169,4 @@ def plot_layouts(by_case: dict[str, list[dict]], path: Path) -> Path:
         ax.set_title(f"{case}\nseed {trial['seed']}, {frac:.1%} in goal", fontsize=9)
     fig.suptitle("Final box layouts (trial nearest each case's median; green: in goal, orange: outside, "
                  "grey dots: robots)", fontsize=9)
-    return _save(fig, path)
+    return _save(fig, path, compact=True)

@@ -308,16 +308,16 @@ def _markdown(meta, by_case, tables, first, last, tests, figs, dest: Path, failu
 
 
 def _figures_section(figs: dict, rel) -> list[str]:
-    return ["", "## Figure 4. Fraction of boxes in the goal over time", "",
-            f"![fraction in goal]({rel(figs['fraction_in_goal'])})",
-            f"([SVG]({rel(figs['fraction_in_goal'].with_suffix('.svg'))}))",
-            "", "## Figure 5. Mean distance of boxes outside the goal over time", "",
-            f"![mean distance outside]({rel(figs['mean_outside_distance'])})",
-            f"([SVG]({rel(figs['mean_outside_distance'].with_suffix('.svg'))}))",
-            "", "## Figures 6 and 7. Final box layouts", "",
+    """The one figure report.md shows, the final layouts (compact: the repository keeps it of every committed
+    evaluation), and where the others are; links only to what is shown, so a committed report links to
+    nothing that is not committed."""
+    return ["", "## Figures 6 and 7. Final box layouts", "",
             "For each case, the trial whose final fraction in goal is nearest the case's median. Green boxes "
             "are in the goal (black outline), orange ones outside; the dashed square is the construction area.",
-            "", f"![final layouts]({rel(figs['layouts'])})"]
+            "", f"![final layouts]({rel(figs['layouts'])})", "",
+            f"Figure 4, the fraction of boxes in the goal over time, and Figure 5, the mean distance of the boxes "
+            f"outside it (mean ± 1 s.d. band per case), are `{rel(figs['fraction_in_goal'])}` and "
+            f"`{rel(figs['mean_outside_distance'])}`; every figure is also an SVG beside its PNG."]
 
 
 # ------------------------------------------------------------------ CLI

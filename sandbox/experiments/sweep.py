@@ -116,6 +116,15 @@ def _term_as_interrupt():
         signal.signal(signal.SIGTERM, previous)
 
 
+def sweep_cases(args: argparse.Namespace) -> tuple[list[Case], list]:
+    """The cases a parsed ``sweep`` command runs and its extra pairs to compare, built and checked (its
+    grid file, parameters and shapes) without running anything: ``regenerate --dry-run`` checks with it."""
+    base, typed = _base(args), _typed_flags(args)
+    if args.grid:
+        return grid_cases(args.grid, base, typed)
+    return paper_cases(args.cases or "paper", base, typed), []
+
+
 def sweep_command(args: argparse.Namespace) -> int:
 
     watchdog.on_stuck = watchdog.exit_on_stuck("phototaxis sweep")
@@ -134,10 +143,7 @@ def _sweep(args: argparse.Namespace) -> int:
         raise SweepError(f"--seeds must be 0 or more (got {args.seeds})")
     base, typed = _base(args), _typed_flags(args)
     seed_start = args.seeds if args.seeds is not None else Config().replace(**{**base, **typed}).seed
-    if args.grid:
-        cases, compare = grid_cases(args.grid, base, typed)
-    else:
-        cases, compare = paper_cases(args.cases or "paper", base, typed), []
+    cases, compare = sweep_cases(args)
     out = Path(args.out)
     store = ResultStore(out)
     store.check_writable()

@@ -7,7 +7,7 @@ two opposite sides (the letters H, K, X and W open up and down), every cycle
 takes robots from the two sides between and none come back: a robot drives
 only up a gradient, and an evenly lit band never sends it along itself. The
 letter K's stem side held 30 robots in its first cycle and 6 in its sixth, and
-the K built 0.720 (``static/shapes/notched/README.md``).
+the K built 0.720 (``docs/design-notches.md``).
 
 So while the band dilates beyond :data:`BEYOND` of the goal, only its lights
 beyond the goal's bounding box on those starved sides stay lit: the robots

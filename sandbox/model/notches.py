@@ -4,7 +4,7 @@ The offset band enters a notch only once it is closer to the goal than half
 the notch's width; from then on its level set there is a ridge along the
 notch's axis that lights all at once. The boxes the band brings in fill the
 notch, which lies outside the goal, and they are the boxes missing at the
-ends of the prongs (``static/shapes/notched/README.md``).
+ends of the prongs (``docs/design-notches.md``).
 
 A **notch** here is what closing the goal by a disc of radius
 :data:`CLOSING_RADIUS` adds to it (a gap narrower than twice that), in pieces

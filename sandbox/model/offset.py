@@ -10,8 +10,8 @@ light wide as the paper's. It follows every arm, notch and hollow of the
 goal, and no centre is needed.
 
 The geometry decides the sizes (measured on nine shapes, 2-4 seeds x
-40,000-100,000 steps: the prototype's notes are in the design log,
-``static/shapes/README.md``):
+40,000-100,000 steps: ``docs/design-offset.md``; every shape at 100,000
+steps: ``static/shapes/README.md``):
 
 * **smallest** ``d``: one robot diameter, the paper's gap;
 * **largest** ``d``, where the first contraction starts: the band encloses

@@ -20,7 +20,7 @@ notched goal everywhere (0.5 m without notches); a right-angled corner looks
 1.41 m wide (its deepest point within 1 m is 0.71 m deep) and holds the band
 at 0.95 m, an acute tip farther still.
 
-Measured (seeds 0-3, 100,000 steps; ``static/shapes/notched/README.md``): the
+Measured (seeds 0-3, 100,000 steps; ``docs/design-notches.md``): the
 W 0.750 against 0.720 without it, the comb 0.754 against 0.749, and no
 notched shape of the set or the templates lower. Measuring the width within
 1.2 m or 1.6 m, or holding at 0.65 m all round and nowhere farther, did less.

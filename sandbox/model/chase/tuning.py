@@ -2,7 +2,7 @@
 
 They were chosen by trying a few values on seeds 0, 1 and 100-103, never on
 the evaluation's seeds' results as a target (the trials are in
-``static/closed-loop/README.md``).
+``docs/design-chase.md``).
 """
 
 from __future__ import annotations

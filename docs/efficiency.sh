@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Parallel efficiency of `phototaxis sweep`: wall time of equal trials on 1 vs 2 local workers.
-# Usage: static/paper/efficiency.sh [TRIALS=4] [STEPS=5000]. Run it on an otherwise idle machine.
+# Usage: docs/efficiency.sh [TRIALS=4] [STEPS=5000]. Run it on an otherwise idle machine.
 set -euo pipefail
 trials=${1:-4}; steps=${2:-5000}
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
