@@ -5,11 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from sandbox.model import geometry
 from sandbox.model.config import Config
 from sandbox.model.controller import CONTRACTING, DILATING, HOLDING, Controller
-from sandbox.model.goal import make_goal
-from sandbox.shapes import shape_vertices
+from sandbox.model.family import make_goal
+from sandbox.shapes import geometry, shape_vertices
 
 
 def controller(shape="circle", **changes) -> Controller:

@@ -23,8 +23,9 @@ SANDBOX = Path(__file__).resolve().parent.parent / "sandbox"
 #: The layers, lowest first: a module may import modules of its own unit and of lower layers only. A module's
 #: unit is the longest name below that it starts with (``sandbox.shapes.geometry`` before ``sandbox.shapes``).
 LAYERS: tuple[tuple[str, ...], ...] = (
-    # what everything may use: polygon geometry, numba loaded at first use, how a process is started
-    ("sandbox.shapes.geometry", "sandbox.lazy_numba", "sandbox.processes"),
+    # what everything may use: numba loaded at first use, how a process is started; then polygon geometry
+    ("sandbox.lazy_numba", "sandbox.processes"),
+    ("sandbox.shapes.geometry",),
     ("sandbox.shapes",),        # goal polygons from files, and their checks
     ("sandbox.model",),         # the simulation (headless)
     ("sandbox.cli",),           # the flags every command shares, read into a Config

@@ -8,15 +8,14 @@ import math
 import numpy as np
 import pytest
 
-from sandbox.model import geometry
 from sandbox.model.chase import ChaseController, finish, sculpt
 from sandbox.model.chase.hold import Hold
 from sandbox.model.chase.tuning import SCULPTING, Sculpting
 from sandbox.model.config import Config
 from sandbox.model.controller import Controller
+from sandbox.model.family import make_goal
 from sandbox.model.phases import DILATING, HOLDING
-from sandbox.model.goal import make_goal
-from sandbox.shapes import shape_vertices
+from sandbox.shapes import geometry, shape_vertices
 
 SQUARE = np.array([[-2.0, -2.0], [2.0, -2.0], [2.0, 2.0], [-2.0, 2.0]])  # side 4, inradius 2
 BOX_AREA = 0.1624  # hexagon of circumradius 0.25: 3 sqrt(3) / 2 * 0.25^2

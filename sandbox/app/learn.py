@@ -21,7 +21,7 @@ from PIL import Image, ImageDraw, ImageFont
 from sandbox.app import palette as pal
 from sandbox.model.chase import ChaseController
 from sandbox.model.config import Config
-from sandbox.model.goal import make_goal
+from sandbox.model.family import make_goal
 from sandbox.model.lights import LightField
 from sandbox.model.phases import DILATING
 from sandbox.model.robots import PHOTOCELLS

@@ -19,7 +19,6 @@ how success is measured. Headless: nothing here imports the web app.
 - :mod:`.programs`    the light-program interface: observations, pattern checks, loading
 - :mod:`.env`         a Gymnasium-style environment: the light pattern is the action
 - :mod:`.design`      a goal and the light program that built it, in one file: record, replay, save, load
-- :mod:`.geometry`    pure polygon geometry
 - :mod:`.metrics`     the success metrics and their samples
 - :mod:`.simulation`  ``Simulation``: reset, step, read-only state
 """

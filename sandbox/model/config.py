@@ -22,9 +22,8 @@ try:  # Python 3.11+
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-
-class ConfigError(ValueError):
-    """A configuration value or file a user gave is not acceptable."""
+from sandbox.model import budget
+from sandbox.model.config_error import ConfigError  # (raised here and by the budget; imported from here)
 
 
 #: The two profiles (SPEC §9). The default is the authors' program: it is
@@ -362,8 +361,6 @@ class Config:
     def _check_budget(self) -> None:
         """Refuse settings whose world would need more memory than the budget (sandbox.model.budget):
         here, so that no configuration a command, a file or the page makes can bypass it."""
-        from sandbox.model import budget  # it reads Config: imported when the class exists
-
         if budget.budget_checked():
             budget.check_settings(self)
 

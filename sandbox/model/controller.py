@@ -24,13 +24,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model import band, gather, geometry
+from sandbox.model import band, gather
 from sandbox.model.config import Config
-from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal, make_goal
+from sandbox.model.family import make_goal
+from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal
 from sandbox.model.lights import light_centres
 from sandbox.model.notes import goal_notes
 from sandbox.model.phases import CONTRACTING, DILATING, HOLDING
 from sandbox.model.schedule import InSchedule, Schedule
+from sandbox.shapes import geometry
 
 #: After holding, the authors' program grows a circle back by this much (its ``delta``, m).
 PROGRAM_CIRCLE_REGROWTH = 0.6

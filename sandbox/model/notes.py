@@ -6,11 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model import geometry, outlines
+from sandbox.model import outlines
 from sandbox.model.budget import MAX_GOAL_VERTICES
 from sandbox.model.config import STRATEGIES, Config
 from sandbox.model.goal import Goal
 from sandbox.model.outlines import Sizing
+from sandbox.shapes import geometry
 from sandbox.shapes.errors import ShapeError
 
 STRATEGY_LABELS = {s.name: s.label for s in STRATEGIES}

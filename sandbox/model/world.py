@@ -17,9 +17,10 @@ import pymunk
 import pymunk.batch as batch
 from pymunk._chipmunk_cffi import lib as chipmunk
 
-from sandbox.model import body_memory, geometry, kernels, undamped
+from sandbox.model import body_memory, kernels, undamped
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.goal import Goal
+from sandbox.shapes import geometry
 
 # Collision categories: the construction wall only meets boxes.
 ROBOT, BOX, OUTER_WALL, CONSTRUCTION_WALL = 1, 2, 4, 8
