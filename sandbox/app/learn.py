@@ -124,7 +124,7 @@ def _smallest(config: Config, shape: str, **strategies: float) -> tuple[np.ndarr
     goal = make_goal(cfg, shape_vertices(shape))
     ctrl = ChaseController(cfg, goal)
     ctrl.scale = ctrl.min_scale
-    ctrl._redraw()
+    ctrl.redraw()
     return ctrl.intensities.copy(), ctrl.outline.copy(), goal.outline().copy()
 
 

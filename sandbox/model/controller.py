@@ -271,6 +271,11 @@ class Controller(Cycle):
         """One world step: the new pattern when it changed, else None (the observation is unread)."""
         return self.intensities if self.advance() else None
 
+    def redraw(self) -> None:
+        """Light the outline for the size and phase as they are now: for a caller that set them itself (the
+        learn panel's pictures set the smallest size). Each step redraws on its own when they change."""
+        self._redraw()
+
     def _redraw(self) -> None:
         """Recompute the outline and which lights are on. Hook: chase lights the goal
         grown, sculpted from what the boxes show."""
