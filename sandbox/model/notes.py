@@ -76,11 +76,7 @@ def goal_fit_notes(config: Config, sizing: Sizing, smallest: np.ndarray | None =
 
 
 #: The strategies that do nothing with the offset outline, and why (the advisor leaves them out there too).
-OFFSET_INERT = {
-    "flare": "its band already rounds every corner at the same distance as the edges",
-    "switch": "far from the goal its band is nearly a circle already",
-    "no_corners": "its band has no convex corners to darken",
-}
+OFFSET_INERT = {s.name: s.offset_inert for s in STRATEGIES if s.offset_inert}
 
 
 def inert_strategies(family: str) -> dict[str, str]:
