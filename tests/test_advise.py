@@ -29,6 +29,9 @@ def test_the_candidates_are_what_means_something_on_each_goal():
 def test_a_candidate_sets_its_strategies_and_turns_the_others_off():
     config = Candidate("offset", (("chase", 2.0),)).config(Config(flare=1.75, switch=0.25))
     assert (config.outline, config.chase, config.flare, config.switch, config.no_corners) == ("offset", 2.0, 0, 0, 0)
+    # what the page's "Use the best" applies: every strategy named, from the declaration (STRATEGY_NAMES)
+    assert Candidate("scaled", (("switch", 0.25),)).every_strategy == {"flare": 0.0, "switch": 0.25,
+                                                                      "no_corners": 0.0, "chase": 0.0}
 
 
 def test_the_ranking_puts_most_in_the_goal_first_then_the_closest_rest():

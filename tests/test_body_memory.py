@@ -4,9 +4,8 @@ import math
 
 import numpy as np
 import pymunk
-from pymunk._chipmunk_cffi import lib
 
-from sandbox.model import body_memory
+from sandbox.model import body_memory, pymunk_seam
 from sandbox.model.config import Config
 from sandbox.model.simulation import Simulation
 
@@ -99,10 +98,11 @@ def test_compiled_setters_set_and_wake_as_chipmunks_setters_through_cffi():
     space, bodies = world()
     body_memory.set_velocities(body_memory.addresses(bodies), writes, 3, *body_memory.SETTERS)
     space_c, bodies_c = world()
+    set_velocity, set_angular_velocity = pymunk_seam.velocity_setters()
     for row, vx, vy, w in writes.tolist():
-        body = bodies_c[int(row)]._body
-        lib.cpBodySetVelocity(body, (vx, vy))
-        lib.cpBodySetAngularVelocity(body, w)
+        body = pymunk_seam.body_pointer(bodies_c[int(row)])
+        set_velocity(body, (vx, vy))
+        set_angular_velocity(body, w)
     for compiled, through_cffi in zip(bodies, bodies_c):
         assert (compiled.velocity, compiled.angular_velocity, compiled.is_sleeping) == \
             (through_cffi.velocity, through_cffi.angular_velocity, through_cffi.is_sleeping)

@@ -18,7 +18,8 @@ import shapely
 
 from sandbox.model import budget
 from sandbox.model.config import Config, ConfigError
-from sandbox.model.goal import fit_goal, make_goal
+from sandbox.model.family import make_goal
+from sandbox.model.goal import fit_goal
 from sandbox.model.lights import _AxisLayout
 from sandbox.model.simulation import Simulation
 from sandbox.shapes import ShapeError, shape_vertices
@@ -59,6 +60,14 @@ def unchecked(**values) -> Config:
 
 
 # ------------------------------------------------------------------ the estimate
+def test_a_config_offers_all_the_budget_reads_of_it():
+    """budget.py is below config (every Config checks itself against it) and names what it reads in
+    budget.Settings instead of importing Config: a field renamed in Config must be renamed there."""
+    config = Config()
+    read = [*budget.Settings.__annotations__, *budget.KNOBS, "replace"]
+    assert len(read) > 12 and not [name for name in read if not hasattr(config, name)]
+
+
 def test_the_field_is_sized_as_the_light_layout_makes_it():
     """Worked out without the layout's arrays, and equal to what it builds, on a spread of settings."""
     for window in ("cells", "range"):
@@ -289,7 +298,7 @@ def test_a_goal_of_ten_thousand_vertices_is_simplified_quickly_and_says_so():
 def test_a_goal_within_the_bound_is_fitted_as_it_always_was():
     """The paper's shapes, the templates and a 300-vertex outline: simplified within a twentieth of a pitch
     and refitted, bit for bit as before the bound, and nothing said."""
-    from sandbox.model import geometry
+    from sandbox.shapes import geometry
     from sandbox.shapes.templates import TEMPLATES
 
     t = np.linspace(0.0, 2 * math.pi, 300, endpoint=False)

@@ -5,11 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from sandbox.model import geometry
 from sandbox.model.config import Config
 from sandbox.model.controller import CONTRACTING, DILATING, HOLDING, Controller
-from sandbox.model.goal import make_goal
-from sandbox.shapes import shape_vertices
+from sandbox.model.family import make_goal
+from sandbox.shapes import geometry, shape_vertices
 
 
 def controller(shape="circle", **changes) -> Controller:
@@ -156,3 +155,15 @@ def test_live_strategy_change_waits_for_the_next_update():
         c.advance()
     assert c.strategies["no_corners"] == 0.5
     assert c.intensities.sum() < before.sum()
+
+
+def test_redraw_lights_the_size_a_caller_set():
+    """The learn panel's pictures set the smallest size and ask for its lights through the public redraw."""
+    c = controller("square")
+    largest = c.outline.copy()
+    c.scale = c.min_scale
+    assert np.array_equal(c.outline, largest)  # setting the size lights nothing by itself
+    c.redraw()
+    assert np.allclose(c.outline, c.sizing.polygon(c.min_scale))
+    assert abs(geometry.signed_area(c.outline)) < abs(geometry.signed_area(largest))
+    assert c.intensities.any()

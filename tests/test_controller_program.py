@@ -10,11 +10,10 @@ import math
 import numpy as np
 import pytest
 
-from sandbox.model import geometry
 from sandbox.model.config import Config
 from sandbox.model.controller import CONTRACTING, DILATING, HOLDING, Controller, first_cycle_steps
-from sandbox.model.goal import make_goal
-from sandbox.shapes import shape_vertices
+from sandbox.model.family import make_goal
+from sandbox.shapes import geometry, shape_vertices
 
 GOAL_AREA = 500 * 1.5 * math.sqrt(3) * 0.25**2
 CENTRE = 32.5

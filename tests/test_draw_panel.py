@@ -10,7 +10,7 @@ import pytest
 
 from sandbox.app.panel.draw import PICK_TEMPLATE, status_text
 from sandbox.app.view.sketch import DIM_OPACITY, SELECTED_COLOUR  # noqa: I001 - after the panel, which imports it first
-from sandbox.model.geometry import signed_area
+from sandbox.shapes.geometry import signed_area
 from sandbox.shapes.templates import template_vertices
 from tests.shown import shown
 from tests.test_security import connected, make_app, own_page, uuid_of, wait_until
@@ -108,7 +108,7 @@ def test_status_says_what_each_disabled_button_waits_for(draw):
 
 
 def test_preview_is_the_goal_at_its_final_size_with_its_outlines(app, draw):
-    from sandbox.model.goal import make_goal
+    from sandbox.model.family import make_goal
     from sandbox.model.outlines import sizing_for
 
     draw._change(SQUARE)

@@ -4,7 +4,6 @@ crossing edges (hand-computed values)."""
 import numpy as np
 import pytest
 
-from sandbox.model.geometry import signed_area
 from sandbox.shapes import ShapeError, validate_polygon
 from sandbox.shapes.drawing import (
     crossing_edges,
@@ -14,6 +13,7 @@ from sandbox.shapes.drawing import (
     snap,
     without_repeats,
 )
+from sandbox.shapes.geometry import signed_area
 from sandbox.shapes.templates import CELL, placed, template_names, template_vertices
 
 # ----------------------------------------------------------------- templates

@@ -12,7 +12,8 @@ import pytest
 from sandbox.model import gather, notches
 from sandbox.model.config import Config
 from sandbox.model.controller import Controller
-from sandbox.model.goal import Goal, make_goal
+from sandbox.model.family import make_goal
+from sandbox.model.goal import Goal
 from sandbox.model.offset import OffsetSizing
 from sandbox.model.phases import CONTRACTING, DILATING
 from sandbox.model.simulation import Simulation

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sandbox.model import geometry
+from sandbox.shapes import geometry
 
 SQUARE = np.array([[0, 0], [2, 0], [2, 2], [0, 2]], dtype=float)
 L_SHAPE = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], dtype=float)

@@ -9,7 +9,7 @@ import pytest
 from sandbox.model import lights
 from sandbox.model.config import Config
 from sandbox.model.controller import Controller
-from sandbox.model.goal import make_goal
+from sandbox.model.family import make_goal
 from sandbox.model.lights import LightField, brightness_kernel, light_centres, luminosity_direct
 from sandbox.shapes import shape_vertices
 

@@ -5,7 +5,7 @@ import pytest
 
 from sandbox.model import metrics
 from sandbox.model.config import Config
-from sandbox.model.goal import make_goal
+from sandbox.model.family import make_goal
 
 
 def square_goal():

@@ -12,8 +12,8 @@ import pytest
 from sandbox.model import notches
 from sandbox.model.config import Config
 from sandbox.model.controller import Controller
-from sandbox.model.family import settle
-from sandbox.model.goal import Goal, make_goal
+from sandbox.model.family import make_goal, settle
+from sandbox.model.goal import Goal
 from sandbox.model.offset import OffsetSizing, signed_distance
 from sandbox.shapes import shape_vertices
 

@@ -11,8 +11,8 @@ import pytest
 
 from sandbox.model.config import Config
 from sandbox.model.controller import Controller
-from sandbox.model.family import DEEP_INSIDE, centre_depth, choose
-from sandbox.model.goal import Goal, fit_goal, make_goal
+from sandbox.model.family import DEEP_INSIDE, centre_depth, choose, make_goal
+from sandbox.model.goal import Goal, fit_goal
 from sandbox.model.lights import light_centres
 from sandbox.model.offset import OffsetSizing, covering_distance, signed_distance, wall_distance
 from sandbox.model.phases import CONTRACTING, DILATING, HOLDING

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from sandbox.model.config import CASES, Config, ConfigError
-from sandbox.model.goal import make_goal
+from sandbox.model.family import make_goal
 from sandbox.model.simulation import Simulation
 from sandbox.model.world import packed_in_goal
 

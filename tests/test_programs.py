@@ -13,7 +13,7 @@ from sandbox.commands import main
 from sandbox.model.chase import ChaseController
 from sandbox.model.config import Config
 from sandbox.model.controller import Controller
-from sandbox.model.goal import make_goal
+from sandbox.model.family import make_goal
 from sandbox.model.light_field_env import LightFieldEnv
 from sandbox.model.programs import LightProgram, ProgramError, check_pattern, load_program
 from sandbox.model.simulation import Simulation

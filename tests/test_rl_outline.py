@@ -12,7 +12,7 @@ import sandbox
 import sandbox.rl
 from sandbox.model.config import Config
 from sandbox.model.controller import Controller
-from sandbox.model.goal import make_goal
+from sandbox.model.family import make_goal
 from sandbox.rl.features import DISTANCE_EDGES, distance_histogram, feature_names
 from sandbox.rl.outline import FLARE_HIGH, NO_CORNERS_HIGH, Knobs, OutlinePainter
 from sandbox.shapes import shape_vertices

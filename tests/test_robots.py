@@ -32,12 +32,6 @@ def test_charge_step_by_hand_and_clamped():
     assert out[2] == 20.0  # never above capacity
 
 
-def test_colours_red_to_green():
-    c = robots.charge_colours(np.array([0.0, 20.0, 10.0]), 20.0)
-    assert c[0][0] > c[0][1] and c[1][1] > c[1][0]
-    assert c[2] == pytest.approx((c[0] + c[1]) / 2)
-
-
 # --- the authors' program (SPEC §9 rows 6-9) --------------------------------
 
 def test_corner_photocells_follow_heading():

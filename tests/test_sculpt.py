@@ -8,15 +8,14 @@ import math
 import numpy as np
 import pytest
 
-from sandbox.model import geometry
 from sandbox.model.chase import ChaseController, finish, sculpt
 from sandbox.model.chase.hold import Hold
 from sandbox.model.chase.tuning import SCULPTING, Sculpting
 from sandbox.model.config import Config
 from sandbox.model.controller import Controller
+from sandbox.model.family import make_goal
 from sandbox.model.phases import DILATING, HOLDING
-from sandbox.model.goal import make_goal
-from sandbox.shapes import shape_vertices
+from sandbox.shapes import geometry, shape_vertices
 
 SQUARE = np.array([[-2.0, -2.0], [2.0, -2.0], [2.0, 2.0], [-2.0, 2.0]])  # side 4, inradius 2
 BOX_AREA = 0.1624  # hexagon of circumradius 0.25: 3 sqrt(3) / 2 * 0.25^2
@@ -141,7 +140,7 @@ def test_chase_lights_the_goal_grown_by_a_robot_diameter_at_the_smallest_size():
     closed = ChaseController(Config(chase=2.0), make_goal(Config(chase=2.0), star))
     for c in (open_loop, closed):
         c.scale = c.min_scale
-        c._redraw()
+        c.redraw()
     goal = closed.goal.vertices
     assert geometry.distance_to_outline(closed.outline, goal) == pytest.approx(np.full(len(closed.outline), 0.5))
     assert geometry.distance_to_outline(open_loop.outline, goal).max() > 1.0
@@ -366,11 +365,11 @@ def test_with_chase_no_corners_darkens_only_while_dilating():
     c = ChaseController(cfg, make_goal(cfg, star))
     for ctrl in (plain, c):
         ctrl.scale = 2.0
-        ctrl._redraw()
+        ctrl.redraw()
     lit = int(plain.intensities.sum())
     assert int(c.intensities.sum()) == lit  # contracting: nothing darkened
     c.phase = "dilating"
-    c._redraw()
+    c.redraw()
     assert int(c.intensities.sum()) == lit - math.ceil(lit / 2)
 
 

@@ -348,7 +348,7 @@ def test_a_goal_larger_than_the_construction_area_is_refused_with_what_would_fit
     """500 boxes of 0.1624 m² are 81.2 m²: a 2:1 rectangle of that area is 12.74 x 6.37 m and fits the
     16 m area; a 25:1 one is 45.05 x 1.80 m, a third of it inside at best, and fits at (16 / 45.05)² of the
     boxes, 63. A 4.2:1 one (18.5 x 4.4 m) lies 87 % inside: refused; 3.8:1 (17.6 x 4.6 m), 91 %: built."""
-    from sandbox.model.goal import make_goal
+    from sandbox.model.family import make_goal
     from sandbox.shapes import ShapeError
 
     config = Config()

@@ -9,13 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sandbox.model import geometry, thin
+from sandbox.model import thin
 from sandbox.model.config import Config
-from sandbox.model.family import settle
-from sandbox.model.goal import make_goal
+from sandbox.model.family import make_goal, settle
 from sandbox.model.lights import light_centres
 from sandbox.model.offset import OffsetSizing
-from sandbox.shapes import shape_vertices
+from sandbox.shapes import geometry, shape_vertices
 
 ROOT = Path(__file__).resolve().parent.parent
 W_FILE = str(ROOT / "static" / "shapes" / "notched" / "shapes" / "W.txt")

@@ -25,7 +25,7 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from sandbox.model.config import STRATEGY_DEFAULTS, Config
+from sandbox.model.config import STRATEGY_DEFAULTS, STRATEGY_NAMES, Config
 from sandbox.processes import simulation_context
 
 #: Seeds and world steps of one candidate's trials (about a third of a 100,000-step run's cycles).
@@ -49,9 +49,13 @@ class Candidate:
         """Chase senses the boxes (an overhead camera); every other strategy is open loop."""
         return dict(self.strategies).get("chase", 0.0) > 0
 
+    @property
+    def every_strategy(self) -> dict[str, float]:
+        """Every strategy's amount: its own, 0 for the others."""
+        return dict.fromkeys(STRATEGY_NAMES, 0.0) | dict(self.strategies)
+
     def config(self, base: Config) -> Config:
-        off = {name: 0.0 for name in ("flare", "switch", "no_corners", "chase")}
-        return base.replace(**{**off, **dict(self.strategies)}, outline=self.outline)
+        return base.replace(**self.every_strategy, outline=self.outline)
 
 
 @dataclass

@@ -14,10 +14,11 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import socket
 import sys
 from pathlib import Path
 from typing import Iterator
+
+from filelock import FileLock, Timeout
 
 from sandbox.experiments.trials import SweepError, Trial, slug
 from sandbox.model.metrics import SampleWriter, read_samples
@@ -25,6 +26,7 @@ from sandbox.model.metrics import SampleWriter, read_samples
 TRIALS_DIR = "trials"
 FAILURES_FILE = "failures.json"
 SWEEP_FILE = "sweep.json"  # the sweep's cases and command (see sweep.write_meta)
+LOCK_FILE = ".sweep.lock"  # held by the sweep writing to the folder (ResultStore.lock)
 
 
 class ResultStore:
@@ -49,29 +51,21 @@ class ResultStore:
 
     @contextlib.contextmanager
     def lock(self) -> Iterator[None]:
-        """Refuse a second sweep into the same folder while one runs (it would repeat the same trials)."""
-        path = self.root / ".sweep.lock"
-        me = f"{socket.gethostname()} {os.getpid()}"
-        for _ in range(2):
-            try:
-                fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-            except FileExistsError:
-                try:
-                    host, pid = path.read_text().split()
-                except (OSError, ValueError):
-                    host, pid = "", "0"
-                if host == socket.gethostname() and not _alive(int(pid)):
-                    path.unlink(missing_ok=True)  # left by a sweep that was killed
-                    continue
-                raise SweepError(f"another sweep (process {pid} on {host or '?'}) is writing to {self.root}; "
-                                 f"wait for it or stop it (delete {path} if it is gone)") from None
-            os.write(fd, me.encode())
-            os.close(fd)
-            break
+        """Refuse a second sweep into the same folder while one runs (it would repeat the same trials).
+
+        The operating system's lock on :data:`LOCK_FILE` (through filelock): it ends with the process that
+        holds it, killed or not, so no lock is ever left stale, and there is no stale lock to clear while
+        another sweep takes it. The file itself stays, empty (removing it would let two sweeps lock two
+        files of one name)."""
+        lock = FileLock(self.root / LOCK_FILE, timeout=0)
+        try:
+            lock.acquire()
+        except Timeout:
+            raise SweepError(f"another sweep is writing to {self.root}; wait for it to finish or stop it") from None
         try:
             yield
         finally:
-            path.unlink(missing_ok=True)
+            lock.release()
 
     def is_done(self, trial: Trial) -> bool:
         """True when the trial's files are there and were made with the same configuration."""
@@ -131,16 +125,6 @@ class ResultStore:
             return json.loads(path.read_text()) if path.is_file() else []
         except (OSError, ValueError):
             return []
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OverflowError):
-        return True
-    return pid > 0
 
 
 def load_meta(out: Path) -> dict:

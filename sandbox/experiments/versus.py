@@ -41,7 +41,7 @@ def open_loop_energy(config: Config) -> float:
     """Sum of all intensities over ``config.steps`` steps of the paper's
     controller: what it lights never depends on the world, so no physics is run."""
     from sandbox.model.controller import Controller
-    from sandbox.model.goal import make_goal
+    from sandbox.model.family import make_goal
     from sandbox.shapes import shape_vertices
 
     controller = Controller(config, make_goal(config, shape_vertices(config.shape)))

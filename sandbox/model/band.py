@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model import geometry
 from sandbox.model.config import Config
+from sandbox.shapes import geometry
 
 #: Lights exactly ``band`` from the outline are in it, whatever the rounding.
 _EDGE = 1e-9

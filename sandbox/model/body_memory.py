@@ -16,7 +16,9 @@ velocities are plain fields, and the position is Chipmunk's
 with the same operations in the same order.
 
 Where the struct lies comes from Munk2D's ``chipmunk_structs.h`` (the
-Chipmunk2D fork inside pymunk 7), which is not part of pymunk's API. So it
+Chipmunk2D fork inside pymunk 7), which is not part of pymunk's API (nor
+are the bodies' addresses and the setters: :mod:`sandbox.model.pymunk_seam`
+hands them out). So it
 is used only with pymunk 7, and only after :func:`layout_holds` has checked
 it against pymunk's own getters on a body whose centre of gravity is off its
 origin (where the position is not the field ``p``). Anything else reads
@@ -35,6 +37,7 @@ too; elsewhere the setters are called through cffi.
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import math
 
@@ -43,8 +46,8 @@ import pymunk
 from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
-from pymunk._chipmunk_cffi import ffi, lib
 
+from sandbox.model import pymunk_seam
 from sandbox.model.undamped import VECT_AS_TWO_DOUBLES
 
 # Byte offsets of the fields in struct cpBody (Munk2D, 64-bit): two function
@@ -98,14 +101,9 @@ def _call_with_double(typingctx, function, body, x):
     return types.void(function, body, types.float64), codegen
 
 
-def _address_of(function: str) -> int:
-    return int(ffi.cast("uintptr_t", ffi.addressof(lib, function)))
-
-
 #: Addresses of Chipmunk's velocity setters, for :func:`set_velocities` (None where the vector's
 #: passing is not known to match two doubles).
-SETTERS = ((_address_of("cpBodySetVelocity"), _address_of("cpBodySetAngularVelocity"))
-           if VECT_AS_TWO_DOUBLES else None)
+SETTERS = pymunk_seam.velocity_setter_addresses() if VECT_AS_TWO_DOUBLES else None
 
 
 @njit(cache=True)
@@ -137,7 +135,7 @@ def read_rows(addresses, state):
 def addresses(bodies: list[pymunk.Body]) -> np.ndarray:
     """The ``cpBody`` address of each body, as :func:`read_rows` takes them. The bodies must
     outlive every read (the world keeps them)."""
-    return np.array([int(ffi.cast("uintptr_t", body._body)) for body in bodies], dtype=np.uintp)
+    return np.array([pymunk_seam.body_address(body) for body in bodies], dtype=np.uintp)
 
 
 @functools.cache
@@ -145,7 +143,7 @@ def layout_holds() -> bool:
     """Whether this pymunk's ``cpBody`` is laid out as :func:`read_rows` reads it: pymunk 7, and a
     body with distinct values and an off-centre centre of gravity reads back what pymunk's getters
     say, bit for bit."""
-    if not pymunk.version.startswith("7.") or ffi.sizeof("void *") != 8:
+    if not pymunk.version.startswith("7.") or ctypes.sizeof(ctypes.c_void_p) != 8:
         return False
     space = pymunk.Space()
     body = pymunk.Body(2.0, 3.0)

@@ -52,9 +52,9 @@ import math
 import os
 import threading
 from dataclasses import dataclass
-from typing import Callable, Iterator, NamedTuple
+from typing import Any, Callable, Iterator, NamedTuple, Protocol
 
-from sandbox.model.config import Config, ConfigError
+from sandbox.model.config_error import ConfigError
 
 MB, GB, GiB = 10**6, 10**9, 2**30
 #: The environment variable that sets the budget (bytes, or a number with K, M, G or T, or a share of
@@ -88,6 +88,30 @@ PER_VERTEX_PAIR = 500
 WIDTH_SPACING = 0.1
 PER_WIDTH_POINT = 48
 
+
+
+class Settings(Protocol):
+    """What the budget reads of a :class:`~sandbox.model.config.Config`. Every Config checks itself
+    against the budget as it is made (:func:`check_settings`), so this module is below config and does
+    not import it: it reads these fields (and the knobs' by name), makes a variant with ``replace`` and
+    the defaults with ``type(config)()``."""
+
+    arena_size: float
+    boxes: int
+    construction_size: float
+    field_samples: int
+    light_pitch: float
+    light_range: float
+    light_window: str
+    lights_per_side: int
+    metrics_every: int
+    robot_spawn_size: float
+    robots: int
+    steps: int
+
+    def replace(self, **changes: Any) -> Settings: ...
+
+
 #: The terms needed for a moment only, one at a time (see :class:`Cost`).
 PASSING = frozenset({"field block", "goal"})
 
@@ -113,7 +137,7 @@ class Cost:
 
 
 # -- the terms ---------------------------------------------------------------------------------
-def _strip_counts(config: Config) -> list[int]:
+def _strip_counts(config: Settings) -> list[int]:
     """How many intervals each strip of a light pitch has (sandbox.model.lights._AxisLayout)."""
     pitch = config.light_pitch
     target = pitch / config.field_samples
@@ -122,7 +146,7 @@ def _strip_counts(config: Config) -> list[int]:
     return [max(1, math.ceil((hi - lo) / target - 1e-9)) for lo, hi in zip(edges[:-1], edges[1:])]
 
 
-def _cuts(config: Config) -> list[float]:
+def _cuts(config: Settings) -> list[float]:
     """Where, within a light pitch, the set of lights in range changes (sandbox.model.lights._AxisLayout)."""
     pitch, reach = config.light_pitch, config.light_range
     cuts = {round((0.5 * pitch + reach) % pitch, 12), round((0.5 * pitch - reach) % pitch, 12)}
@@ -131,7 +155,7 @@ def _cuts(config: Config) -> list[float]:
     return sorted(cuts)
 
 
-def _light_columns(config: Config) -> tuple[int, int]:
+def _light_columns(config: Settings) -> tuple[int, int]:
     """(how many light columns reach a layout cell, the padding in cells each side): the kept
     ``light_offsets`` of :class:`sandbox.model.lights._AxisLayout` and its ``pad``, worked out on the
     strips' middles (which decide it) as intervals of columns, without the layout's arrays."""
@@ -188,7 +212,7 @@ class _Grid(NamedTuple):
     lights_per_side: int
 
 
-def field_side(config: Config) -> tuple[int, int]:
+def field_side(config: Settings) -> tuple[int, int]:
     """(samples per side of the luminosity field, samples per side of one light's block), as
     :class:`sandbox.model.lights._AxisLayout` makes them."""
     return _field_side(_Grid(config.light_pitch, config.light_range, config.field_samples, config.light_window,
@@ -206,30 +230,30 @@ def _field_side(config: _Grid) -> tuple[int, int]:
     return (cells + 2 * pad) * per_cell, columns * per_cell
 
 
-def field_bytes(config: Config) -> float:
+def field_bytes(config: Settings) -> float:
     """The luminosity field and the block each light adds to it (float32)."""
     side, block = field_side(config)
     return 4.0 * side**2 + 4.0 * block**2
 
 
-def block_build_bytes(config: Config) -> float:
+def block_build_bytes(config: Settings) -> float:
     """The float64 arrays a light's block is computed from, for a moment."""
     return float(KERNEL_BUILD) * field_side(config)[1] ** 2
 
 
-def light_bytes(config: Config) -> float:
+def light_bytes(config: Settings) -> float:
     return float(PER_LIGHT) * config.lights_per_side**2
 
 
-def body_bytes(config: Config) -> float:
+def body_bytes(config: Settings) -> float:
     return float(PER_ROBOT) * config.robots + float(PER_BOX) * config.boxes
 
 
-def metrics_bytes(config: Config) -> float:
+def metrics_bytes(config: Settings) -> float:
     return float(PER_SAMPLE) * (config.steps // config.metrics_every + 2)
 
 
-def settings_cost(config: Config) -> Cost:
+def settings_cost(config: Settings) -> Cost:
     """The memory a world of these settings needs, before its goal is known (a circle adds nothing)."""
     return Cost({"light field": field_bytes(config), "field block": block_build_bytes(config),
                  "lights": light_bytes(config), "bodies": body_bytes(config), "metrics": metrics_bytes(config)},
@@ -243,7 +267,7 @@ def goal_bytes(vertices: int, width: float = 0.0, height: float = 0.0) -> float:
     return float(PER_VERTEX_PAIR) * vertices**2 + float(PER_WIDTH_POINT) * grid
 
 
-def world_cost(config: Config, vertices: int = 0, width: float = 0.0, height: float = 0.0) -> Cost:
+def world_cost(config: Settings, vertices: int = 0, width: float = 0.0, height: float = 0.0) -> Cost:
     """The settings' cost with a polygon goal's (none for a circle)."""
     terms = dict(settings_cost(config).terms)
     terms["goal"] = goal_bytes(vertices, width, height) if vertices else 0.0
@@ -319,7 +343,7 @@ class OverBudget(ConfigError):
     """Settings (or a goal with them) that would need more memory than the budget."""
 
 
-def check_settings(config: Config) -> None:
+def check_settings(config: Settings) -> None:
     """Refuse settings whose world would not fit the budget (:class:`OverBudget`, one line)."""
     budget = memory_budget()
     cost = settings_cost(config)
@@ -343,7 +367,7 @@ class Knob:
 
     name: str
     direction: int
-    values: Callable[[Config], Iterator[float]]
+    values: Callable[[Settings], Iterator[float]]
 
 
 def _nice(low: float, high: float) -> list[float]:
@@ -357,7 +381,7 @@ def _nice(low: float, high: float) -> list[float]:
     return sorted(set(found))
 
 
-def _pitches(config: Config) -> Iterator[float]:
+def _pitches(config: Settings) -> Iterator[float]:
     """Light pitches above the current one that divide the arena, roundest first at each size."""
     arena = config.arena_size
     for pitch in _nice(config.light_pitch * 1.0000001, 100.0):
@@ -367,8 +391,8 @@ def _pitches(config: Config) -> Iterator[float]:
         yield arena / cells
 
 
-def _downwards_ints(name: str, least: int) -> Callable[[Config], Iterator[float]]:
-    def values(config: Config) -> Iterator[float]:
+def _downwards_ints(name: str, least: int) -> Callable[[Settings], Iterator[float]]:
+    def values(config: Settings) -> Iterator[float]:
         current = int(getattr(config, name))
         for value in _round_down_ints(current, least):
             yield value
@@ -389,13 +413,13 @@ def _round_down_ints(current: int, least: int) -> list[int]:
     return out
 
 
-def _downwards_floats(name: str, least: Callable[[Config], float]) -> Callable[[Config], Iterator[float]]:
-    def values(config: Config) -> Iterator[float]:
+def _downwards_floats(name: str, least: Callable[[Settings], float]) -> Callable[[Settings], Iterator[float]]:
+    def values(config: Settings) -> Iterator[float]:
         return iter(reversed(_nice(least(config), getattr(config, name) * 0.9999999)))
     return values
 
 
-def _arenas(config: Config) -> Iterator[float]:
+def _arenas(config: Settings) -> Iterator[float]:
     """Smaller arenas that are a whole number of light pitches and hold the spawn square."""
     least = max(config.construction_size, config.robot_spawn_size)
     for arena in reversed(_nice(least, config.arena_size * 0.9999999)):
@@ -425,7 +449,7 @@ TERM_KNOBS = {
 FIXES_SAID = 2
 
 
-def refusal(config: Config, cost: Cost, budget: float) -> str:
+def refusal(config: Settings, cost: Cost, budget: float) -> str:
     """One line: which values need how much, over which budget, and what to change how far (the nearest
     value of each of the two most to blame that alone would fit)."""
     culprits = _culprits(config, cost)
@@ -438,7 +462,7 @@ def refusal(config: Config, cost: Cost, budget: float) -> str:
             f"or raise the budget (--memory-budget, docs/security.md)")
 
 
-def goal_refusal(config: Config, cost: Cost, budget: float, vertices: int) -> str:
+def goal_refusal(config: Settings, cost: Cost, budget: float, vertices: int) -> str:
     """One line for a goal that takes the world over the budget: what it and the settings need, and
     what would leave room for it."""
     goal = cost.terms["goal"]
@@ -450,10 +474,10 @@ def goal_refusal(config: Config, cost: Cost, budget: float, vertices: int) -> st
             f"needs ~{size_text(cost.total)} ({cost.said()}), over the {size_text(budget)} budget: {advice}")
 
 
-def _culprits(config: Config, cost: Cost) -> list[str]:
+def _culprits(config: Settings, cost: Cost) -> list[str]:
     """The settings to change, most to blame first: those of the costliest terms, the ones set away
     from their defaults before the others."""
-    defaults = Config()
+    defaults = type(config)()
     names: list[str] = []
     for term in sorted(cost.terms, key=cost.terms.get, reverse=True):
         if cost.terms[term] < 0.25 * cost.total:
@@ -464,7 +488,7 @@ def _culprits(config: Config, cost: Cost) -> list[str]:
     return names
 
 
-def _fixes(config: Config, culprits: list[str], room: float) -> list[str]:
+def _fixes(config: Settings, culprits: list[str], room: float) -> list[str]:
     """'raise light pitch to at least 0.5', one per culprit that alone can bring the cost within
     ``room`` (at most :data:`FIXES_SAID`)."""
     fixes = []
@@ -478,7 +502,7 @@ def _fixes(config: Config, culprits: list[str], room: float) -> list[str]:
     return fixes
 
 
-def _fitting_value(config: Config, knob: Knob, room: float, tries: int = 400) -> float | None:
+def _fitting_value(config: Settings, knob: Knob, room: float, tries: int = 400) -> float | None:
     """The nearest value of the knob (among those worth suggesting) whose settings fit ``room``, other
     settings as they are; None if none does."""
     for count, value in enumerate(knob.values(config)):
@@ -493,7 +517,7 @@ def _fitting_value(config: Config, knob: Knob, room: float, tries: int = 400) ->
     return None
 
 
-def _unchecked(config: Config, name: str, value: float) -> Config:
+def _unchecked(config: Settings, name: str, value: float) -> Settings:
     """``config`` with one value changed, checked like any other but for the budget."""
     with unchecked_budget():
         return config.replace(**{name: value})

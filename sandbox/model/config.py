@@ -22,9 +22,8 @@ try:  # Python 3.11+
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-
-class ConfigError(ValueError):
-    """A configuration value or file a user gave is not acceptable."""
+from sandbox.model import budget
+from sandbox.model.config_error import ConfigError  # (raised here and by the budget; imported from here)
 
 
 #: The two profiles (SPEC §9). The default is the authors' program: it is
@@ -72,6 +71,9 @@ class Strategy:
     help: str
     #: The panel's tooltip: at most two short lines in plain words (help is the full reference).
     tip: str = ""
+    #: Why it does nothing, whatever its amount, with the offset outline, in a clause ('' when it does
+    #: something there): sandbox.model.notes says so, and the page greys it out.
+    offset_inert: str = ""
 
 
 STRATEGIES = (
@@ -79,16 +81,19 @@ STRATEGIES = (
              "flare amount f (0 = off; 1.75 when switched on): corners pushed out by max(1, 90 f / angle), "
              "see flare_mode",
              tip="Pushes the outline's corners out, sharp ones most, so robots reach into corners. "
-                 "Flare amount: how far (1.75 when switched on)."),
+                 "Flare amount: how far (1.75 when switched on).",
+             offset_inert="its band already rounds every corner at the same distance as the edges"),
     Strategy("switch", "Switch to circle", 0.25, 1.0, 0.05,
              "switch to a circle (0 = off; 0.25 when on): see switch_mode for what the amount means",
              tip="Grows back as a circle, so robots spread evenly instead of bunching at far points. "
-                 "Switch to circle amount: how soon (0.25 when switched on)."),
+                 "Switch to circle amount: how soon (0.25 when switched on).",
+             offset_inert="far from the goal its band is nearly a circle already"),
     Strategy("no_corners", "No corners", 0.5, 0.95, 0.05,
              "fraction of band lights nearest convex corners that stay off (0 = off; 0.5 when on; at most "
              "0.95: at 1 the whole band would be dark)",
              tip="Leaves the lights nearest the corners dark, so robots do not pile up in sharp points. "
-                 "No corners amount: the share left dark."),
+                 "No corners amount: the share left dark.",
+             offset_inert="its band has no convex corners to darken"),
     Strategy("chase", "Chase stray boxes", 2.0, 10.0, 0.25,
              "closed loop (senses the boxes, as an overhead camera would): the outline is the goal grown by "
              "the same distance all round; it dilates only until it is this many metres beyond the farthest "
@@ -362,8 +367,6 @@ class Config:
     def _check_budget(self) -> None:
         """Refuse settings whose world would need more memory than the budget (sandbox.model.budget):
         here, so that no configuration a command, a file or the page makes can bypass it."""
-        from sandbox.model import budget  # it reads Config: imported when the class exists
-
         if budget.budget_checked():
             budget.check_settings(self)
 

@@ -24,13 +24,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model import band, gather, geometry
+from sandbox.model import band, gather
 from sandbox.model.config import Config
-from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal, make_goal
+from sandbox.model.family import make_goal
+from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal
 from sandbox.model.lights import light_centres
 from sandbox.model.notes import goal_notes
 from sandbox.model.phases import CONTRACTING, DILATING, HOLDING
 from sandbox.model.schedule import InSchedule, Schedule
+from sandbox.shapes import geometry
 
 #: After holding, the authors' program grows a circle back by this much (its ``delta``, m).
 PROGRAM_CIRCLE_REGROWTH = 0.6
@@ -268,6 +270,11 @@ class Controller(Cycle):
     def update(self, observation) -> np.ndarray | None:
         """One world step: the new pattern when it changed, else None (the observation is unread)."""
         return self.intensities if self.advance() else None
+
+    def redraw(self) -> None:
+        """Light the outline for the size and phase as they are now: for a caller that set them itself (the
+        learn panel's pictures set the smallest size). Each step redraws on its own when they change."""
+        self._redraw()
 
     def _redraw(self) -> None:
         """Recompute the outline and which lights are on. Hook: chase lights the goal

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sandbox.model.geometry import distance_to_outline
+from sandbox.shapes.geometry import distance_to_outline
 
 NEAR_BOX_WIDTHS = 3.0
 WALL_BOX_WIDTHS = 1.5

@@ -1,4 +1,5 @@
-"""Which outline family a goal takes, and why (``Config.outline``).
+"""Which outline family a goal takes, and why (``Config.outline``); :func:`make_goal`, the way in to a
+goal: the user's polygon fitted (:mod:`sandbox.model.goal`) and its family decided.
 
 * ``scaled`` (the paper): the goal scaled about the assembly centre. It
   needs the centre deep inside the goal: its smallest size keeps the centre
@@ -27,9 +28,10 @@ import dataclasses
 
 import numpy as np
 
-from sandbox.model import gather, geometry, notches, offset, outlines
+from sandbox.model import gather, notches, offset, outlines
 from sandbox.model.config import Config
-from sandbox.model.goal import Goal, inside_construction
+from sandbox.model.goal import Goal, fit_goal, inside_construction
+from sandbox.shapes import geometry
 
 #: auto takes scaled when the centre's distance to the edge is at least this share of its distance
 #: to the farthest vertex.
@@ -84,6 +86,20 @@ def choose(config: Config, goal: Goal) -> tuple[str, str]:
                           f"follows the goal's edge at a distance instead")
     return "scaled", (f"auto: the centre lies deep inside the goal (its distance to the edge is {depth:.2f} of its "
                       f"distance to the farthest vertex, at least {DEEP_INSIDE:.2f}), as the paper's shapes do")
+
+
+def make_goal(config: Config, vertices: np.ndarray | None) -> Goal:
+    """Fit the user's polygon (or a circle) to the assembly centre and the boxes' total area, and
+    decide the outline family it takes (:func:`settle`, on the fitted goal: the way in to a goal
+    for the rest of the model).
+
+    The fitted outline is simplified to a twentieth of a light pitch: far
+    finer than a light can show, and a 10,000-vertex file then costs what a
+    hand-drawn one does (every light and every box is measured against it).
+    One that still has more vertices than the outlines afford is simplified
+    further, within at most a quarter of a pitch, and says so; if that is not
+    enough it is refused (:func:`sandbox.model.goal.affordable_outline`)."""
+    return settle(config, fit_goal(config, vertices))
 
 
 def settle(config: Config, goal: Goal) -> Goal:

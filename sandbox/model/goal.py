@@ -17,8 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from sandbox.model import budget, geometry
+from sandbox.model import budget
 from sandbox.model.config import Config
+from sandbox.shapes import geometry
 from sandbox.shapes.errors import ShapeError
 
 #: Vertices of the polygon that stands for a circle when one is drawn or measured against.
@@ -77,22 +78,6 @@ class Goal:
             return np.maximum(np.hypot(*(points - self.centre).T) - self.radius, 0.0)
         d = geometry.distance_to_outline(points, self.vertices)
         return np.where(self.contains(points), 0.0, d)
-
-
-def make_goal(config: Config, vertices: np.ndarray | None) -> Goal:
-    """Fit the user's polygon (or a circle) to the assembly centre and the boxes' total area, and
-    decide the outline family it takes (:mod:`sandbox.model.family`).
-
-    The fitted outline is simplified to a twentieth of a light pitch: far
-    finer than a light can show, and a 10,000-vertex file then costs what a
-    hand-drawn one does (every light and every box is measured against it).
-    One that still has more vertices than the outlines afford is simplified
-    further, within at most a quarter of a pitch, and says so; if that is not
-    enough it is refused (:func:`affordable_outline`)."""
-    # The outline family is decided on the fitted goal, which family.py measures with the outlines.
-    from sandbox.model.family import settle
-
-    return settle(config, fit_goal(config, vertices))
 
 
 def fit_goal(config: Config, vertices: np.ndarray | None) -> Goal:

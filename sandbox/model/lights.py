@@ -34,8 +34,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from sandbox.lazy_numba import compiled_at_first_use
 from sandbox.model.config import Config
-from sandbox.model.lazy_numba import compiled_at_first_use
 
 
 def light_centres(config: Config) -> np.ndarray:

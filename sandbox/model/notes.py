@@ -6,11 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model import geometry, outlines
+from sandbox.model import outlines
 from sandbox.model.budget import MAX_GOAL_VERTICES
 from sandbox.model.config import STRATEGIES, Config
 from sandbox.model.goal import Goal
 from sandbox.model.outlines import Sizing
+from sandbox.shapes import geometry
 from sandbox.shapes.errors import ShapeError
 
 STRATEGY_LABELS = {s.name: s.label for s in STRATEGIES}
@@ -75,11 +76,7 @@ def goal_fit_notes(config: Config, sizing: Sizing, smallest: np.ndarray | None =
 
 
 #: The strategies that do nothing with the offset outline, and why (the advisor leaves them out there too).
-OFFSET_INERT = {
-    "flare": "its band already rounds every corner at the same distance as the edges",
-    "switch": "far from the goal its band is nearly a circle already",
-    "no_corners": "its band has no convex corners to darken",
-}
+OFFSET_INERT = {s.name: s.offset_inert for s in STRATEGIES if s.offset_inert}
 
 
 def inert_strategies(family: str) -> dict[str, str]:

@@ -46,9 +46,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
-from sandbox.model import gather as gathering, geometry, notches as notch_lights, thin
+from sandbox.model import gather as gathering, notches as notch_lights, thin
 from sandbox.model.config import Config
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal
+from sandbox.shapes import geometry
 
 #: Lights exactly ``band`` from the level set are in it, whatever the rounding.
 _EDGE = 1e-9

@@ -44,10 +44,11 @@ from typing import Protocol
 
 import numpy as np
 
-from sandbox.model import band, geometry
+from sandbox.model import band
 from sandbox.model.config import Config
 from sandbox.model.goal import CIRCLE_DRAW_VERTICES, Goal
 from sandbox.model.offset import OffsetSizing
+from sandbox.shapes import geometry
 
 #: The authors' program grows a polygon to its largest size in steps of this factor.
 PROGRAM_GROWTH_STEP = 1.05

@@ -12,7 +12,7 @@ import numpy as np
 
 from sandbox.model import outlines
 from sandbox.model.config import Config
-from sandbox.model.goal import make_goal
+from sandbox.model.family import make_goal
 from sandbox.model.notes import goal_fit_notes
 
 

@@ -157,11 +157,3 @@ def _refresh(positions, headings, due, sample, config, command, readings) -> Non
     readings[due] = sample(cells.reshape(-1, 2)).reshape(-1, 4)
     v, w = braitenberg(readings[due], config.k_drive, config.k_turn, config.photocells, config.steering)
     command[due, 0], command[due, 1] = v, w
-
-
-def charge_colours(charge: np.ndarray, capacity: float) -> np.ndarray:
-    """Display colours, (n, 3) floats in [0, 1]: red when empty, green when full."""
-    f = np.clip(charge / capacity if capacity > 0 else np.ones_like(charge), 0.0, 1.0)
-    red = np.array([0.90, 0.16, 0.16])
-    green = np.array([0.18, 0.80, 0.25])
-    return red + f[:, None] * (green - red)

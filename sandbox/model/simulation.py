@@ -21,7 +21,8 @@ from sandbox.model import budget, kernels, metrics, robots, watchdog
 from sandbox.model.chase import ChaseController
 from sandbox.model.config import STRATEGY_NAMES, Config, param
 from sandbox.model.controller import Controller
-from sandbox.model.goal import Goal, make_goal
+from sandbox.model.family import make_goal
+from sandbox.model.goal import Goal
 from sandbox.model.lights import LightField, light_centres
 from sandbox.model.programs import Observation, ProgramError, check_pattern, every_of, senses_of, source_of
 from sandbox.model.world import World

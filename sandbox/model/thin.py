@@ -38,9 +38,9 @@ from typing import NamedTuple
 import numpy as np
 import shapely
 
-from sandbox.model import geometry
 from sandbox.model.config import Config
 from sandbox.model.lights import brightness_kernel
+from sandbox.shapes import geometry
 
 #: The band holds where a strip of the goal's width behind it, lit on both sides, is at most this bright on
 #: its axis against the band (below 1: the band stays the brightest line, with a margin).

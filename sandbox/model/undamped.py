@@ -24,7 +24,8 @@ import platform
 import sys
 
 import pymunk
-from pymunk._chipmunk_cffi import ffi, lib
+
+from sandbox.model import pymunk_seam
 
 #: Where a struct of two doubles passed by value is laid out like two doubles.
 VECT_AS_TWO_DOUBLES = sys.platform != "win32" and platform.machine().lower() in ("x86_64", "amd64", "aarch64", "arm64")
@@ -39,7 +40,7 @@ def _compiled_velocity_function() -> int:
     if _cfunc_address is None:
         from numba import cfunc, types
 
-        default = int(ffi.cast("uintptr_t", ffi.addressof(lib, "cpBodyUpdateVelocity")))
+        default = pymunk_seam.velocity_update_address()
         signature = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_double,
                                      ctypes.c_double)
         update_velocity = signature(default)
@@ -60,6 +61,6 @@ def _python_velocity_function(body: pymunk.Body, gravity, damping: float, dt: fl
 def make_undamped(body: pymunk.Body) -> None:
     """Let ``body`` ignore the space's damping (gravity and forces still apply)."""
     if VECT_AS_TWO_DOUBLES:
-        lib.cpBodySetVelocityUpdateFunc(body._body, ffi.cast("cpBodyVelocityFunc", _compiled_velocity_function()))
+        pymunk_seam.set_velocity_function(body, _compiled_velocity_function())
     else:  # pragma: no cover - other platforms
         body.velocity_func = _python_velocity_function

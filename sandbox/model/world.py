@@ -15,11 +15,11 @@ from typing import Callable
 import numpy as np
 import pymunk
 import pymunk.batch as batch
-from pymunk._chipmunk_cffi import lib as chipmunk
 
-from sandbox.model import body_memory, geometry, kernels, undamped
+from sandbox.model import body_memory, kernels, pymunk_seam, undamped
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.goal import Goal
+from sandbox.shapes import geometry
 
 # Collision categories: the construction wall only meets boxes.
 ROBOT, BOX, OUTER_WALL, CONSTRUCTION_WALL = 1, 2, 4, 8
@@ -119,6 +119,7 @@ class World:
         ``goal`` is where ``config.box_start == 'packed'`` tiles the boxes (required then)."""
         if config.box_start == "packed" and goal is None:
             raise ValueError("box_start 'packed' needs the goal to pack the boxes in")
+        pymunk_seam.check()  # (once a process) one line on a pymunk that lacks what the model uses
         self.config = config
         self.n_robots, self.n_boxes = config.robots, config.boxes
         total = max(1, self.n_robots + self.n_boxes)
@@ -147,7 +148,7 @@ class World:
         #: (0, no body's, until the first read).
         self._rows = np.arange(len(bodies))
         self._last_ids = np.zeros(len(bodies), dtype=np.uintp)
-        self._robot_pointers = [b._body for b in self.robot_bodies]
+        self._robot_pointers = [pymunk_seam.body_pointer(b) for b in self.robot_bodies]
         self._robot_addresses = body_memory.addresses(self.robot_bodies)
         self.state = np.zeros((self.n_robots + self.n_boxes + 1, 6))
         #: Velocities for the next step, (vx, vy, w) per row of :attr:`state`;
@@ -297,10 +298,11 @@ class World:
             body_memory.set_velocities(self._robot_addresses, writes, count, *body_memory.SETTERS)
             return
         pointers = self._robot_pointers
+        set_velocity, set_angular_velocity = pymunk_seam.velocity_setters()
         for index, vx, vy, w in writes[:count].tolist():
             body = pointers[int(index)]
-            chipmunk.cpBodySetVelocity(body, (vx, vy))
-            chipmunk.cpBodySetAngularVelocity(body, w)
+            set_velocity(body, (vx, vy))
+            set_angular_velocity(body, w)
 
     def step(self) -> None:
         self.space.step(self.config.dt)

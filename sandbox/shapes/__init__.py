@@ -6,6 +6,7 @@ validation, and the built-in shapes.
 - :mod:`.svg_budget`  what an SVG asks for, counted before it is read
 - :mod:`.isolated`    a file read in a child process, under a time and memory limit (uploads)
 - :mod:`.validation`  what makes an outline usable
+- :mod:`.geometry`    pure polygon geometry, below the shapes' other modules and the model
 - :mod:`.builtin`     the shapes/ folder, by name
 """
 

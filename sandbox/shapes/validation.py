@@ -8,8 +8,8 @@ import numpy as np
 import shapely
 from shapely.geometry import MultiPoint, Polygon
 
-from sandbox.model.geometry import distances_to_edges
 from sandbox.shapes.errors import fail
+from sandbox.shapes.geometry import distances_to_edges
 
 MAX_VERTICES = 10_000
 MIN_RELATIVE_AREA = 1e-9       # area / (bounding-box size)^2 below this is "zero"

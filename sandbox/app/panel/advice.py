@@ -135,8 +135,7 @@ class AdviceFolder:
             notify_error(client, "No advice yet", "Press Try them all first.")
             return False
         best = self.results[0].candidate
-        strategies = {name: 0.0 for name in ("flare", "switch", "no_corners", "chase")} | dict(best.strategies)
-        self._use(best.outline, strategies, client)
+        self._use(best.outline, best.every_strategy, client)
         return True
 
     # ------------------------------------------------------------ read-outs

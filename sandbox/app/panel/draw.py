@@ -40,7 +40,7 @@ from sandbox.shapes.drawing import (
     vertex_at,
     without_repeats,
 )
-from sandbox.model.geometry import fit_to_area, signed_area
+from sandbox.shapes.geometry import fit_to_area, signed_area
 from sandbox.shapes.templates import placed, template_names, template_vertices
 
 SOURCE = "drawn shape"

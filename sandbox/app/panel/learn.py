@@ -21,7 +21,7 @@ from PIL import Image, ImageDraw, ImageFont
 from sandbox.app.view import palette as pal
 from sandbox.model.chase import ChaseController
 from sandbox.model.config import Config
-from sandbox.model.goal import make_goal
+from sandbox.model.family import make_goal
 from sandbox.model.lights import LightField
 from sandbox.model.phases import DILATING
 from sandbox.model.robots import PHOTOCELLS
@@ -124,7 +124,7 @@ def _smallest(config: Config, shape: str, **strategies: float) -> tuple[np.ndarr
     goal = make_goal(cfg, shape_vertices(shape))
     ctrl = ChaseController(cfg, goal)
     ctrl.scale = ctrl.min_scale
-    ctrl._redraw()
+    ctrl.redraw()
     return ctrl.intensities.copy(), ctrl.outline.copy(), goal.outline().copy()
 
 

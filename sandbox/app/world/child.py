@@ -168,7 +168,6 @@ class ProcessRunner(SimulationRunner):
         self._series_world: int | None = None  # the world key of the samples in _series
         self._series_lock = threading.Lock()
         self._latest: Snapshot | None = None
-        self._latest_ready = threading.Condition()
         self._stop = threading.Event()
         self._ready_lock = threading.Lock()
         self._thread: threading.Thread | None = None
@@ -251,9 +250,7 @@ class ProcessRunner(SimulationRunner):
                 if world != self._series_world:  # a new world: its samples start a new series
                     self._series, self._series_world = [], world
                 self._series.extend(samples)
-            with self._latest_ready:
-                self._latest = snap
-                self._latest_ready.notify_all()
+            self._latest = snap
             self._framed = True
             self._watch_run(snap)
             self._publish(snap)
@@ -522,12 +519,6 @@ class ProcessRunner(SimulationRunner):
             self.ready()  # built with wait=False and not yet asked
         assert self._latest is not None
         return self._latest
-
-    def wait_for_frame(self, after: int, timeout: float = 10.0) -> Snapshot:
-        """The first snapshot newer than frame ``after``."""
-        with self._latest_ready:
-            self._latest_ready.wait_for(lambda: self._latest is not None and self._latest.frame > after, timeout)
-        return self.latest
 
     def series(self) -> list[Sample]:
         with self._series_lock:

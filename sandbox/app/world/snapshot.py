@@ -90,10 +90,9 @@ def case_name(shape: str, strategies: dict) -> str:
     from sandbox.model.config import STRATEGY_NAMES
 
     active = {name: float(strategies.get(name, 0.0)) for name in STRATEGY_NAMES if strategies.get(name, 0.0) > 0}
-    words = {"flare": "flare", "switch": "switch", "no_corners": "no corners", "chase": "chase"}
     # A shape file by its name alone: its folders pushed a phone's one-line caption off the screen.
     shown = shape.replace("\\", "/").rsplit("/", 1)[-1]
-    described = " + ".join([shown, *(f"{words[k]} {v:g}" for k, v in active.items())])
+    described = " + ".join([shown, *(f"{k.replace('_', ' ')} {v:g}" for k, v in active.items())])
     name = running_case(shape, strategies)
     if name is None:
         return described

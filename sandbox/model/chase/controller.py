@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.model import band, geometry
+from sandbox.model import band
 from sandbox.model.chase import finish, sculpt, sight
 from sandbox.model.chase.hold import Hold
 from sandbox.model.chase.tuning import SCULPTING, Sculpting
@@ -12,6 +12,7 @@ from sandbox.model.config import Config
 from sandbox.model.controller import Controller
 from sandbox.model.goal import Goal
 from sandbox.model.phases import DILATING, HOLDING
+from sandbox.shapes import geometry
 
 _SENSES_BOXES, _SENSES_NOTHING = frozenset({"boxes"}), frozenset()
 

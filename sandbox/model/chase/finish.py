@@ -24,16 +24,17 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import numpy as np
 
 from sandbox.model.chase.sight import turn_radius
+from sandbox.model.chase.tuning import Sculpting
+from sandbox.model.config import Config
 from sandbox.model.controller import Cycle
+from sandbox.model.goal import Goal
 from sandbox.model.phases import HOLDING
-
-if TYPE_CHECKING:
-    from sandbox.model.chase.controller import ChaseController
+from sandbox.model.schedule import Schedule
 
 
 @dataclasses.dataclass
@@ -55,6 +56,22 @@ class EndPlan:
         self.predicted = None
 
 
+class Chasing(Protocol):
+    """What the plan reads of a chase controller (:class:`sandbox.model.chase.controller.ChaseController`,
+    a :class:`Cycle`, which imports this module: named here by what it offers, so the two do not import
+    each other)."""
+
+    config: Config
+    goal: Goal
+    state: Schedule
+    #: The last observation with the boxes (its ``box_positions`` and ``step``), or None.
+    seen: Any
+    sculpting: Sculpting
+    plan: EndPlan
+    inradius: float
+    min_radius: float
+
+
 @dataclasses.dataclass(frozen=True)
 class _Still:
     """The boxes as they were when a rehearsal began (all of an observation it reads)."""
@@ -67,7 +84,7 @@ class Rehearsal(Cycle):
     the boxes as they are now, to count steps: it lights nothing, has no deadline
     and stops when its next hold starts. The controller is left as it was."""
 
-    def __init__(self, chase: ChaseController):
+    def __init__(self, chase: Chasing):
         super().__init__(chase.config, chase.goal, dataclasses.replace(chase.state))
         self._seen = _Still(np.array(chase.seen.box_positions))
         self._turn = False  # turn at the next dilation update whatever the sizes say
@@ -98,7 +115,7 @@ class Rehearsal(Cycle):
         return steps
 
 
-def steps_to_next_hold(chase: ChaseController, limit: int) -> int:
+def steps_to_next_hold(chase: Chasing, limit: int) -> int:
     """World steps from letting go of this hold until the next one starts (at most
     ``limit``), rehearsed on the boxes as they are now. Exact for the schedule,
     whatever it is (the program's overshoot, a circle switched in that grows
@@ -107,13 +124,13 @@ def steps_to_next_hold(chase: ChaseController, limit: int) -> int:
     return Rehearsal(chase).after_letting_go(limit)
 
 
-def steps_back_if_turning_now(chase: ChaseController, limit: int) -> int:
+def steps_back_if_turning_now(chase: Chasing, limit: int) -> int:
     """World steps until the next hold if the dilation turned at this update (at most
     ``limit``). The contraction does not look at the boxes, so this is exact."""
     return Rehearsal(chase).after_turning(limit)
 
 
-def contraction_steps_at_most(cycle: Cycle) -> int:
+def contraction_steps_at_most(cycle: Cycle | Chasing) -> int:
     """An upper bound on the steps from turning now to the next hold: the inradius
     shrinks by ``scale_rate`` per update from where it is to below the smallest;
     a circle switched in contracts to the switch threshold, where the polygon
@@ -124,19 +141,19 @@ def contraction_steps_at_most(cycle: Cycle) -> int:
     return cycle.config.update_every * (math.ceil(updates) + 3)
 
 
-def shortest_hold(chase: ChaseController) -> int:
+def shortest_hold(chase: Chasing) -> int:
     """The fewest steps the closed loop holds the smallest outline."""
     return max(chase.config.hold_steps, chase.sculpting.check)
 
 
-def shortest_cycle(chase: ChaseController) -> int:
+def shortest_cycle(chase: Chasing) -> int:
     """The fewest steps left for which a hold still lets go (its dilation turning back
     in time): the shortest hold and ten updates, five out and five back (on the
     circle's smallest outline, about 0.7 m out)."""
     return shortest_hold(chase) + 10 * chase.config.update_every
 
 
-def keeps_holding(chase: ChaseController, left: int) -> bool:
+def keeps_holding(chase: Chasing, left: int) -> bool:
     """Whether a hold that would let go now, ``left`` steps before the run is measured,
     goes on (see :func:`hold_for_the_end`)."""
     plan = chase.plan
@@ -149,7 +166,7 @@ def keeps_holding(chase: ChaseController, left: int) -> bool:
     return hold_for_the_end(left, cycle, shortest_cycle(chase))
 
 
-def turns_for_the_deadline(chase: ChaseController, left: int) -> bool:
+def turns_for_the_deadline(chase: Chasing, left: int) -> bool:
     """Whether a dilation turns now, ``left`` steps before the run is measured,
     wherever the farthest box is, so that the contraction is back on the smallest
     outline, with the shortest hold to spare, when the run is measured. Turning one

@@ -11,7 +11,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from sandbox.model.chase.tuning import SCULPTING, Sculpting
-from sandbox.model.geometry import nearest_on_outline
+from sandbox.shapes.geometry import nearest_on_outline
 
 #: Segments per quarter circle of an offset's round corners.
 ROUND_SEGMENTS = 4

@@ -1,4 +1,6 @@
-"""Pure polygon geometry used by the controller and the metrics.
+"""Pure polygon geometry: areas, angles, distances, inside tests, simplifying. Used by the shapes'
+checks, the model (the goal, the outlines, the controller, the metrics) and the drawing panel, so it
+sits below them all and imports none of them.
 
 Polygons are float arrays of shape (n, 2), the last vertex joined back to the
 first; either orientation is accepted everywhere.
@@ -11,7 +13,7 @@ import math
 import numpy as np
 from shapely.geometry import Polygon
 
-from sandbox.model.lazy_numba import compiled_at_first_use
+from sandbox.lazy_numba import compiled_at_first_use
 
 
 def signed_area(vertices: np.ndarray) -> float:
