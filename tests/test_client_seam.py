@@ -134,7 +134,8 @@ def test_a_value_from_viser_not_in_the_table_fails():
 def test_what_a_script_takes_from_viser_is_read_from_its_markup_and_its_VISER():
     source = """// a comment's ".mantine-Gone-root" and [role="none"] are not read
 (() => {
-  const VISER = {title: "Hello", wait: 250, sheet: {place: "fixed"}, keys: ["KeyA"], roles: "[role='tab'],[role='tree']"};
+  const VISER = {title: "Hello", wait: 250, sheet: {place: "fixed"}, keys: ["KeyA"],
+                 roles: "[role='tab'],[role='tree']"};
   document.querySelectorAll("div[style*='width: 20em']");  // a selector asked of the DOM, whole
   const css = ".mantine-Paper-root, .a-class { top: 0.5em; } /* not a comment: in a string */";
   const label = "Press Play (space) to start.";  // no markup

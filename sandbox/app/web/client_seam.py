@@ -1,5 +1,6 @@
-"""The page scripts' seam onto viser's client (event loop, at connect; tests): each script as it is sent,
-the rows of its table, and their check against the client the installed viser serves.
+"""The page scripts' seam onto viser's client (any thread: a script is read once, then filled in; the check
+runs in the tests): each script as it is sent, the rows of its table, and their check against the client
+the installed viser serves.
 
 The scripts (``sandbox/app/web/page/*.js``, package data) do what viser's page lacks, inside it: they
 find its Mantine markup, listen where it listens, wrap what it calls, wait as long as it animates. None of
@@ -9,7 +10,9 @@ in the module that sends it (``CLIENT`` in :mod:`.page_keys`, :mod:`.page_layout
 why, and what in viser's client bundle shows that it is still there. :func:`missing` reads the bundle
 (viser ships its client built: ``viser/client/build/index.html``, the scripts and styles compressed in
 it) and names each row it does not find; ``tests/test_client_seam.py`` fails on any, so a new viser fails
-a test, not a classroom. The check is the tests', not the start's: reading the bundle takes a second.
+a test, not a classroom. The check is the tests', not the start's: a row missing costs one thing on the
+page (a notice that stays, a drawer that starts open), not the server, and every start would pay for
+reading the bundle.
 
 What a script takes from viser's client is either markup, found wherever the script writes it
 (:func:`relied_on`: Mantine's classes, attribute and class selectors, what it asks the DOM for, the
@@ -58,7 +61,7 @@ class Relies:
 RUNS_SCRIPTS = Relies(
     "RunJavascriptMessage", "the server sends each script as viser's RunJavascriptMessage, which the page runs "
     "with Function(source)(): in its global scope (window), at once, every time it comes",
-    found=(r"case`RunJavascriptMessage`:Function\(\w+\.source\)\(\)",))
+    found=(r"case`RunJavascriptMessage`:Function\([\w$]+\.source\)\(\)",))
 
 
 # ---------------------------------------------------------------- scripts
@@ -85,7 +88,8 @@ _ATTRIBUTE = re.compile(r"""\[\s*[\w-]+\s*(?:[~|^$*]?=\s*(?:"[^"]*"|'[^']*'|[^\]
 _CLASS_SELECTOR = re.compile(r"(?<![\w.-])\.[A-Za-z_][\w-]*")
 _DATA_NAME = re.compile(r"(?<![\w-])data-[a-z][\w-]*")
 _MESSAGE = re.compile(r"\b[A-Z]\w*Message\b")
-_DOM_QUERY = re.compile(r"""\.(?:querySelector|querySelectorAll|closest|matches)\(\s*(["'`])((?:\\.|(?!\1)[^\\])*)\1\s*\)""")
+_DOM_QUERY = re.compile(r"""\.(?:querySelector|querySelectorAll|closest|matches)\(\s*"""
+                        r"""(["'`])((?:\\.|(?!\1)[^\\])*)\1\s*\)""")
 _PROTOTYPE = re.compile(r"\b[A-Z]\w*\.prototype\b")
 _WRAPPED_GLOBAL = re.compile(r"\bwindow\.(?!__phototaxis)\w+(?=\s*=[^=])")
 _NUMBER = re.compile(r"(?<![\w.$])-?\d+(?:\.\d+)?(?![\w.])")

@@ -43,7 +43,8 @@ KEYS_JS = script("keys.js", controls=",".join(f'[role="{role}"]' for role in ARR
                  hotkeys=list(HOTKEYS_NOT_CAMERA))
 
 # Where viser's client listens for keys: its camera on the document, for these keys (not in a text field).
-_CAMERA_KEYS = r"new Set\(\[`KeyW`,`KeyA`,`KeyS`,`KeyD`,`KeyQ`,`KeyE`,`ArrowUp`,`ArrowDown`,`ArrowLeft`,`ArrowRight`\]\)"
+_CAMERA_KEYS = (r"new Set\(\[`KeyW`,`KeyA`,`KeyS`,`KeyD`,`KeyQ`,`KeyE`,"
+                r"`ArrowUp`,`ArrowDown`,`ArrowLeft`,`ArrowRight`\]\)")
 _CAMERA_ON_DOCUMENT = r"document\.addEventListener\(`keydown`,[\w$]+\),document\.addEventListener\(`keyup`,"
 _NOT_IN_TEXT_FIELDS = r"===`INPUT`\|\|[\w$]+===`TEXTAREA`\|\|[\w$]+===`SELECT`\|\|[\w$]+\.isContentEditable"
 _ARROW = ("viser turns its camera on the arrow keys, listening on the document, wherever they are pressed but "

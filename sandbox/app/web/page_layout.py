@@ -76,7 +76,8 @@ _SHEET = (r"style:\{boxSizing:`border-box`,zIndex:10,position:`fixed`,bottom:0,r
 _HANDLE = r"style:\{cursor:`pointer`,position:`relative`,[^{}]*height:`3\.5em`\}"
 # A folder's title: a Paper styled cursor: pointer (a folder with something in it), its label, then a chevron.
 _FOLDER_TITLE = r"style:\{cursor:[\w$]+\?void 0:`pointer`\},onClick:[\w$]+,children:\[[\w$]+,"
-_LIST = "a dropdown's list (viser's dropdown is Mantine's Select, its list a Combobox's): placed by the script on a phone"
+_LIST = ("a dropdown's list (viser's dropdown is Mantine's Select, its list a Combobox's): placed by the script "
+         "on a phone")
 
 #: What layout.js relies on in viser's client (sandbox.app.web.client_seam).
 CLIENT = (

@@ -47,7 +47,8 @@ SENDS_JS = script("sends.js", most_ms=MOST_MS)
 
 #: viser's throttled sender: it sends, then arms its timer in the same turn; its cancel clears the timer.
 _THROTTLE = r"\.sendMessage\([\w$]+\),[\w$]+=!1,[\w$]+=!1,[\w$]+=setTimeout\(\(\)=>\{"
-_CANCEL = r"clearTimeout\([\w$]+\),[\w$]+=null\),[\w$]+=!0,[\w$]+=!1,[\w$]+=null\}return\{send:[\w$]+,flush:[\w$]+,cancel:"
+_CANCEL = (r"clearTimeout\([\w$]+\),[\w$]+=null\),[\w$]+=!0,[\w$]+=!1,[\w$]+=null\}"
+           r"return\{send:[\w$]+,flush:[\w$]+,cancel:")
 
 #: What sends.js relies on in viser's client (sandbox.app.web.client_seam).
 CLIENT = (
