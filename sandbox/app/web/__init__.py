@@ -14,5 +14,6 @@ before viser acts on it; every viser callback then runs on the app's one event q
 - :mod:`.pacing`      what each viewer is sent, at the rate it draws
 - :mod:`.stopping`    how ``serve`` stops (SIGTERM as Ctrl+C)
 - :mod:`.page_keys`, :mod:`.page_layout`, :mod:`.page_open`, :mod:`.page_sends`, :mod:`.page_touch`
-  the scripts the page runs in viser's client
+  the scripts the page runs in viser's client (``page/*.js``), each with the table of what it relies on there
+- :mod:`.client_seam` the scripts as sent, and the check of their tables against viser's client
 """

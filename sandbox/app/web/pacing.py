@@ -7,11 +7,11 @@ cost bytes and the page's time to apply, and are never seen.
 
 viser's client reports nothing per drawn frame, but it runs the Javascript
 the server sends (``RunJavascriptMessage``, viser's own way to load
-plotly). At connect, each page gets :data:`REPORT_JS` with a token of its
-own. The script marks the page's WebGL draw calls. While the page is busy
-(an animation frame came more than :data:`BUSY_GAP_MS` after the last), it
-asks ``/__drawn/<token>`` at the first animation frame after a draw (one
-request at a time): "I drew". After a second with no such gap it says
+plotly). At connect, each page gets :func:`report_js` (``page/report.js``)
+with a token of its own. The script marks the page's WebGL draw calls. While
+the page is busy (an animation frame came more than :data:`BUSY_GAP_MS` after
+the last), it asks ``/__drawn/<token>`` at the first animation frame after a
+draw (one request at a time): "I drew". After a second with no such gap it says
 ``/__drawn/<token>?calm`` once, and reports no more until it is busy again:
 a page that keeps up (a laptop with a graphics card) costs the server one
 request, its calm after its first second (a report cost it 0.6 ms of CPU,
@@ -30,6 +30,9 @@ stops drawing). Meanwhile the buffer keeps only the newest of each node's
 updates (viser culls the older), so the next window carries the current
 frame, never a backlog. A page that never reports (viser's embed, a
 websocket client of our own), or says it is calm, is not paced.
+
+:data:`CLIENT` is what the script relies on in viser's client, checked against the installed viser's
+bundle (:mod:`sandbox.app.web.client_seam`).
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ import threading
 import time
 from collections import Counter, deque
 from typing import AsyncGenerator, Iterable
+
+from sandbox.app.web.client_seam import Relies, script
 
 #: Where a page reports a drawn frame.
 PATH = "/__drawn/"
@@ -71,48 +76,21 @@ def frames_per_snapshot(fps: float, rates: Iterable[float | None]) -> int:
     wanted = max(HEADROOM * max(rates), FEWEST_SHOWN)
     return max(1, int(fps // wanted))
 
-REPORT_JS = """(() => {
-  window.__phototaxisDrawn = "%(path)s%(token)s";  // a reconnected page reports under its new token
-  window.__phototaxisSpoke = false;  // ... and says once how it draws under it
-  if (window.__phototaxisReporting) return;
-  window.__phototaxisReporting = true;
-  let drew = false, asking = false, busy = false, last = null, calmSince = null;
-  const proto = window.WebGL2RenderingContext && WebGL2RenderingContext.prototype;
-  if (!proto) return;
-  for (const name of ["drawArrays", "drawElements", "drawArraysInstanced", "drawElementsInstanced",
-                      "drawRangeElements"]) {
-    const draw = proto[name];
-    if (typeof draw !== "function") continue;
-    proto[name] = function (...args) { drew = true; return draw.apply(this, args); };
-  }
-  const ask = (suffix) => {
-    asking = true;
-    window.__phototaxisSpoke = true;
-    fetch(window.__phototaxisDrawn + suffix, {cache: "no-store", credentials: "same-origin"})
-      .catch(() => {}).finally(() => { asking = false; });
-  };
-  const tick = (now) => {
-    if (last !== null && now - last > %(busy_gap)d) {
-      busy = true;
-      calmSince = null;
-    } else if (busy || !window.__phototaxisSpoke) {  // (a page that keeps up from the start says so once)
-      calmSince = calmSince === null ? now : calmSince;
-      if (now - calmSince > 1000 && !asking) {
-        busy = false;
-        ask("%(calm)s");
-      }
-    }
-    last = now;
-    if (busy && drew && !asking) {
-      drew = false;
-      ask("");
-    } else if (!busy) {
-      drew = false;  // a draw while keeping up needs no report
-    }
-    requestAnimationFrame(tick);
-  };
-  requestAnimationFrame(tick);
-})();"""
+def report_js(address: str) -> str:
+    """The reporting script (``page/report.js``) for a page that reports at ``address``."""
+    return script("report.js", address=address, busy_gap_ms=BUSY_GAP_MS, calm=CALM)
+
+
+#: What report.js relies on in viser's client (sandbox.app.web.client_seam).
+CLIENT = (
+    Relies("WebGL2RenderingContext.prototype", "viser's scene (three.js) draws with WebGL 2: the script marks "
+           "its draw calls on the context's prototype", found=(r"getContext\(`webgl2`",)),
+    Relies("drawArrays", "one of the calls with which three.js draws", found=(r"\.drawArrays\(",)),
+    Relies("drawElements", "one of the calls with which three.js draws", found=(r"\.drawElements\(",)),
+    Relies("drawArraysInstanced", "one of the calls with which three.js draws", found=(r"\.drawArraysInstanced\(",)),
+    Relies("drawElementsInstanced", "one of the calls with which three.js draws",
+           found=(r"\.drawElementsInstanced\(",)),
+)
 
 
 def drawing_rate(times: Iterable[float], now: float) -> float | None:
@@ -147,7 +125,7 @@ class Pacer:
         token = secrets.token_urlsafe(16)
         self._client_of[token], self._token_of[client_id] = client_id, token
         self._drawn[client_id] = asyncio.Event()
-        return REPORT_JS % {"path": PATH, "token": token, "busy_gap": BUSY_GAP_MS, "calm": CALM}
+        return report_js(PATH + token)
 
     def drawn(self, report: str, now: float | None = None) -> bool:
         """A page reports (on the event loop; ``now``: its time.monotonic(), for tests): ``<token>`` a drawn

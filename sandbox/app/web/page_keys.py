@@ -15,7 +15,7 @@ page, as measured:
 - **s, the Step key** (the Run folder's hotkeys: space, s, r, p). It also
   moved the camera back (south, seen from above): 0.7-2.2 m for one press.
 
-:data:`KEYS_JS`, sent to each page at connect (:mod:`sandbox.app.web.gate`),
+:data:`KEYS_JS` (``page/keys.js``), sent to each page at connect (:mod:`sandbox.app.web.gate`),
 stops an arrow on its way up from a control that uses arrows (a slider, a
 tab, a radio, a list's option, a menu), and the Step key once the page's
 hotkeys have had it. The control has already had the arrow (React hears it
@@ -24,31 +24,46 @@ element, where the Step key is stopped for the listeners further up; viser's
 camera listens on the document itself, above both, and hears neither. With
 the focus on the floor or on a button, the arrows still turn the camera and
 W A D Q E still move it, as viser documents.
+
+:data:`CLIENT` is what the script relies on in viser's client, checked against the installed viser's
+bundle (:mod:`sandbox.app.web.client_seam`).
 """
 
 from __future__ import annotations
 
-import json
+from sandbox.app.web.client_seam import Relies, script
 
-#: Controls whose own keys the arrows are (ARIA roles, as Mantine's controls carry them).
-ARROW_CONTROLS = ("slider", "tab", "radio", "option", "listbox", "menuitem", "combobox", "spinbutton")
+#: Controls whose own keys the arrows are (ARIA roles, as Mantine's controls carry them). viser 1.1.1 has
+#: no radio or spinbutton role: its radios and number fields are inputs, which its camera skips already.
+ARROW_CONTROLS = ("slider", "tab", "option", "listbox", "menuitem", "combobox")
 #: The page's hotkeys that are also viser's camera keys (KeyboardEvent.code): s steps (sandbox.app.panel.run).
 HOTKEYS_NOT_CAMERA = ("KeyS",)
 
-KEYS_JS = """(() => {
-  if (window.__phototaxisKeysKept) return;  // a page that reconnects keeps the one pair of listeners
-  window.__phototaxisKeysKept = true;
-  const ARROWS = new Set(["ArrowUp", "ArrowDown", "ArrowLeft", "ArrowRight"]);
-  const CONTROLS = %(selector)s;
-  const HOTKEYS = new Set(%(hotkeys)s);
-  document.body.addEventListener("keydown", (event) => {
-    const target = event.target;
-    if (ARROWS.has(event.code) && target instanceof Element && target.closest(CONTROLS)) {
-      event.stopPropagation();  // the control had it; viser's camera, listening on the document, does not
-    }
-  });
-  document.documentElement.addEventListener("keydown", (event) => {
-    if (HOTKEYS.has(event.code)) event.stopPropagation();  // the hotkeys here had it; the camera does not
-  });
-})();""" % {"selector": json.dumps(",".join(f'[role="{role}"]' for role in ARROW_CONTROLS)),
-           "hotkeys": json.dumps(list(HOTKEYS_NOT_CAMERA))}
+KEYS_JS = script("keys.js", controls=",".join(f'[role="{role}"]' for role in ARROW_CONTROLS),
+                 hotkeys=list(HOTKEYS_NOT_CAMERA))
+
+# Where viser's client listens for keys: its camera on the document, for these keys (not in a text field).
+_CAMERA_KEYS = (r"new Set\(\[`KeyW`,`KeyA`,`KeyS`,`KeyD`,`KeyQ`,`KeyE`,"
+                r"`ArrowUp`,`ArrowDown`,`ArrowLeft`,`ArrowRight`\]\)")
+_CAMERA_ON_DOCUMENT = r"document\.addEventListener\(`keydown`,[\w$]+\),document\.addEventListener\(`keyup`,"
+_NOT_IN_TEXT_FIELDS = r"===`INPUT`\|\|[\w$]+===`TEXTAREA`\|\|[\w$]+===`SELECT`\|\|[\w$]+\.isContentEditable"
+_ARROW = ("viser turns its camera on the arrow keys, listening on the document, wherever they are pressed but "
+          "in a text field: the script stops them on the body, below the document, after the control had them")
+_ROLE = "a control that takes the arrows as its own: its arrows are stopped before viser's camera hears them"
+
+#: What keys.js relies on in viser's client (sandbox.app.web.client_seam).
+CLIENT = (
+    Relies("ArrowUp", _ARROW, found=(_CAMERA_KEYS, _CAMERA_ON_DOCUMENT, _NOT_IN_TEXT_FIELDS)),
+    Relies("ArrowDown", _ARROW, found=(_CAMERA_KEYS, _CAMERA_ON_DOCUMENT)),
+    Relies("ArrowLeft", _ARROW, found=(_CAMERA_KEYS, _CAMERA_ON_DOCUMENT)),
+    Relies("ArrowRight", _ARROW, found=(_CAMERA_KEYS, _CAMERA_ON_DOCUMENT)),
+    Relies("KeyS", "viser moves its camera back on s, listening on the document; the page's hotkeys (Mantine's "
+           "useHotkeys) listen on the document's root element, below it: the script stops s there",
+           found=(_CAMERA_KEYS, _CAMERA_ON_DOCUMENT, r"document\.documentElement\.addEventListener\(`keydown`,")),
+    Relies('[role="slider"]', f"Mantine's Slider (viser's sliders) on its thumb: {_ROLE}", found=(r"role:`slider`",)),
+    Relies('[role="tab"]', f"Mantine's Tabs (viser's tab groups): {_ROLE}", found=(r"role:`tab`",)),
+    Relies('[role="option"]', f"a dropdown's option (Mantine's Combobox): {_ROLE}", found=(r"role:`option`",)),
+    Relies('[role="listbox"]', f"a dropdown's list (Mantine's Combobox): {_ROLE}", found=(r"role:`listbox`",)),
+    Relies('[role="menuitem"]', f"an item of a Mantine Menu: {_ROLE}", found=(r"role:`menuitem`",)),
+    Relies('[role="combobox"]', f"a dropdown's field (Mantine's Select): {_ROLE}", found=(r"role:`combobox`",)),
+)

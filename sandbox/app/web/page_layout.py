@@ -9,7 +9,7 @@ controls. viser's "Software WebGL rendering detected" notice (its own,
 shown whenever the page draws in software, not configurable) covered the
 top third of the screen until closed.
 
-:data:`LAYOUT_JS`, sent to each page at connect (:mod:`sandbox.app.web.gate`):
+:data:`LAYOUT_JS` (``page/layout.js``), sent to each page at connect (:mod:`sandbox.app.web.gate`):
 
 - **A drawer.** On a narrow page the sheet spans the width and starts
   closed (its own handle, "Phototaxis sandbox", opens and closes it), so
@@ -38,11 +38,14 @@ top third of the screen until closed.
   height. viser's lists are placed for the 20em sheet and do not flip: at
   390x844 the *group* list of Population and physics opened at x 243-501
   and y 933 and more, off the screen's right edge and below its bottom.
+
+:data:`CLIENT` is what the script relies on in viser's client, checked against the installed viser's
+bundle (:mod:`sandbox.app.web.client_seam`).
 """
 
 from __future__ import annotations
 
-import json
+from sandbox.app.web.client_seam import MANTINE, TEXT, Relies, script
 
 #: viser's breakpoint for its phone layout (Mantine's xs: 36em at 16 px).
 NARROW = "(max-width: 576px)"
@@ -62,132 +65,45 @@ TAP_PLAY = "Tap Play to start."
 #: A page touched rather than pointed at: its primary pointer is a finger.
 TOUCH = "(pointer: coarse)"
 
-LAYOUT_JS = """(() => {
-  if (window.__phototaxisLayout) return;  // a page that reconnects keeps one observer
-  window.__phototaxisLayout = true;
-  const NARROW = window.matchMedia(%(narrow)s), TOUCH = window.matchMedia(%(touch)s);
-  const PRESS_PLAY = %(press)s, TAP_PLAY = %(tap)s;
-  const NOTICE = %(notice)s, NOTICE_MS = %(notice_ms)d;
-  const LAMP = %(lamp)s, CHALLENGE = %(challenge)s, START = %(start)s, BAR = %(bar)s;
-  const closing = new WeakSet(), drawers = new WeakSet();
-  const button = (labels) => [...document.querySelectorAll("button")].find(  // the panel's, not ours
-    (b) => labels.includes(b.textContent.trim()) && !b.closest("#" + BAR));
-  const shown = (el) => !!el && el.getBoundingClientRect().height > 0;
+LAYOUT_JS = script("layout.js", narrow=NARROW, notice=SOFTWARE_NOTICE, notice_ms=round(1000 * NOTICE_SECONDS),
+                   lamp=list(LAMP_LABELS), challenge=CHALLENGE, start=START_ROUND, bar=SHORTCUTS_ID,
+                   touch=TOUCH, press=PRESS_PLAY, tap=TAP_PLAY)
 
-  // viser's software-rendering notice: closed after a few seconds.
-  const closeNotice = () => {
-    for (const note of document.querySelectorAll(".mantine-Notification-root")) {
-      if (closing.has(note) || !note.textContent.includes(NOTICE)) continue;
-      closing.add(note);
-      setTimeout(() => note.querySelector(".mantine-Notification-closeButton")?.click(), NOTICE_MS);
-    }
-  };
+# viser's phone sheet (its BottomPanel): a Paper fixed at the page's bottom, 20em wide, its height animated.
+_SHEET = (r"style:\{boxSizing:`border-box`,zIndex:10,position:`fixed`,bottom:0,right:0,margin:0,"
+          r"minHeight:`3\.5em`,maxHeight:`60%`,width:`20em`,transition:`height 0\.3s linear`\}")
+# ... its handle (a Box, a div): the first thing in it styled cursor: pointer, as tall as the closed sheet
+_HANDLE = r"style:\{cursor:`pointer`,position:`relative`,[^{}]*height:`3\.5em`\}"
+# A folder's title: a Paper styled cursor: pointer (a folder with something in it), its label, then a chevron.
+_FOLDER_TITLE = r"style:\{cursor:[\w$]+\?void 0:`pointer`\},onClick:[\w$]+,children:\[[\w$]+,"
+_LIST = ("a dropdown's list (viser's dropdown is Mantine's Select, its list a Combobox's): placed by the script "
+         "on a phone")
 
-  // The phone's bottom sheet (a fixed Paper at the page's bottom): full width, closed at first.
-  const sheet = () => [...document.querySelectorAll(".mantine-Paper-root")].find(
-    (p) => p.style.position === "fixed" && p.style.bottom === "0px");
-  const handleOf = (paper) => paper.querySelector("div[style*='cursor: pointer']");
-  const sheetOpen = (paper) => paper.getBoundingClientRect().height > 1.5 * handleOf(paper).getBoundingClientRect().height;
-  const makeDrawer = () => {
-    const paper = sheet();
-    if (!paper || drawers.has(paper) || !handleOf(paper)) return;
-    drawers.add(paper);
-    paper.style.width = "100%%";
-    // Open, it ends where the arena begins: a phone frames the arena as wide as the page at its top
-    // (sandbox.app.view.scene.top_down_camera), so the floor's square is 100vw tall. viser's sheet took 60 %%.
-    paper.style.maxHeight = "max(40vh, calc(100vh - 100vw - 4px))";
-    for (const box of paper.querySelectorAll("div[style*='width: 20em']")) box.style.width = "100%%";  // its contents
-    if (sheetOpen(paper)) handleOf(paper).click();  // closed: the arena whole until the drawer is opened
-  };
-
-  // A folder opened (the drawer first) and its title scrolled to the panel's top; ``inside``: the labels
-  // of a button it holds, shown once it is open (a click on the title of an open folder would close it).
-  const openFolder = (name, inside) => {
-    const paper = sheet();
-    if (paper && !sheetOpen(paper)) handleOf(paper).click();
-    setTimeout(() => {
-      const title = [...document.querySelectorAll(".mantine-Paper-root")].find(  // a folder's label: text, chevron
-        (e) => e.firstChild?.nodeType === Node.TEXT_NODE && e.firstChild.textContent.trim() === name);
-      if (!title) return;
-      if (!shown(button(inside))) title.click();
-      setTimeout(() => title.scrollIntoView({block: "start", behavior: "smooth"}), 350);
-    }, 350);
-  };
-  window.__phototaxisOpenFolder = openFolder;  // for the server's scripts to one page (sandbox.app.web.page_open)
-
-  // Be the light and Challenge, one tap away on a phone.
-  const openChallenge = () => openFolder(CHALLENGE, [START]);
-  const shortcuts = () => {
-    let bar = document.getElementById(BAR);
-    if (!NARROW.matches) {
-      if (bar) bar.style.display = "none";
-      return;
-    }
-    if (!bar) {
-      bar = document.createElement("div");
-      bar.id = BAR;
-      bar.style.cssText = "position: fixed; left: 8px; bottom: calc(3.5em + 10px); z-index: 9; display: flex; " +
-                          "gap: 8px; font: 600 15px system-ui, sans-serif;";
-      const make = (name, act) => {
-        const b = document.createElement("button");
-        b.type = "button";
-        b.dataset.shortcut = name;
-        b.textContent = name;
-        b.style.cssText = "padding: 10px 14px; border-radius: 8px; border: 0; color: #111; " +
-                          "background: rgb(255, 190, 40); box-shadow: 0 2px 6px rgba(0,0,0,.5);";
-        b.addEventListener("click", act);
-        bar.appendChild(b);
-        return b;
-      };
-      make(LAMP[0], () => button(LAMP)?.click());
-      make(CHALLENGE, openChallenge);
-      document.body.appendChild(bar);
-    }
-    bar.style.display = "flex";
-    const lamp = button(LAMP);
-    const first = bar.firstElementChild;
-    if (lamp && first.textContent !== lamp.textContent.trim()) first.textContent = lamp.textContent.trim();
-    const paper = sheet();
-    bar.style.visibility = paper && sheetOpen(paper) ? "hidden" : "visible";  // under the open drawer
-  };
-
-  // The title card's words for this page: a finger taps Play, a keyboard has space (and a desktop window
-  // narrowed, then widened again, gets its keyboard's words back).
-  const cardWords = () => {
-    const [from, to] = TOUCH.matches || NARROW.matches ? [PRESS_PLAY, TAP_PLAY] : [TAP_PLAY, PRESS_PLAY];
-    for (const card of document.querySelectorAll("[role='dialog']")) {
-      const texts = document.createTreeWalker(card, NodeFilter.SHOW_TEXT);
-      for (let text = texts.nextNode(); text; text = texts.nextNode()) {
-        if (text.nodeValue.trim() === from) text.nodeValue = to;
-      }
-    }
-  };
-
-  // A dropdown's list on a narrow page: a sheet along the bottom of the screen (it wins over the inline
-  // place viser's page computes, which is off the screen in the drawer).
-  const lists = document.createElement("style");
-  lists.textContent = "@media " + NARROW.media + " { .mantine-Combobox-dropdown, .mantine-Select-dropdown {" +
-    " position: fixed !important; left: 8px !important; right: 8px !important; top: auto !important;" +
-    " bottom: 8px !important; width: auto !important; max-height: 50vh !important; overflow-y: auto !important; } }";
-  document.head.appendChild(lists);
-
-  const look = () => {
-    closeNotice();
-    if (NARROW.matches) makeDrawer();
-    shortcuts();
-    cardWords();
-  };
-  let queued = false;
-  new MutationObserver(() => {
-    if (queued) return;
-    queued = true;
-    requestAnimationFrame(() => { queued = false; look(); });
-  }).observe(document.body, {childList: true, subtree: true, characterData: true});
-  NARROW.addEventListener("change", look);
-  TOUCH.addEventListener("change", look);
-  setInterval(() => { if (NARROW.matches) look(); }, 500);  // the drawer opened or closed (a style, unobserved)
-  look();
-})();""" % {"narrow": json.dumps(NARROW), "notice": json.dumps(SOFTWARE_NOTICE),
-            "notice_ms": round(1000 * NOTICE_SECONDS), "lamp": json.dumps(list(LAMP_LABELS)),
-            "challenge": json.dumps(CHALLENGE), "start": json.dumps(START_ROUND), "bar": json.dumps(SHORTCUTS_ID),
-            "touch": json.dumps(TOUCH), "press": json.dumps(PRESS_PLAY), "tap": json.dumps(TAP_PLAY)}
+#: What layout.js relies on in viser's client (sandbox.app.web.client_seam).
+CLIENT = (
+    Relies(".mantine-Notification-root", "viser's notices are Mantine's Notifications: the software-rendering "
+           "one is found by its title", MANTINE),
+    Relies(".mantine-Notification-closeButton", "a notice's close button, which the script clicks", MANTINE),
+    Relies(".mantine-Paper-root", "viser's phone sheet and each folder's title are Mantine Papers: the sheet the "
+           "one fixed at the page's bottom, a title the one whose first child is its label's text (a click on it "
+           "opens or closes the folder)", MANTINE, found=(_SHEET, _FOLDER_TITLE)),
+    Relies(".mantine-Combobox-dropdown", _LIST, MANTINE),
+    Relies(".mantine-Select-dropdown", _LIST, MANTINE),
+    Relies('div[style*="cursor: pointer"]', "the sheet's handle, its first element styled cursor: pointer: a click "
+           "opens or closes the sheet, and the closed sheet is as tall as it (3.5em)", found=(_HANDLE,)),
+    Relies('div[style*="width: 20em"]', "the sheet's contents, a Box as wide as the sheet (20em): widened with it",
+           found=(r"style:\{width:`20em`\}",)),
+    Relies('[role="dialog"]', "the title card is a viser modal, Mantine's Modal: its content a section with role "
+           "dialog", found=(r"component:`section`,role:`dialog`",)),
+    Relies("button", "viser's buttons are Mantine's (an UnstyledButton, a <button>) with their label as their "
+           "text: the script presses the panel's by their labels",
+           found=(r"\.displayName=`@mantine/core/Button`", r"component:[\w$]+=`button`")),
+    Relies(NARROW, "viser lays the page out for a phone under Mantine's xs breakpoint, 36em (576 px at 16 px)",
+           found=(r"\(max-width: \$\{[\w$]+\(\)\.breakpoints\.xs\}\)", r"breakpoints:\{xs:`36em`")),
+    Relies(SOFTWARE_NOTICE, "the title of viser's notice that the page draws in software", TEXT),
+    Relies("fixed", "the sheet is the Paper whose style has position fixed ...", found=(_SHEET,)),
+    Relies("0px", "... and bottom 0", found=(_SHEET,)),
+    Relies("350", "how long (ms) the script waits for the drawer, then a folder, to open: viser's sheet animates "
+           "its height over 0.3 s, a folder (Mantine's Collapse) over 200 ms",
+           found=(_SHEET, r"transitionDuration:200,transitionTimingFunction:`ease`,animateOpacity")),
+)

@@ -6,15 +6,17 @@ The panel is one for every page, and viser 1.1.1 opens a folder only when it bui
 (viser's ``RunJavascriptMessage``, through :func:`sandbox.app.web.viser_seam.send_to`: never into the
 backlog a new page replays) that calls the layout script's ``window.__phototaxisOpenFolder``
 (:mod:`sandbox.app.web.page_layout`): it opens the phone's drawer if closed, the folder if closed, and
-scrolls the folder's title to the top of the panel. Other pages keep their panel as it is."""
+scrolls the folder's title to the top of the panel. Other pages keep their panel as it is. The line is
+``page/open.js``; it relies on nothing in viser's client but what every page script does
+(:data:`sandbox.app.web.client_seam.RUNS_SCRIPTS`)."""
 
 from __future__ import annotations
 
-import json
 import logging
 from typing import Any
 
 from sandbox.app.web import viser_seam
+from sandbox.app.web.client_seam import script
 
 log = logging.getLogger("sandbox.app.web.page_open")
 
@@ -22,7 +24,7 @@ log = logging.getLogger("sandbox.app.web.page_open")
 def open_folder_js(title: str, inside: str) -> str:
     """The script that opens the folder titled ``title`` on a page; ``inside``: a button's label in it,
     shown once the folder is open."""
-    return f"window.__phototaxisOpenFolder?.({json.dumps(title)}, [{json.dumps(inside)}]);"
+    return script("open.js", title=title, inside=inside)
 
 
 def open_folder(client: Any, title: str, inside: str) -> None:

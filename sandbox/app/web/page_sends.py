@@ -14,7 +14,7 @@ by each newer one, and six clicks on the floor 2 s apart gave the server 2
 (the first, and the last once the timer fired). Drags suffered the same: an
 update, then nothing until the release.
 
-:data:`SENDS_JS`, sent to each page at connect (:mod:`sandbox.app.web.gate`),
+:data:`SENDS_JS` (``page/sends.js``), sent to each page at connect (:mod:`sandbox.app.web.gate`),
 runs such a timer itself, before the page's own handlers hear the pointer:
 
 - **on a press or a release, at once**, due or not. Clicks are discrete, and
@@ -31,53 +31,38 @@ It only does this for the timers that follow a message to the server in the
 same turn of the page's script, at most :data:`MOST_MS` long: the throttles'
 timers. A page that is not busy, and not clicked, runs them on time as
 before, and nothing else in the page changes.
+
+:data:`CLIENT` is what the script relies on in viser's client, checked against the installed viser's
+bundle (:mod:`sandbox.app.web.client_seam`).
 """
 
 from __future__ import annotations
 
+from sandbox.app.web.client_seam import Relies, script
+
 #: The longest timer treated as a throttle's (ms): viser's are 20 and 50.
 MOST_MS = 100
 
-SENDS_JS = """(() => {
-  if (window.__phototaxisSendsKept) return;  // a page that reconnects keeps the one set of hooks
-  window.__phototaxisSendsKept = true;
-  const worker = window.Worker && Worker.prototype;  // viser's websocket lives in a worker
-  if (!worker) return;
-  const MOST_MS = %(most_ms)d;
-  const due = new Map();  // a throttle's timer id -> {at, run}
-  let justSent = false;  // a message went to the server in this turn of the script
-  const post = worker.postMessage;
-  worker.postMessage = function (...args) {
-    justSent = true;
-    queueMicrotask(() => { justSent = false; });
-    return post.apply(this, args);
-  };
-  const setTimer = window.setTimeout, clearTimer = window.clearTimeout;
-  window.setTimeout = function (fn, ms, ...rest) {
-    if (!justSent || typeof fn !== "function" || !(ms > 0 && ms <= MOST_MS)) {
-      return setTimer.call(window, fn, ms, ...rest);
-    }
-    let id = null;
-    const run = () => { if (due.delete(id)) fn(...rest); };  // once, whoever runs it first
-    id = setTimer.call(window, run, ms);
-    due.set(id, {at: performance.now() + ms, run});
-    return id;
-  };
-  window.clearTimeout = function (id) {
-    due.delete(id);
-    return clearTimer.call(window, id);
-  };
-  const run = (all) => {  // the throttles' timers: every one (all), or those due by now
-    const now = performance.now();
-    for (const [id, timer] of [...due]) {
-      if (!all && timer.at > now) continue;
-      clearTimer.call(window, id);
-      try { timer.run(); } catch (error) { setTimer.call(window, () => { throw error; }, 0); }
-    }
-  };
-  const options = {capture: true, passive: true};
-  // A press or a release: every held message goes now, so this one's click is sent, not held and merged.
-  for (const type of ["pointerdown", "pointerup"]) window.addEventListener(type, () => run(true), options);
-  // A move keeps the throttle's pace (a drag's updates): only what is due.
-  window.addEventListener("pointermove", () => run(false), options);
-})();""" % {"most_ms": MOST_MS}
+SENDS_JS = script("sends.js", most_ms=MOST_MS)
+
+#: viser's throttled sender: it sends, then arms its timer in the same turn; its cancel clears the timer.
+_THROTTLE = r"\.sendMessage\([\w$]+\),[\w$]+=!1,[\w$]+=!1,[\w$]+=setTimeout\(\(\)=>\{"
+_CANCEL = (r"clearTimeout\([\w$]+\),[\w$]+=null\),[\w$]+=!0,[\w$]+=!1,[\w$]+=null\}"
+           r"return\{send:[\w$]+,flush:[\w$]+,cancel:")
+
+#: What sends.js relies on in viser's client (sandbox.app.web.client_seam).
+CLIENT = (
+    Relies("Worker.prototype", "viser's client talks to its websocket in a worker: every message to the "
+           "server is the worker's postMessage({type: \"send\", message}), which the script marks as sent",
+           found=(r"new Worker\(", r"\{type:`send`,message:[\w$]+\}")),
+    Relies("window.setTimeout", "viser's throttled sender (makeThrottledMessageSender) sends a message, then "
+           "arms its throttle's timer with setTimeout in the same turn: the timers the script runs on time",
+           found=(_THROTTLE,)),
+    Relies("window.clearTimeout", "the sender's cancel clears its timer: the script forgets it too",
+           found=(_CANCEL,)),
+    Relies(str(MOST_MS), "the longest timer taken for a throttle's (ms): viser's throttles are 20 ms (scene "
+           "clicks, the camera) and 50 ms (node clicks, drags, controls), each a use of its hook "
+           "useThrottledMessageSender(ms) or of the sender itself (ms after its viewer)",
+           found=(r"\((\d+)\)\.send\b", r"\{send:[\w$]+,flush:[\w$]+\}=[\w$]+\((?:[\w$]+,)?(\d+)\)"),
+           values=(20, 50)),
+)

@@ -8,7 +8,7 @@ heard nothing, while a mouse click at the same place moved the lamp. On a
 phone, *Be the light*, the inspector's click on a robot and drawing by
 clicks did nothing.
 
-:data:`TOUCH_JS`, sent to each page at connect (:mod:`sandbox.app.web.gate`),
+:data:`TOUCH_JS` (``page/touch.js``), sent to each page at connect (:mod:`sandbox.app.web.gate`),
 turns a finger into the mouse viser listens to, on the scene's canvas only:
 
 - **A tap** (one finger, down and up within :data:`TAP_PX` and
@@ -25,11 +25,14 @@ turns a finger into the mouse viser listens to, on the scene's canvas only:
 
 The server decides as for a mouse click: what a click does, and whether this
 page may do it (a watching page's clicks are refused).
+
+:data:`CLIENT` is what the script relies on in viser's client, checked against the installed viser's
+bundle (:mod:`sandbox.app.web.client_seam`).
 """
 
 from __future__ import annotations
 
-import json
+from sandbox.app.web.client_seam import Relies, script
 
 #: The most a tap may move (px) and last (ms); beyond, the finger moves the camera.
 TAP_PX = 10
@@ -41,71 +44,27 @@ LAMP_LIT_LABEL = "Give the light back"
 #: The id our mouse events carry (a finger's ids are small numbers; the mouse's is 1).
 MOUSE_ID = 7041
 
-TOUCH_JS = """(() => {
-  if (window.__phototaxisTouch) return;  // a page that reconnects keeps one set of listeners
-  window.__phototaxisTouch = true;
-  const TAP_PX = %(tap_px)d, TAP_MS = %(tap_ms)d, DRAG_PX = %(drag_px)d;
-  const LIT = %(lit)s, MOUSE_ID = %(mouse_id)d;
-  const fingers = new Map();  // pointerId -> {x0, y0, t0, lamp, canvas, lastX, lastY, moved}
-  const area = (c) => c.clientWidth * c.clientHeight;
-  const sceneCanvas = (target) => {  // the scene's canvases are the page's largest (charts are small)
-    if (!(target instanceof HTMLCanvasElement)) return null;
-    const largest = Math.max(...[...document.querySelectorAll("canvas")].map(area));
-    return area(target) >= 0.9 * largest ? target : null;
-  };
-  const lampLit = () => [...document.querySelectorAll("button")].some((b) => b.textContent.trim() === LIT);
-  const click = (target, x, y) => {  // the mouse press and release viser sends as a click
-    for (const type of ["pointerdown", "pointerup"]) {
-      target.dispatchEvent(new PointerEvent(type, {
-        bubbles: true, cancelable: true, composed: true, pointerId: MOUSE_ID, pointerType: "mouse",
-        isPrimary: true, button: 0, buttons: type === "pointerdown" ? 1 : 0, clientX: x, clientY: y}));
-    }
-    window.__phototaxisTouchClicks = (window.__phototaxisTouchClicks || 0) + 1;
-  };
-  const ours = (event) => event.pointerType === "touch" && event.isTrusted;
-  window.addEventListener("pointerdown", (event) => {
-    if (!ours(event)) return;
-    const canvas = sceneCanvas(event.target);
-    if (!canvas) return;
-    const lamp = fingers.size === 0 && lampLit();  // a second finger is the camera's
-    if (fingers.size > 0) for (const f of fingers.values()) f.lamp = false;
-    const now = performance.now();
-    fingers.set(event.pointerId, {x0: event.clientX, y0: event.clientY, t0: now, lamp, canvas,
-                                  lastX: event.clientX, lastY: event.clientY, moved: false});
-    if (lamp) {
-      event.stopImmediatePropagation();  // not the camera's: the lamp's
-      click(canvas, event.clientX, event.clientY);
-    }
-  }, true);
-  window.addEventListener("pointermove", (event) => {
-    if (!ours(event)) return;
-    const f = fingers.get(event.pointerId);
-    if (!f) return;
-    if (Math.hypot(event.clientX - f.x0, event.clientY - f.y0) > TAP_PX) f.moved = true;
-    if (!f.lamp) return;
-    event.stopImmediatePropagation();
-    if (Math.hypot(event.clientX - f.lastX, event.clientY - f.lastY) >= DRAG_PX) {
-      f.lastX = event.clientX; f.lastY = event.clientY;
-      click(f.canvas, event.clientX, event.clientY);
-    }
-  }, true);
-  const lift = (event, cancelled) => {
-    if (!ours(event)) return;
-    const f = fingers.get(event.pointerId);
-    if (!f) return;
-    fingers.delete(event.pointerId);
-    if (f.lamp) {
-      event.stopImmediatePropagation();
-      if (!cancelled && (event.clientX !== f.lastX || event.clientY !== f.lastY)) {
-        click(f.canvas, event.clientX, event.clientY);  // where the finger left the floor
-      }
-    } else if (!cancelled && !f.moved && performance.now() - f.t0 <= TAP_MS) {
-      // After viser has had the finger's release (this listener runs first): until then the finger's
-      // press is viser's gesture under way, and a press of the mouse would be ignored.
-      setTimeout(() => click(f.canvas, f.x0, f.y0), 0);
-    }
-  };
-  window.addEventListener("pointerup", (event) => lift(event, false), true);
-  window.addEventListener("pointercancel", (event) => lift(event, true), true);
-})();""" % {"tap_px": TAP_PX, "tap_ms": TAP_MS, "drag_px": DRAG_PX,
-            "lit": json.dumps(LAMP_LIT_LABEL), "mouse_id": MOUSE_ID}
+TOUCH_JS = script("touch.js", tap_px=TAP_PX, tap_ms=TAP_MS, drag_px=DRAG_PX, lit=LAMP_LIT_LABEL,
+                  mouse_id=MOUSE_ID)
+
+# viser's canvas: a press there starts a gesture (none while one is under way), and a release without a move
+# sends the click.
+_CANVAS_HEARS = r"onPointerDown:[\w$]+,onPointerMove:[\w$]+,onPointerUp:[\w$]+,onPointerCancel:"
+_CLICK_SENT = r"type:`ScenePointerMessage`,event_type:`click`"
+_ONE_GESTURE = r"onPointerDown\([\w$]+\)\{if\(this\.gesture\.kind!==`idle`"
+
+#: What touch.js relies on in viser's client (sandbox.app.web.client_seam).
+CLIENT = (
+    Relies("canvas", "viser draws the scene on a canvas that fills the viewer (React Three Fiber's): the "
+           "largest of the page's canvases, its charts' are smaller", found=(r"\(`canvas`,\{ref:[\w$]+,style:",)),
+    Relies("button", "viser's buttons are Mantine's (an UnstyledButton, a <button>) with their label as their "
+           "text: the lamp's button says whether the lamp is lit",
+           found=(r"\.displayName=`@mantine/core/Button`", r"component:[\w$]+=`button`")),
+    Relies("pointerdown", "viser's canvas hears a press (it starts a gesture, unless one is under way: the "
+           "script's click waits for the finger's gesture to end)", found=(_CANVAS_HEARS, _ONE_GESTURE)),
+    Relies("pointerup", "... and a release: one without a move sends the click (ScenePointerMessage)",
+           found=(_CANVAS_HEARS, _CLICK_SENT)),
+    Relies("mouse", "viser's camera (camera-controls) takes a mouse's press by its buttons and a finger's as a "
+           "touch (pan, pinch): the script's click is a mouse's",
+           found=(r"pointerType===`mouse`\?", r"pointerType===`touch`\)switch")),
+)
