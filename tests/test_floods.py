@@ -233,11 +233,15 @@ def test_a_burst_of_values_is_applied_at_most_the_controls_budget_and_the_last_v
     cid = connected(app, client)
     speed = app.panel.run.speed
     calls = counter(speed.on_update)
+    started = time.monotonic()
     for i in range(200):
         client.set_value(speed._impl.uuid, 2 + i % 50)
+    sending = time.monotonic() - started
     wait_until(lambda: app.runner.steps_per_frame == 2 + 199 % 50, what="the last value")
     wait_until_steady(lambda: len(calls))
-    assert len(calls) <= CONTROLS.burst + 5, f"{len(calls)} values applied"
+    # the burst, and what the budget refills while a busy machine takes its time to send the 200
+    allowed = CONTROLS.burst + CONTROLS.rate * sending + 5
+    assert len(calls) <= allowed, f"{len(calls)} values applied, {allowed:.0f} allowed ({sending:.2f} s sending)"
     assert speed.value == 2 + 199 % 50 and app.gate.flow(cid).counts["replaced"] >= 130
     client.close()
 
