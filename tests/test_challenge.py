@@ -12,6 +12,7 @@ from sandbox.app.panel.challenge import HINT, ChallengeFolder
 from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 from sandbox.model.challenge import Gain, lamp_start, paper_gain
 from sandbox.model.config import Config
+from tests.inline_events import InlineEvents
 
 
 def test_a_gain_counts_only_the_boxes_brought_in():
@@ -47,25 +48,6 @@ class Markdown:
     content = ""
 
 
-class Timers:
-    """The event queue's ``after``, run by hand: the test says when time has passed."""
-
-    def __init__(self):
-        self.waiting = []
-
-    def after(self, seconds, fn, *args):
-        timer = SimpleNamespace(seconds=seconds, fn=fn, args=args, cancelled=False)
-        timer.cancel = lambda: setattr(timer, "cancelled", True)
-        self.waiting.append(timer)
-        return timer
-
-    def pass_time(self):
-        due, self.waiting = [t for t in self.waiting if not t.cancelled], []
-        for timer in due:
-            timer.fn(*timer.args)
-        return len(due)
-
-
 def frame(step, in_goal, world=2, program=LAMP_PROGRAM, robots=((10.0, 10.0), (10.5, 10.0), (40.0, 40.0))):
     boxes = np.zeros(10, bool)
     boxes[:in_goal] = True
@@ -73,7 +55,7 @@ def frame(step, in_goal, world=2, program=LAMP_PROGRAM, robots=((10.0, 10.0), (1
                            robot_positions=np.array(robots))
 
 
-def challenge_folder(reset, playing, timers, lamps):
+def challenge_folder(reset, playing, events, lamps):
     """A challenge folder over stand-ins: a runner whose last frame is world 1's (the lamp lit at once,
     each centre kept in ``lamps``) and a lockstep whose ``reset`` is given (``playing`` hears play and pause)."""
     runner = SimpleNamespace(latest=frame(500, 0, world=1, program=PAPER_PROGRAM),
@@ -81,14 +63,14 @@ def challenge_folder(reset, playing, timers, lamps):
                                                                                        on_done(None)))
     lockstep = SimpleNamespace(set_playing=playing, reset=reset)
     lamp = SimpleNamespace(radius=SimpleNamespace(value=1.0))
-    folder = ChallengeFolder(None, runner, lockstep, lamp, on_change=lambda what: None, after=timers.after)
+    folder = ChallengeFolder(None, runner, lockstep, lamp, on_change=lambda what: None, events=events)
     folder.status, folder.hint, folder.scores = Markdown(), Markdown(), Markdown()
     return folder
 
 
 def a_round(hint_seconds=10.0):
     """A challenge folder over stand-ins for the runner and the lockstep, a round begun in world 2."""
-    timers, lamps, playing = Timers(), [], []
+    timers, lamps, playing = InlineEvents(), [], []
     folder = challenge_folder(lambda seed, on_done, on_error: on_done(2), playing.append, timers, lamps)
     folder.round_steps, folder.hint_seconds = 10_000, hint_seconds
     folder.start("Ada", None)
@@ -101,7 +83,7 @@ def test_a_round_lights_the_robots_counts_from_its_start_and_hints_after_no_prog
     folder, timers, lamps, playing = a_round(hint_seconds=10.0)
     assert lamps in ([(10.0, 10.0)], [(10.5, 10.0)]) and playing == [False, True]  # on the pair, then playing
     assert folder.round.started == 3
-    assert [t.seconds for t in timers.waiting] == [10.0]
+    assert [t.due for t in timers.timers] == [10.0]
     folder.update(frame(100, 3))
     assert "0 boxes brought in" in folder.status.content and folder.hint.content == ""
     assert timers.pass_time() == 1  # ten seconds and no box brought in
@@ -109,9 +91,9 @@ def test_a_round_lights_the_robots_counts_from_its_start_and_hints_after_no_prog
     folder.update(frame(200, 5))  # two boxes in: the hint goes and waits again
     assert folder.hint.content == "" and "2 boxes brought in" in folder.status.content
     folder.update(frame(300, 4))  # one out again: no progress, the wait goes on
-    assert len(timers.waiting) == 1
+    assert len(timers.timers) == 1
     folder.update(frame(400, 6))
-    assert len([t for t in timers.waiting if not t.cancelled]) == 1  # each progress re-arms one wait
+    assert len([t for t in timers.timers if not t.cancelled]) == 1  # each progress re-arms one wait
     folder.runner.world_spec = lambda on_done, on_error: None
     folder.update(frame(10_000, 7))  # the round's end: the wait is cancelled
     assert folder.round.score == Gain(3, 7, 10) and timers.pass_time() == 0 and folder.hint.content == ""
@@ -134,7 +116,7 @@ def test_a_round_begins_on_its_own_world_not_on_one_an_earlier_reset_built():
         folder.runner.latest = frame(0, 1, world=2, program=PAPER_PROGRAM)  # the earlier reset's world, meanwhile
         on_done(3)  # the round's world: 3
 
-    folder = challenge_folder(reset, lambda playing: None, Timers(), lamps)
+    folder = challenge_folder(reset, lambda playing: None, InlineEvents(), lamps)
     folder.start("Ada", None)
     assert lamps == [] and folder.round.world is None  # not on world 2
     folder.update(frame(0, 4, world=3, program=PAPER_PROGRAM))

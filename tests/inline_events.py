@@ -1,0 +1,60 @@
+"""The app's event queue, stood in for by the test: every event runs at once, on the thread that
+posts it; timers wait until the test says time has passed (:meth:`InlineEvents.pass_time`).
+
+The panel and the view take the app's event queue (:mod:`sandbox.app.web.events`) as the only way in;
+a test that builds one of them without a server passes this instead. It has the queue's methods and
+nothing else: a folder that works with it works with the queue, in the order it posts."""
+
+from __future__ import annotations
+
+from concurrent.futures import Future
+from typing import Any, Callable, Hashable
+
+from sandbox.app.web.events import Timer
+
+
+class InlineEvents:
+    """:class:`~sandbox.app.web.events.EventQueue`'s methods, run inline (see the module's docstring)."""
+
+    def __init__(self):
+        #: The timers set and not yet run, in the order they were set.
+        self.timers: list[Timer] = []
+
+    def post(self, fn: Callable, *args: Any) -> None:
+        fn(*args)
+
+    def post_latest(self, key: Hashable, fn: Callable, *args: Any) -> None:
+        fn(*args)
+
+    def submit(self, fn: Callable, *args: Any) -> Future:
+        future: Future = Future()
+        try:
+            future.set_result(fn(*args))
+        except Exception as exc:  # noqa: BLE001 - the future holds it, as the queue's would
+            future.set_exception(exc)
+        return future
+
+    def call(self, fn: Callable, *args: Any, timeout: float = 10.0) -> Any:
+        return fn(*args)
+
+    def on_event_thread(self) -> bool:
+        return True
+
+    def after(self, seconds: float, fn: Callable, *args: Any) -> Timer:
+        timer = Timer(seconds, None, fn, args)
+        self.timers.append(timer)
+        return timer
+
+    def every(self, seconds: float, fn: Callable, *args: Any) -> Timer:
+        timer = Timer(seconds, seconds, fn, args)
+        self.timers.append(timer)
+        return timer
+
+    def pass_time(self) -> int:
+        """Run every timer not cancelled (a periodic one stays); returns how many ran."""
+        due, self.timers = [t for t in self.timers if not t.cancelled], []
+        for timer in due:
+            timer.fn(*timer.args)
+            if timer.period is not None and not timer.cancelled:
+                self.timers.append(timer)
+        return len(due)
