@@ -1,12 +1,18 @@
-"""The app's event queue, stood in for by the test: every event runs at once, on the thread that
-posts it; timers wait until the test says time has passed (:meth:`InlineEvents.pass_time`).
+"""The app's event queue in tests.
 
-The panel and the view take the app's event queue (:mod:`sandbox.app.web.events`) as the only way in;
-a test that builds one of them without a server passes this instead. It has the queue's methods and
-nothing else: a folder that works with it works with the queue, in the order it posts."""
+:class:`InlineEvents` stands in for it: every event runs at once, on the thread that posts it; timers
+wait until the test says time has passed (:meth:`InlineEvents.pass_time`). The panel and the view take
+the app's event queue (:mod:`sandbox.app.web.events`) as the only way in; a test that builds one of
+them without a server passes this instead. It has the queue's methods and nothing else: a folder that
+works with it works with the queue, in the order it posts.
+
+:class:`OnEvents` is the other way round: a live app's folder, driven by a test on the app's own event
+thread, which owns it, as a page's clicks are."""
 
 from __future__ import annotations
 
+import functools
+import inspect
 from concurrent.futures import Future
 from typing import Any, Callable, Hashable
 
@@ -58,3 +64,18 @@ class InlineEvents:
             if timer.period is not None and not timer.cancelled:
                 self.timers.append(timer)
         return len(due)
+
+
+class OnEvents:
+    """``obj`` (a live app's folder) as a test drives it: each of its methods called through this runs as
+    an event on ``events`` (the test waits for it and gets what it returns); its attributes are read as
+    they stand between events."""
+
+    def __init__(self, obj: Any, events: Any):
+        self._obj, self._events = obj, events
+
+    def __getattr__(self, name: str) -> Any:
+        value = getattr(self._obj, name)
+        if inspect.ismethod(value):
+            return lambda *args, **kwargs: self._events.call(functools.partial(value, *args, **kwargs))
+        return value

@@ -229,6 +229,7 @@ class ChallengeFolder:
         it ends at once)."""
         if self._stopped:
             pool.terminate()
+            self._show(r, None, "no reference: the app stopped")
             return
         self._pools[pool] = r
         config, seed, shape = spec
