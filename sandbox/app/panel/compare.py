@@ -77,7 +77,7 @@ class CompareFolder:
             if choice == NOTHING:
                 self._post(self._ended, client)
                 return
-            self._post(self._say, "Starting the second world...")
+            self._post(self._say_starting)
             try:
                 config, shape = self._partner(choice)
                 self.comparison.begin(config, shape, choice, stacked=stacked)
@@ -86,8 +86,8 @@ class CompareFolder:
                 return
             self._post(self._began, choice, client)
 
-    def _say(self, status: str) -> None:
-        self.status.content = status
+    def _say_starting(self) -> None:
+        self.status.content = "Starting the second world..."
 
     def _ended(self, client: Any) -> None:
         self._starting = False
