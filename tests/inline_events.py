@@ -20,10 +20,12 @@ from sandbox.app.web.events import Timer
 
 
 class InlineEvents:
-    """:class:`~sandbox.app.web.events.EventQueue`'s methods, run inline (see the module's docstring)."""
+    """:class:`~sandbox.app.web.events.EventQueue`'s methods, run inline (see the module's docstring).
+    Its clock (:attr:`now`, seconds) moves only when the test says: :meth:`pass_time`."""
 
     def __init__(self):
-        #: The timers set and not yet run, in the order they were set.
+        self.now = 0.0
+        #: The timers set and not yet run (their ``due`` on :attr:`now`'s clock), in the order set.
         self.timers: list[Timer] = []
 
     def post(self, fn: Callable, *args: Any) -> None:
@@ -47,23 +49,35 @@ class InlineEvents:
         return True
 
     def after(self, seconds: float, fn: Callable, *args: Any) -> Timer:
-        timer = Timer(seconds, None, fn, args)
+        timer = Timer(self.now + seconds, None, fn, args)
         self.timers.append(timer)
         return timer
 
     def every(self, seconds: float, fn: Callable, *args: Any) -> Timer:
-        timer = Timer(seconds, seconds, fn, args)
+        if seconds <= 0:
+            raise ValueError("a period must be positive")
+        timer = Timer(self.now + seconds, seconds, fn, args)
         self.timers.append(timer)
         return timer
 
-    def pass_time(self) -> int:
-        """Run every timer not cancelled (a periodic one stays); returns how many ran."""
-        due, self.timers = [t for t in self.timers if not t.cancelled], []
-        for timer in due:
+    def pass_time(self, seconds: float | None = None) -> int:
+        """The clock moves on by ``seconds`` (None: until every timer set is due), then the timers due by
+        then run, in the order they fell due, a periodic one as often as it fell due. Returns how many ran."""
+        if seconds is not None:
+            self.now += seconds
+        else:
+            self.now = max([self.now, *(t.due for t in self.timers if not t.cancelled)])
+        ran = 0
+        while due := [t for t in self.timers if not t.cancelled and t.due <= self.now]:
+            timer = min(due, key=lambda t: t.due)
+            self.timers.remove(timer)
             timer.fn(*timer.args)
+            ran += 1
             if timer.period is not None and not timer.cancelled:
+                timer.due += timer.period
                 self.timers.append(timer)
-        return len(due)
+        self.timers = [t for t in self.timers if not t.cancelled]
+        return ran
 
 
 class OnEvents:

@@ -202,3 +202,14 @@ def test_a_lock_in_a_room_the_event_thread_owns_says_which_threads_share_it():
                for room in OWNED_BY_THE_EVENT_THREAD for path in sorted((app / room).rglob("*.py"))
                for line in locks_without_their_sharers(path.read_text(encoding="utf-8"))]
     assert not missing, f"a lock without a comment saying which threads share it: {', '.join(missing)}"
+
+
+def test_the_tests_stand_in_has_the_queues_ways_in_with_the_same_arguments():
+    """tests/inline_events.InlineEvents stands in for the queue where a test builds a folder without a
+    server: a folder that works with it must work with the queue."""
+    import inspect
+
+    from tests.inline_events import InlineEvents
+
+    for name in ("post", "post_latest", "submit", "call", "after", "every", "on_event_thread"):
+        assert inspect.signature(getattr(InlineEvents, name)) == inspect.signature(getattr(EventQueue, name)), name
