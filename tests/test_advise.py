@@ -9,6 +9,7 @@ import pytest
 from sandbox.experiments.advise import Candidate, Ranked, candidates, rank, table, time_left
 from sandbox.model.config import Config
 from sandbox.shapes import shape_vertices
+from tests.inline_events import InlineEvents
 from tests.waiting import wait_until
 
 TINY = Config(robots=20, boxes=40, update_every=10, hold_steps=5)
@@ -79,7 +80,7 @@ def test_the_pages_advice_says_the_time_left_while_it_runs():
     from sandbox.app.panel.advice import AdviceFolder
 
     runner = _Handle(latest=_Handle(steps_per_second=100.0))
-    folder = AdviceFolder(_Gui(), runner, use=lambda *args: None)
+    folder = AdviceFolder(_Gui(), runner, use=lambda *args: None, events=InlineEvents())
     folder.build(runner.latest)
     folder._busy, folder._started = True, time.monotonic() - 30.0  # as begin() leaves it, 30 s ago
     folder._heard(3, 12)
@@ -105,7 +106,8 @@ def test_the_pages_advice_runs_beside_the_simulation_and_its_best_is_used():
     runner = Runner(TINY.replace(shape="l-shape"), fps=30, steps_per_frame=2).start()
     used = []
     try:
-        folder = AdviceFolder(_Gui(), runner, use=lambda o, s, client: used.append((o, s)), seeds=1, steps=300)
+        folder = AdviceFolder(_Gui(), runner, use=lambda o, s, client: used.append((o, s)), events=InlineEvents(),
+                              seeds=1, steps=300)
         folder.build(runner.latest)
         folder.begin(client=None)
         wait_until(lambda: not folder.running, timeout=120, what="the advice's trials")

@@ -339,15 +339,16 @@ def test_a_paper_case_starts_the_case_and_the_dropdown_shows_what_runs(app):
     snap = wait_until(lambda: runner.latest.world_key != world and runner.latest, what="a new world")
     assert snap.shape_name == "star" and snap.strategies["switch"] == 0.25 and snap.seed == seed
     assert snap.step < 50, "a case starts from step 0"
-    wait_until(lambda: app.panel.update(runner.latest, force=True) or folder.case.value == "star-switch")
+    refresh = lambda: app.events.call(app.panel.update, runner.latest, True)  # noqa: E731
+    wait_until(lambda: refresh() or folder.case.value == "star-switch")
     # The chart's mark comes with the reset's answer, which can follow the new world's first frame.
     wait_until(lambda: app.panel.metrics.marks[-1:] == [(0, "case star-switch")], what="the case's mark")
     # A strategy changed by hand: no longer one of the seven.
     folder.controls["no_corners"][0].value = True
-    wait_until(lambda: app.panel.update(runner.latest, force=True) or folder.case.value == "star-switch-nocorners",
+    wait_until(lambda: refresh() or folder.case.value == "star-switch-nocorners",
                what="the case with no corners")
     folder.controls["switch"][0].value = False
-    wait_until(lambda: app.panel.update(runner.latest, force=True) or folder.case.value == CUSTOM, what="custom")
+    wait_until(lambda: refresh() or folder.case.value == CUSTOM, what="custom")
     assert not client.notes, client.notes
 
 
@@ -394,11 +395,11 @@ def test_metrics_csv_and_frames(app):
 
 
 def test_recording_from_the_panel(app):
-    app.panel.record.start()
+    app.events.call(app.panel.record.start)
     assert app.panel.record._floor_legend is not None  # the replay's legend, on the floor while recording
     frames = app.frames_drawn
     wait_until(lambda: app.frames_drawn > frames + 5)
-    html = app.panel.record.stop()
+    html = app.events.call(app.panel.record.stop)
     assert "__VISER_EMBED_DATA__" in html
     assert app.panel.record.recorder is None and app.panel.record._floor_legend is None
 
@@ -639,13 +640,13 @@ def test_classroom_waits_at_step_0_and_lays_pages_out_for_a_projector():
         assert left < SMALL.centre - SMALL.construction_size / 2  # beside the construction area
         presenter_x = a.camera.look_at[0]
         assert presenter_x < SMALL.centre  # centred between the legend and the construction area
-        app.panel.run.frame(a, WHOLE_ARENA)
+        app.events.call(app.panel.run.frame, a, WHOLE_ARENA)
         assert a.camera.position[2] == pytest.approx(top_down_camera(SMALL, a.camera.aspect)[0][2])
         assert a.client_id not in framing._legends and framing.of(b.client_id) == PRESENTER  # b keeps its own
-        app.panel.run.frame(a, CONSTRUCTION)
+        app.events.call(app.panel.run.frame, a, CONSTRUCTION)
         assert a.camera.position[2] == pytest.approx(top_down_camera(SMALL, a.camera.aspect, whole=False)[0][2])
         assert a.camera.position[2] < 0.5 * whole_height
-        framing.toggle_presenter(a)  # the P key
+        app.events.call(framing.toggle_presenter, a)  # the P key
         assert framing.of(a.client_id) == PRESENTER and a.client_id in framing._legends
         assert a.camera.look_at[0] == pytest.approx(presenter_x)
     finally:
@@ -655,41 +656,37 @@ def test_classroom_waits_at_step_0_and_lays_pages_out_for_a_projector():
         app.stop()
 
 
-def test_a_page_is_framed_under_the_framings_lock(monkeypatch):
-    """The server's fit thread and a View button both frame a page: each reads the page's view and
-    moves its camera under the framing's lock, so the view chosen last is the one left. Stress run 5
-    of issue 39 saw the fit's presenter camera land after the whole arena chosen meanwhile."""
+def test_a_page_is_framed_by_events_in_the_order_they_come(monkeypatch):
+    """The app's fit of a page's camera and a View button both frame a page, each in one event of the
+    app's event thread, from reading the page's view to moving its camera: the view chosen last is the
+    one left, whichever came first. Stress run 5 of issue 39 saw the fit's presenter camera land after
+    the whole arena chosen meanwhile, when the fit ran in a thread of its own."""
     from types import SimpleNamespace
 
     from sandbox.app.panel import framing as module
+    from sandbox.app.web.events import EventQueue
 
     framing = module.Framing(SimpleNamespace(latest=SimpleNamespace(world_config=SMALL)), default=module.PRESENTER)
-
-    def lock_held() -> bool:
-        """Whether this thread holds the framing's lock: another thread cannot take it without waiting."""
-        free = []
-
-        def try_it() -> None:
-            free.append(framing._lock.acquire(blocking=False))
-            if free[0]:
-                framing._lock.release()
-
-        other = threading.Thread(target=try_it)
-        other.start()
-        other.join()
-        return not free[0]
-
     moves = []
-    monkeypatch.setattr(module, "aim_camera", lambda client, *camera: moves.append(("presenter", lock_held())))
+    monkeypatch.setattr(module, "aim_camera", lambda client, *camera: moves.append(
+        ("presenter", threading.current_thread().name)))
     monkeypatch.setattr(module, "frame_arena", lambda client, config, whole: moves.append(
-        ("whole arena" if whole else "construction area", lock_held())))
+        ("whole arena" if whole else "construction area", threading.current_thread().name)))
     monkeypatch.setattr(module, "add_floor_legend", lambda *args, **kwargs: SimpleNamespace(remove=lambda: None))
     panel = SimpleNamespace(minimize=lambda: None, expand=lambda: None)
     page = SimpleNamespace(client_id=1, camera=SimpleNamespace(aspect=800 / 600), scene=None,
                            gui=SimpleNamespace(main_panel=panel))
-    framing.apply(page)  # as the fit thread does
-    framing.choose(page, module.WHOLE_ARENA)  # the View button
-    assert moves == [("presenter", True), ("whole arena", True)]
+    events = EventQueue(name="the-event-thread")
+    events.post(framing.apply, page)  # the fit, as the page reports its shape
+    events.post(framing.choose, page, module.WHOLE_ARENA)  # the View button
+    events.post(framing.apply, page)  # the fit again: it reads the view chosen
+    events.open()
+    try:
+        events.call(lambda: None)  # every event before this one has run
+    finally:
+        events.stop()
+    assert moves == [("presenter", "the-event-thread"), ("whole arena", "the-event-thread"),
+                     ("whole arena", "the-event-thread")]
 
 
 def test_parameter_tooltips_are_short_plain_words():
@@ -890,3 +887,37 @@ def test_the_advisors_best_runs_afresh_to_the_end(app):
                       and app.runner.latest, what="a new world at the end step")
     assert snap.seed == seed and snap.strategies["switch"] == 0.25
     wait_until(lambda: "perfect packing" in app.panel.result.text.content, what="the result explained")
+
+
+def test_the_app_stops_the_panels_workers_through_its_event_queue_and_waits_for_them():
+    """App.stop called the advisor's and the challenge's stop from the main thread while the queue ran
+    (issue 55). Now their stop is an event, and the app waits (bounded) for the workers it returns to
+    end, they posting to the queue as they do, before it stops the queue; a second stop does nothing."""
+    from types import SimpleNamespace
+
+    from sandbox.app.web.events import EventQueue
+    from sandbox.commands.serve import App
+
+    heard, told = [], threading.Event()
+    worker = threading.Thread(target=lambda: told.wait(10) and events.post(heard.append, "the worker's end"),
+                              name="a-worker")
+
+    def stop_workers():
+        heard.append(("stop", threading.current_thread().name))
+        told.set()
+        return [worker]
+
+    events = EventQueue(name="the-event-thread").open()
+    real_stop = events.stop
+    events.stop = lambda: heard.append(("queue stops", worker.is_alive())) or real_stop()
+    worker.start()
+    app = SimpleNamespace(events=events, panel=SimpleNamespace(stop=stop_workers),
+                          comparison=SimpleNamespace(end=lambda: heard.append("comparison ends")),
+                          runner=SimpleNamespace(stop=lambda: heard.append("runner stops")),
+                          server=SimpleNamespace(stop=lambda: heard.append("server stops")))
+    App.stop(app)
+    assert heard[0] == ("stop", "the-event-thread")
+    assert [what for what in heard[1:] if what != "the worker's end"] == [
+        ("queue stops", False), "comparison ends", "runner stops", "server stops"]
+    App.stop(app)  # again (a failed start, then the command's own stop): the stopped queue runs nothing
+    assert heard.count(("stop", "the-event-thread")) == 1

@@ -3,6 +3,7 @@ lamp starts where the robots are, and a hint comes after a while without progres
 
 from __future__ import annotations
 
+import threading
 from types import SimpleNamespace
 
 import numpy as np
@@ -12,6 +13,9 @@ from sandbox.app.panel.challenge import HINT, ChallengeFolder
 from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 from sandbox.model.challenge import Gain, lamp_start, paper_gain
 from sandbox.model.config import Config
+from tests.inline_events import InlineEvents
+from tests.shown import shown
+from tests.waiting import wait_until
 
 
 def test_a_gain_counts_only_the_boxes_brought_in():
@@ -47,25 +51,6 @@ class Markdown:
     content = ""
 
 
-class Timers:
-    """The event queue's ``after``, run by hand: the test says when time has passed."""
-
-    def __init__(self):
-        self.waiting = []
-
-    def after(self, seconds, fn, *args):
-        timer = SimpleNamespace(seconds=seconds, fn=fn, args=args, cancelled=False)
-        timer.cancel = lambda: setattr(timer, "cancelled", True)
-        self.waiting.append(timer)
-        return timer
-
-    def pass_time(self):
-        due, self.waiting = [t for t in self.waiting if not t.cancelled], []
-        for timer in due:
-            timer.fn(*timer.args)
-        return len(due)
-
-
 def frame(step, in_goal, world=2, program=LAMP_PROGRAM, robots=((10.0, 10.0), (10.5, 10.0), (40.0, 40.0))):
     boxes = np.zeros(10, bool)
     boxes[:in_goal] = True
@@ -73,7 +58,7 @@ def frame(step, in_goal, world=2, program=LAMP_PROGRAM, robots=((10.0, 10.0), (1
                            robot_positions=np.array(robots))
 
 
-def challenge_folder(reset, playing, timers, lamps):
+def challenge_folder(reset, playing, events, lamps):
     """A challenge folder over stand-ins: a runner whose last frame is world 1's (the lamp lit at once,
     each centre kept in ``lamps``) and a lockstep whose ``reset`` is given (``playing`` hears play and pause)."""
     runner = SimpleNamespace(latest=frame(500, 0, world=1, program=PAPER_PROGRAM),
@@ -81,14 +66,14 @@ def challenge_folder(reset, playing, timers, lamps):
                                                                                        on_done(None)))
     lockstep = SimpleNamespace(set_playing=playing, reset=reset)
     lamp = SimpleNamespace(radius=SimpleNamespace(value=1.0))
-    folder = ChallengeFolder(None, runner, lockstep, lamp, on_change=lambda what: None, after=timers.after)
+    folder = ChallengeFolder(None, runner, lockstep, lamp, on_change=lambda what: None, events=events)
     folder.status, folder.hint, folder.scores = Markdown(), Markdown(), Markdown()
     return folder
 
 
 def a_round(hint_seconds=10.0):
     """A challenge folder over stand-ins for the runner and the lockstep, a round begun in world 2."""
-    timers, lamps, playing = Timers(), [], []
+    timers, lamps, playing = InlineEvents(), [], []
     folder = challenge_folder(lambda seed, on_done, on_error: on_done(2), playing.append, timers, lamps)
     folder.round_steps, folder.hint_seconds = 10_000, hint_seconds
     folder.start("Ada", None)
@@ -101,17 +86,17 @@ def test_a_round_lights_the_robots_counts_from_its_start_and_hints_after_no_prog
     folder, timers, lamps, playing = a_round(hint_seconds=10.0)
     assert lamps in ([(10.0, 10.0)], [(10.5, 10.0)]) and playing == [False, True]  # on the pair, then playing
     assert folder.round.started == 3
-    assert [t.seconds for t in timers.waiting] == [10.0]
+    assert [t.due for t in timers.timers] == [10.0]
     folder.update(frame(100, 3))
     assert "0 boxes brought in" in folder.status.content and folder.hint.content == ""
     assert timers.pass_time() == 1  # ten seconds and no box brought in
     assert folder.hint.content == HINT
     folder.update(frame(200, 5))  # two boxes in: the hint goes and waits again
-    assert folder.hint.content == "" and "2 boxes brought in" in folder.status.content
+    assert folder.hint.content == "" and "2 boxes brought in" in shown(folder.status.content)
     folder.update(frame(300, 4))  # one out again: no progress, the wait goes on
-    assert len(timers.waiting) == 1
+    assert len(timers.timers) == 1
     folder.update(frame(400, 6))
-    assert len([t for t in timers.waiting if not t.cancelled]) == 1  # each progress re-arms one wait
+    assert len([t for t in timers.timers if not t.cancelled]) == 1  # each progress re-arms one wait
     folder.runner.world_spec = lambda on_done, on_error: None
     folder.update(frame(10_000, 7))  # the round's end: the wait is cancelled
     assert folder.round.score == Gain(3, 7, 10) and timers.pass_time() == 0 and folder.hint.content == ""
@@ -120,7 +105,7 @@ def test_a_round_lights_the_robots_counts_from_its_start_and_hints_after_no_prog
 def test_a_round_abandoned_takes_its_hint_with_it():
     folder, timers, _, _ = a_round()
     folder.update(frame(100, 3, world=3))
-    assert folder.round is None and "abandoned" in folder.status.content
+    assert folder.round is None and "abandoned" in shown(folder.status.content)
     assert timers.pass_time() == 0 and folder.hint.content == ""
 
 
@@ -134,10 +119,117 @@ def test_a_round_begins_on_its_own_world_not_on_one_an_earlier_reset_built():
         folder.runner.latest = frame(0, 1, world=2, program=PAPER_PROGRAM)  # the earlier reset's world, meanwhile
         on_done(3)  # the round's world: 3
 
-    folder = challenge_folder(reset, lambda playing: None, Timers(), lamps)
+    folder = challenge_folder(reset, lambda playing: None, InlineEvents(), lamps)
     folder.start("Ada", None)
     assert lamps == [] and folder.round.world is None  # not on world 2
     folder.update(frame(0, 4, world=3, program=PAPER_PROGRAM))
     assert len(lamps) == 1 and folder.round.world == 3 and folder.round.started == 4
     folder.update(frame(50, 4, world=3))
-    assert folder.round is not None and "step 50" in folder.status.content
+    assert folder.round is not None and "step 50" in shown(folder.status.content)
+
+
+# ------------------------------------------------- the reference run's pool: the event thread's (issue 55)
+class Pools:
+    """multiprocessing's context as the challenge uses it, with pools that say on which thread each was
+    set going, closed or terminated. ``Pool()`` waits until :attr:`release` is set (starting a pool blocks)."""
+
+    def __init__(self):
+        self.asked, self.release = threading.Event(), threading.Event()
+        self.made = []
+
+    def context(self):
+        return SimpleNamespace(Pool=self.pool)
+
+    def pool(self, processes):
+        self.asked.set()
+        self.release.wait(10)
+        self.made.append(FakePool())
+        return self.made[-1]
+
+
+class FakePool:
+    """A pool that records what is done to it, and on which thread; its answer is the test's to give."""
+
+    def __init__(self):
+        self.calls, self.answer = [], None
+
+    def _heard(self, what):
+        self.calls.append((what, threading.current_thread().name))
+
+    def apply_async(self, fn, args, callback, error_callback):
+        self._heard("apply")
+        self.answer = callback
+
+    def close(self):
+        self._heard("close")
+
+    def terminate(self):
+        self._heard("terminate")
+
+
+@pytest.fixture
+def reference(monkeypatch):
+    """A finished round's folder on a real event queue (served), its pools the test's."""
+    from sandbox.app.panel import challenge as module
+    from sandbox.app.panel.challenge import Round
+    from sandbox.app.web.events import EventQueue
+
+    pools = Pools()
+    monkeypatch.setattr(module, "simulation_context", pools.context)
+    events = EventQueue(name="the-event-thread").open()
+    folder = ChallengeFolder(None, None, None, None, on_change=lambda what: None, events=events)
+    folder.status, folder.hint, folder.scores = Markdown(), Markdown(), Markdown()
+    r = Round("Ada", 100, world=1, started=2, most=5, score=Gain(2, 5, 10), at_step=100)
+    yield folder, r, pools, events
+    pools.release.set()
+    events.stop()
+
+
+def test_the_reference_pool_is_handed_to_the_event_thread_which_hears_its_answer_and_ends_it(reference):
+    folder, r, pools, events = reference
+    pools.release.set()
+    events.call(folder._score_the_paper, r, (Config(), 0, None))
+    wait_until(lambda: pools.made and pools.made[0].answer is not None, timeout=10, what="the run set going")
+    pool = pools.made[0]
+    pool.answer(Gain(2, 4, 10))  # the pool's answer, on the pool's own thread
+    events.call(lambda: None)
+    assert pool.calls == [("apply", "the-event-thread"), ("close", "the-event-thread")]
+    assert "You beat it!" in folder.status.content and folder.best == {"Ada": 0.375}
+    assert events.call(lambda: folder._pools) == {}
+
+
+def test_a_stop_ends_a_running_reference_on_the_event_thread_and_the_round_counts(reference):
+    """The pool was set on the worker and read by stop() on another thread (issue 55): now only the event
+    thread holds it, and stop (an event) terminates it there, once."""
+    folder, r, pools, events = reference
+    pools.release.set()
+    events.call(folder._score_the_paper, r, (Config(), 0, None))
+    wait_until(lambda: pools.made and pools.made[0].answer is not None, timeout=10, what="the run set going")
+    for starter in events.call(folder.stop):  # its worker only started the pool: it is done, or nearly
+        starter.join(10)
+    assert pools.made[0].calls == [("apply", "the-event-thread"), ("terminate", "the-event-thread")]
+    assert "no reference: the app stopped" in shown(folder.status.content) and folder.best == {"Ada": 0.375}
+
+
+def test_a_pool_started_after_the_stop_is_ended_when_handed_over_and_never_runs(reference):
+    folder, r, pools, events = reference
+    events.call(folder._score_the_paper, r, (Config(), 0, None))
+    assert pools.asked.wait(10)  # the worker is starting its pool
+    starters = events.call(folder.stop)
+    assert [thread.name for thread in starters] == ["challenge-reference"]  # for the app to wait for
+    pools.release.set()
+    starters[0].join(10)
+    assert pools.made[0].calls == [("terminate", "the-event-thread")]
+    assert "no reference: the app stopped" in shown(folder.status.content)
+
+
+def test_a_pool_started_after_the_queue_stopped_is_ended_by_its_worker(reference):
+    folder, r, pools, events = reference
+    events.call(folder._score_the_paper, r, (Config(), 0, None))
+    assert pools.asked.wait(10)
+    starters = [thread for thread in threading.enumerate() if thread.name == "challenge-reference"]
+    events.stop()  # nobody will take the pool: the worker that started it ends it
+    pools.release.set()
+    for thread in starters:
+        thread.join(10)
+    assert pools.made[0].calls == [("terminate", "challenge-reference")]

@@ -216,7 +216,7 @@ def test_the_app_draws_both_worlds_and_charts_both(comparing_app):
     assert {"/compare", "/compare/swarm/robots", "/compare/caption", "/compare/goal"} <= names
     wait_until(lambda: partner.latest.step >= 300 and app.runner.latest.step >= 300, what="both worlds to run")
     app.panel.metrics._charted_at = 0.0
-    app.panel.update(app.runner.latest, force=True)
+    app.events.call(app.panel.update, app.runner.latest, True)
     labels = [series["label"] for series in app.panel.metrics._series_shown["chart_goal"]]
     assert labels == ["step", "in goal: star (left)", "star-switch (right)", "change"]
     data = app.panel.metrics.chart_goal.data
@@ -228,19 +228,19 @@ def test_the_app_draws_both_worlds_and_charts_both(comparing_app):
     assert rows[0].startswith("world,step,") and rows[0].endswith(",time")
     worlds = {row.split(",")[0] for row in rows[1:]}
     assert worlds == {"left: star", "right: star-switch"}
-    app.panel.compare.choose("nothing", None)
+    app.events.call(app.panel.compare.choose, "nothing", None)
     wait_until(lambda: app.comparison.runner is None and app.panel.framing.offset is None,
                what="the comparison to end and the pages to frame one world")
     assert app.runner.hold_at is None and partner.stopped and not app.comparison.view
     app.panel.metrics._charted_at = 0.0
-    app.panel.update(app.runner.latest, force=True)
+    app.events.call(app.panel.update, app.runner.latest, True)
     assert [s["label"] for s in app.panel.metrics._series_shown["chart_goal"]] == ["step", "in goal", "change"]
     assert app.panel.metrics.csv().startswith("step,") and "Right" not in app.panel.metrics.text.content
 
 
 def test_learns_show_me_runs_the_case_without_and_with_the_strategy(comparing_app):
     app = comparing_app
-    app.panel.show_me("square", "square-flare", None)
+    app.events.call(app.panel.show_me, "square", "square-flare", None)
     wait_until(lambda: app.comparison.label == "square-flare" and app.runner.latest.shape_name == "square",
                what="square beside square-flare")
     a, b = app.runner.latest, app.comparison.runner.latest
@@ -259,7 +259,7 @@ def test_compare_with_the_same_world_under_the_papers_lights():
     app = App(SMALL, port=free_port(), fps=60, steps_per_frame=5, process=False).start()
     try:
         app.runner.set_lamp((32.0, 32.0), 6.0)
-        app.panel.compare.choose(SAME, None)
+        app.events.call(app.panel.compare.choose, SAME, None)
         wait_until(lambda: app.comparison.runner is not None, what="the second world")
         wait_until(lambda: app.comparison.runner.latest.world_key == app.runner.latest.world_key == 1,
                    what="both worlds restarted")
@@ -320,11 +320,11 @@ def test_a_challenge_round_in_compare_mode_plays_the_paper_beside_the_player():
 
     app = App(SMALL, port=free_port(), fps=60, steps_per_frame=5, process=False).start()
     try:
-        app.panel.compare.choose(SAME, None)
+        app.events.call(app.panel.compare.choose, SAME, None)
         wait_until(lambda: app.comparison.runner is not None, what="the second world")
         folder, partner = app.panel.challenge, app.comparison.runner
         folder.round_steps = 150
-        folder.start("Ada", None)
+        app.events.call(folder.start, "Ada", None)
         wait_until(lambda: folder.round is not None and folder.round.score is not None, what="the round's end")
         wait_until(lambda: not partner.latest.playing and partner.latest.step == app.runner.latest.step,
                    what="both worlds stopped on one step")
@@ -355,9 +355,9 @@ def test_a_refused_reset_leaves_both_worlds_going_on_in_step(pair):
     wait_until(lambda: main.latest.step == partner.latest.step == lockstep.target and not main.latest.playing, what="paused in step")
 
 
-def _pick_as_viser_does(handle, value, refresh) -> None:
-    """What viser does with a page's pick: the value is set on its event loop, the callback runs later in
-    a thread of its own. ``refresh()`` is a panel refresh that falls in between."""
+def _pick_as_viser_does(handle, value, refresh, events) -> None:
+    """What viser does with a page's pick: the value is set on its event loop, the callback runs later on
+    the app's ``events``. ``refresh()`` is a panel refresh that falls in between."""
     from unittest import mock
 
     import viser
@@ -366,7 +366,7 @@ def _pick_as_viser_does(handle, value, refresh) -> None:
     refresh()
     page = mock.MagicMock(name="the page's client")  # told what happens (notifications); not a browser
     for callback in handle._impl.update_cb:
-        callback(viser.GuiEvent(client=page, client_id=0, target=handle))
+        events.call(callback, viser.GuiEvent(client=page, client_id=0, target=handle))
 
 
 def test_a_pick_survives_a_panel_refresh_before_its_callback():
@@ -378,20 +378,65 @@ def test_a_pick_survives_a_panel_refresh_before_its_callback():
     app = App(SMALL, port=free_port(), fps=30, steps_per_frame=2, process=False).start()
     try:
         panel = app.panel
-        refresh = lambda: panel.update(app.runner.latest, force=True)  # noqa: E731
-        _pick_as_viser_does(panel.compare.choice, "star-switch", refresh)
+        refresh = lambda: app.events.call(panel.update, app.runner.latest, True)  # noqa: E731
+        _pick_as_viser_does(panel.compare.choice, "star-switch", refresh, app.events)
         wait_until(lambda: app.comparison.label == "star-switch" and app.comparison.runner is not None,
                    what="the second world")
         refresh()
         assert panel.compare.choice.value == "star-switch"
-        _pick_as_viser_does(panel.strategies.case, "square", refresh)
+        _pick_as_viser_does(panel.strategies.case, "square", refresh, app.events)
         wait_until(lambda: app.runner.latest.shape_name == "square", what="the square case")
         refresh()
         assert panel.strategies.case.value == "square"
-        panel.compare.choose("nothing", None)  # ended elsewhere: the dropdown follows what runs
+        app.events.call(panel.compare.choose, "nothing", None)  # ended elsewhere: the dropdown follows what runs
         wait_until(lambda: app.comparison.runner is None, what="the comparison to end")
         refresh()
         assert panel.compare.choice.value == "nothing"
         assert not app.runner.errors
     finally:
         app.stop()
+
+
+def test_the_compare_worker_posts_its_status_and_touches_nothing_of_the_folder():
+    """A worker starts the second world (it blocks for a second or two); the folder's status line, its
+    flags and the comparison's adoption are the event thread's. The worker wrote the status itself
+    (issue 55): now it posts the change, and the event thread makes it, in the order posted."""
+    import threading
+    from types import SimpleNamespace
+
+    from sandbox.app.panel.compare import NOTHING, CompareFolder
+    from sandbox.app.web.events import EventQueue
+
+    writes, began = [], []
+
+    class Status:
+        def __init__(self):
+            self._content = ""
+
+        @property
+        def content(self):
+            return self._content
+
+        @content.setter
+        def content(self, text):
+            writes.append((text, threading.current_thread().name))
+            self._content = text
+
+    comparison = SimpleNamespace(runner=None, label=None, stacked=False,
+                                 begin=lambda config, shape, label, stacked: began.append(label))
+    events = EventQueue(name="the-event-thread")  # not served yet: what the worker posts waits its turn
+    folder = CompareFolder(None, SimpleNamespace(latest=SimpleNamespace(config=SMALL)), comparison,
+                           on_change=lambda what: writes.append((what, threading.current_thread().name)),
+                           events=events)
+    folder.status, folder.choice = Status(), SimpleNamespace(value=NOTHING)
+    folder._starting = True  # as choose() leaves it, on the event thread
+    folder._choose("star-switch", None, False)  # the worker's work, here on the test's thread
+    assert began == ["star-switch"] and writes == [] and folder._starting  # started; nothing changed here
+    events.open()
+    try:
+        events.call(lambda: None)  # what the worker posted has run
+    finally:
+        events.stop()
+    assert writes == [("Starting the second world...", "the-event-thread"),
+                      ("compare: star-switch", "the-event-thread")]
+    assert not folder._starting

@@ -12,6 +12,7 @@ from sandbox.app.panel.draw import PICK_TEMPLATE, status_text
 from sandbox.app.view.sketch import DIM_OPACITY, SELECTED_COLOUR  # noqa: I001 - after the panel, which imports it first
 from sandbox.shapes.geometry import signed_area
 from sandbox.shapes.templates import template_vertices
+from tests.inline_events import OnEvents
 from tests.shown import shown
 from tests.test_security import connected, make_app, own_page, uuid_of, wait_until
 from tests.viser_wire import RawClient
@@ -28,7 +29,8 @@ def app():
 
 @pytest.fixture
 def draw(app):
-    folder = app.panel.shape.draw
+    """The Draw folder, its methods run on the app's event thread (which owns it), as a page's clicks."""
+    folder = OnEvents(app.panel.shape.draw, app.events)
     folder._change([])
     folder._set_drawing(False)
     folder.snap_on.value, folder.grid.value = True, 0.5

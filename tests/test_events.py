@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import ast
+import re
 import threading
 import time
+from pathlib import Path
 
 import pytest
 
@@ -150,3 +153,63 @@ def test_stop_of_a_queue_never_opened_fails_what_waits(events):
 def test_call_from_an_event_runs_inline_instead_of_waiting_for_itself(events):
     events.open()
     assert events.call(lambda: events.call(lambda: "inner") + " outer") == "inner outer"
+
+
+# ------------------------------------------------- who shares a lock (docs/code.md, "Threads")
+#: The rooms whose classes the event thread owns: a lock there is for state another thread shares.
+OWNED_BY_THE_EVENT_THREAD = ("panel", "view")
+#: A lock's comment says it is shared, and by which thread: one of the Threads table's.
+LOCK = re.compile(r"(threading\.)?R?Lock")
+SHARED_BY = re.compile(r"\bshared\b.*\b(main thread|event thread|event loop|receiver|workers?|threads)\b",
+                       re.IGNORECASE | re.DOTALL)
+
+
+def locks_without_their_sharers(source: str) -> list[int]:
+    """The lines of ``source`` whose statement makes a ``threading.Lock`` or ``RLock`` without a comment
+    (on the statement's lines, or the comment lines just above it) saying which threads share it."""
+    lines = source.splitlines()
+    missing = []
+    for statement in ast.walk(ast.parse(source)):
+        if not isinstance(statement, (ast.Assign, ast.AnnAssign, ast.Expr)):
+            continue
+        if not any(isinstance(node, ast.Call) and LOCK.fullmatch(ast.unparse(node.func))
+                   for node in ast.walk(statement)):
+            continue
+        first, last = statement.lineno - 1, statement.end_lineno - 1
+        comment = " ".join(line.partition("#")[2] for line in lines[first:last + 1])
+        while first > 0 and lines[first - 1].lstrip().startswith("#"):
+            first -= 1
+            comment = lines[first].lstrip()[1:] + " " + comment
+        if not SHARED_BY.search(comment):
+            missing.append(statement.lineno)
+    return missing
+
+
+def test_the_lock_check_finds_a_lock_without_its_sharers():
+    assert locks_without_their_sharers("import threading\nlock = threading.Lock()\n") == [2]
+    assert locks_without_their_sharers("lock = RLock()  # one at a time\n") == [1]
+    assert locks_without_their_sharers("lock = threading.Lock()  # shared by the receiver and the event thread\n") == []
+    assert locks_without_their_sharers("# Shared by the workers: one at a time.\nlock = threading.Lock()\n") == []
+
+
+def test_a_lock_in_a_room_the_event_thread_owns_says_which_threads_share_it():
+    """No state the event thread owns needs a lock (sandbox/app/web/events.py): a lock in the panel or
+    the view guards something another thread really shares, and says which (issue 55)."""
+    import sandbox.app
+
+    app = Path(sandbox.app.__file__).parent
+    missing = [f"{path.relative_to(app.parent.parent)}:{line}"
+               for room in OWNED_BY_THE_EVENT_THREAD for path in sorted((app / room).rglob("*.py"))
+               for line in locks_without_their_sharers(path.read_text(encoding="utf-8"))]
+    assert not missing, f"a lock without a comment saying which threads share it: {', '.join(missing)}"
+
+
+def test_the_tests_stand_in_has_the_queues_ways_in_with_the_same_arguments():
+    """tests/inline_events.InlineEvents stands in for the queue where a test builds a folder without a
+    server: a folder that works with it must work with the queue."""
+    import inspect
+
+    from tests.inline_events import InlineEvents
+
+    for name in ("post", "post_latest", "submit", "call", "after", "every", "on_event_thread"):
+        assert inspect.signature(getattr(InlineEvents, name)) == inspect.signature(getattr(EventQueue, name)), name

@@ -147,18 +147,27 @@ def test_a_round_is_scored_against_the_paper_in_the_same_world_and_steps():
 
 
 def test_stopping_the_app_ends_a_reference_run_at_once():
+    """The reference run's pool is the event thread's once a worker started it: the app's stop, an event,
+    terminates it there, and the round counts without a reference."""
     from sandbox.app.panel.challenge import ChallengeFolder, Round
+    from sandbox.app.web.events import EventQueue
     from sandbox.model.challenge import Gain
     from tests.waiting import wait_until
 
     class Markdown:
         content = ""
 
-    folder = ChallengeFolder(gui=None, runner=None, lockstep=None, lamp=None, on_change=lambda what: None)
-    folder.status, folder.scores = Markdown(), Markdown()
-    r = Round("Ada", 10**9, 0, world=1, score=Gain(20, 40, 80), at_step=10**9)  # a reference that would run for days
-    folder._score_the_paper(r, (Config(robots=20, boxes=30), 0, None))
-    wait_until(lambda: folder._pool is not None, what="the worker")
-    folder.stop()
-    wait_until(lambda: "no reference" in folder.status.content, timeout=20, what="the run ended")
-    assert folder.best == {"Ada": 1 / 3} and r.paper is None
+    events = EventQueue().open()
+    try:
+        folder = ChallengeFolder(gui=None, runner=None, lockstep=None, lamp=None, on_change=lambda what: None,
+                                 events=events)
+        folder.status, folder.scores = Markdown(), Markdown()
+        r = Round("Ada", 10**9, 0, world=1, score=Gain(20, 40, 80), at_step=10**9)  # a reference for days
+        events.call(folder._score_the_paper, r, (Config(robots=20, boxes=30), 0, None))
+        wait_until(lambda: events.call(lambda: bool(folder._pools)), timeout=20, what="the pool handed over")
+        pool = events.call(lambda: next(iter(folder._pools)))
+        assert events.call(folder.stop) == []  # the worker that started it is done
+        assert "no reference" in folder.status.content and pool._state == "TERMINATE"
+        assert folder.best == {"Ada": 1 / 3} and r.paper is None
+    finally:
+        events.stop()

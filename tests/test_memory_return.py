@@ -4,47 +4,22 @@ a fake clock's timers and a counting trim. The whole server's growth is test_pag
 from __future__ import annotations
 
 from sandbox.app.web.memory import FreedMemoryReturn
-
-
-class Timers:
-    """``after(seconds, fn)`` on a clock the test moves."""
-
-    def __init__(self) -> None:
-        self.now, self.pending = 0.0, []
-
-    def after(self, seconds, fn):
-        timer = Timer(self.now + seconds, fn)
-        self.pending.append(timer)
-        return timer
-
-    def advance(self, seconds: float) -> None:
-        self.now += seconds
-        for timer in [t for t in self.pending if t.due <= self.now and not t.cancelled]:
-            self.pending.remove(timer)
-            timer.fn()
-
-
-class Timer:
-    def __init__(self, due, fn) -> None:
-        self.due, self.fn, self.cancelled = due, fn, False
-
-    def cancel(self) -> None:
-        self.cancelled = True
+from tests.inline_events import InlineEvents
 
 
 def test_a_burst_of_departures_hands_memory_back_once_when_it_is_over():
-    timers, trims = Timers(), []
+    timers, trims = InlineEvents(), []
     returner = FreedMemoryReturn(timers.after, quiet=1.0, trim=lambda: trims.append(timers.now))
     for _ in range(20):  # a class closing its laptops, 0.1 s apart
         returner.page_left(object())
-        timers.advance(0.1)
+        timers.pass_time(0.1)
     assert returner.returns == 0 and trims == []  # each departure put the return off
-    timers.advance(0.85)
+    timers.pass_time(0.85)
     assert returner.returns == 0
-    timers.advance(0.1)  # 1 s after the last departure
+    timers.pass_time(0.1)  # 1 s after the last departure
     assert returner.returns == 1 and trims == [timers.now]
-    timers.advance(10.0)
+    timers.pass_time(10.0)
     assert returner.returns == 1  # nothing left to do until the next departure
     returner.page_left(object())
-    timers.advance(1.0)
+    timers.pass_time(1.0)
     assert returner.returns == 2 and len(trims) == 2

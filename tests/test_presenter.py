@@ -10,6 +10,7 @@ from unittest import mock
 from sandbox.app.panel.framing import CONSTRUCTION, PRESENTER, Framing
 from sandbox.app.panel.presenter import PresenterScreen, title_lines
 from sandbox.model.config import Config
+from tests.inline_events import InlineEvents
 
 
 class World:
@@ -35,7 +36,7 @@ def page(client_id: int):
 def screen(step: int, playing: bool):
     world = World(step, playing)
     run = mock.MagicMock(name="the Run folder")
-    return PresenterScreen(world, world, run, compared=lambda: None), world, run
+    return PresenterScreen(world, world, run, compared=lambda: None, events=InlineEvents()), world, run
 
 
 def labels(client) -> list[str]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import logging
 import os
 import re
 import socket
@@ -22,7 +23,7 @@ from typing import Any
 from sandbox.app.web.access import WATCH, Access, is_loopback_host, is_shared, well_formed_token
 from sandbox.app.view.partner import Comparison
 from sandbox.app.world.lockstep import Lockstep, side_config
-from sandbox.app.web.events import EventQueue
+from sandbox.app.web.events import EventQueue, QueueStopped
 from sandbox.app.web.gate import start_server
 from sandbox.app.web.icons import read_icons_once
 from sandbox.app.web.memory import return_memory_after_pages_leave
@@ -51,6 +52,11 @@ PACE_SNAPSHOTS_EVERY = 0.5
 #: For this long after a page connects, each change of its window's shape fits its camera to the
 #: arena again (s): the page lays itself out, slowly on a loaded machine.
 FIT_SECONDS = 30.0
+#: As the app stops, how long (s) it waits for the panel's workers (the advisor's trials, the challenge's
+#: reference runs) to end: they were told to at once, and end within a fraction of it.
+STOP_WORKERS_SECONDS = 5.0
+
+log = logging.getLogger("sandbox.app")
 
 
 class App:
@@ -108,9 +114,9 @@ class App:
             # Loading a program runs a Python file on this machine: every page may where the server is for
             # this machine alone or --allow-programs, else only a page on this machine; the gate decides per page.
             offered = self.access.allow_programs or not is_shared(host)
-            self.panel = Panel(self.server, self.runner, self.view, self.comparison, allow_programs=offered,
-                               may_load_programs=self.gate.may_load_programs,
-                               default_view=WHOLE_ARENA if whole_arena else PRESENTER, events=self.events)
+            self.panel = Panel(self.server, self.runner, self.view, self.comparison, events=self.events,
+                               allow_programs=offered, may_load_programs=self.gate.may_load_programs,
+                               default_view=WHOLE_ARENA if whole_arena else PRESENTER)
         except BaseException:
             self.events.stop()
             _stop_quietly(self.server)  # do not leave a half-built server listening
@@ -282,12 +288,30 @@ class App:
         return self
 
     def stop(self) -> None:
-        self.panel.advice.stop()
-        self.panel.challenge.stop()
+        stop_workers(self.events, self.panel)
         self.events.stop()  # no event runs from here on: what follows owns the app's state alone
         self.comparison.end()
         self.runner.stop()
         _stop_quietly(self.server)
+
+
+def stop_workers(events: EventQueue, panel: Panel, timeout: float = STOP_WORKERS_SECONDS) -> None:
+    """The panel's workers (the advisor's trials, the challenge's reference runs) stop through the event
+    queue, whose thread owns what they report to, and this thread waits for them, at most ``timeout``
+    seconds in all: they post to the queue as they end, so it stops only after. Nothing to do once the
+    queue has stopped (a second stop)."""
+    deadline = time.monotonic() + timeout
+    try:
+        workers = events.call(panel.stop, timeout=timeout)
+    except QueueStopped:
+        return
+    except TimeoutError:
+        log.warning("the panel's workers were not stopped within %.0f s: the app stops without them", timeout)
+        return
+    for worker in workers:
+        worker.join(max(0.0, deadline - time.monotonic()))
+    if any(worker.is_alive() for worker in workers):
+        log.warning("a worker of the panel was still running %.0f s after the app asked it to stop", timeout)
 
 
 def _stop_quietly(server: Any) -> None:

@@ -9,6 +9,7 @@ generated from the model's declaration.
 
 from __future__ import annotations
 
+import threading
 import time
 from typing import Any, Callable
 
@@ -41,13 +42,16 @@ class Panel:
     """Builds the GUI on ``server`` for ``runner`` and keeps its read-outs current.
     ``view`` is the scene (it shows the heat map); the shape being drawn has its own nodes (draw_view)."""
 
-    def __init__(self, server: Any, runner: Any, view: Any, comparison: Comparison, *, allow_programs: bool = True,
-                 may_load_programs: Any = None, default_view: str = WHOLE_ARENA, events: Any = None):
+    def __init__(self, server: Any, runner: Any, view: Any, comparison: Comparison, *, events: Any,
+                 allow_programs: bool = True, may_load_programs: Any = None, default_view: str = WHOLE_ARENA):
         """``comparison``: compare mode's second world (:mod:`sandbox.app.world.lockstep`); play, pause, step,
         reset and speed act on its :class:`~sandbox.app.world.lockstep.Lockstep`. ``events``: the app's event
-        queue (:mod:`sandbox.app.web.events`), where work done in threads of its own puts its results."""
+        queue (:mod:`sandbox.app.web.events`), the only way in: work done in threads of its own puts its
+        results there, and the timers are its. (Tests pass a stand-in that runs each event at once.)
+
+        Each folder gets what it calls at construction; where two folders call each other, the one built
+        first gets a function that finds the other when called."""
         gui = server.gui
-        post = events.post if events is not None else (lambda fn, *args: fn(*args))
         self.runner = runner
         self.comparison = comparison
         lockstep = comparison.lockstep
@@ -61,22 +65,21 @@ class Panel:
         self.run = RunFolder(gui, runner, lockstep, show_field=lambda on: view.set_show_field(on, runner.latest),
                              after_reset=self._after_reset, framing=self.framing,
                              after_skip=lambda arrival, client: self.result.explain_at(arrival, client))
-        self.shape = ShapeFolder(gui, runner, server.scene, on_change=self.metrics.mark, reset=self.run.reset,
-                                 post=post)
+        self.shape = ShapeFolder(gui, runner, server.scene, events=events, on_change=self.metrics.mark,
+                                 reset=self.run.reset,
+                                 back_to_defaults=lambda client: self.strategies.back_to_defaults(client),
+                                 run_to_the_end=self._to_the_end)
         self.strategies = StrategiesFolder(gui, runner, use_shape=self.shape.use, on_change=self.metrics.mark,
                                            reset=self.run.reset)
-        self.shape.back_to_defaults = self.strategies.back_to_defaults
-        self.shape.draw.run_to_the_end = self._to_the_end
-        self.advice = AdviceFolder(gui, runner, use=self.strategies.use, post=post)
-        self.advice.run_to_the_end = self._afresh_to_the_end
+        self.advice = AdviceFolder(gui, runner, use=self.strategies.use, events=events,
+                                   run_to_the_end=self._afresh_to_the_end)
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
         self.lamp = LampFolder(gui, runner, on_change=self.metrics.mark)
-        self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark, post=post,
-                                        after=events.after if events is not None else None)
-        self.compare = CompareFolder(gui, runner, comparison, on_change=self.metrics.mark, post=post)
+        self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark, events=events)
+        self.compare = CompareFolder(gui, runner, comparison, on_change=self.metrics.mark, events=events)
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
-        self.result = ResultFolder(gui, runner, server.scene, post=post)
+        self.result = ResultFolder(gui, runner, server.scene, events=events)
         self.record = RecordFolder(gui, server, runner)
         self.presenter = PresenterScreen(runner, lockstep, self.run, compared=lambda: comparison.runner, events=events)
         self.folders = (self.run, self.compare, self.shape, self.advice, self.strategies, self.program, self.lamp,
@@ -121,6 +124,12 @@ class Panel:
 
     def on_frame_drawn(self) -> None:
         self.record.on_frame_drawn()
+
+    def stop(self) -> list[threading.Thread]:
+        """The app is stopping (on the event thread, which owns the workers' folders): the advisor's trials
+        and the challenge's reference runs end now. Returns the workers still going, for the app to wait
+        for off the event thread (they post to it as they end)."""
+        return [*self.advice.stop(), *self.challenge.stop()]
 
     def _to_the_end(self, client: Any) -> None:
         """Run the world just built (a goal used, the advisor's best) to the Run folder's end step."""

@@ -5,6 +5,9 @@ outlines and strategies tried in short trials beside the live simulation
 The trials run in one worker process at a lower priority, and while they run
 the folder compares the live simulation's speed with its speed before: when
 it falls below :data:`SLOWED` of it, the folder says so.
+
+Runs on the app's event thread; the trials' thread only posts to it (its
+progress, its end) and hears one thing back: the cancel event.
 """
 
 from __future__ import annotations
@@ -24,18 +27,19 @@ SLOWED = 0.8
 
 
 class AdviceFolder:
-    def __init__(self, gui: Any, runner: Any, use: Callable[[str, dict, Any], None], *, seeds: int = advice.SEEDS,
-                 steps: int = advice.STEPS, post: Callable[..., None] = lambda fn, *args: fn(*args)):
-        """``post(fn, *args)``: run on the app's event thread (the trials run in a thread of their own and
-        report there)."""
+    def __init__(self, gui: Any, runner: Any, use: Callable[[str, dict, Any], None], *, events: Any,
+                 run_to_the_end: Callable[[Any], None] = lambda client: None, seeds: int = advice.SEEDS,
+                 steps: int = advice.STEPS):
+        """``events``: the app's event queue (:mod:`sandbox.app.web.events`; the trials run in a thread of
+        their own and report there); ``run_to_the_end(client)``: a new world (same seed) run to the end,
+        the result explained (the Run folder's)."""
         self.gui, self.runner = gui, runner
-        self._post = post
+        self._post = events.post
         self._use = use
-        #: A new world (same seed) run to the end, the result explained (the panel wires the Run folder's).
-        self.run_to_the_end: Callable[[Any], None] = lambda client: None
+        self.run_to_the_end = run_to_the_end
         self.seeds, self.steps = seeds, steps
         self.results: list[advice.Ranked] = []
-        self._cancel = threading.Event()
+        self._cancel = threading.Event()  # set here, read by the trials' thread: how it hears Cancel
         self._thread: threading.Thread | None = None
         self._busy = False
         self._speed_before = 0.0
@@ -161,8 +165,8 @@ class AdviceFolder:
             return advice.table(self.results, self.steps)
         return ""
 
-    def stop(self) -> None:
-        """Stop trials still running (the app is stopping)."""
+    def stop(self) -> list[threading.Thread]:
+        """Stop trials still running (the app is stopping, on the event thread). Returns their thread,
+        if it still runs, for the app to wait for (not here: it posts to this thread as it ends)."""
         self._cancel.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5.0)
+        return [self._thread] if self._thread is not None and self._thread.is_alive() else []

@@ -10,6 +10,9 @@ computed in a worker process while the live world waits (honest: same
 configuration, seed, goal, steps and definition). After :data:`HINT_SECONDS`
 without a box brought in, a one-line hint says what to try. The page keeps
 each player's best score of the session, by name.
+
+Runs on the app's event thread, which owns the round and the reference runs'
+pools (a worker only starts a pool, which blocks, and hands it over).
 """
 
 from __future__ import annotations
@@ -64,23 +67,26 @@ def describe(gain: Gain) -> str:
 
 
 class ChallengeFolder:
-    def __init__(self, gui: Any, runner: Any, lockstep: Any, lamp: Any, on_change: Callable[[str], None],
-                 post: Callable[..., None] = lambda fn, *args: fn(*args), after: Callable[..., Any] | None = None):
+    def __init__(self, gui: Any, runner: Any, lockstep: Any, lamp: Any, on_change: Callable[[str], None], *,
+                 events: Any):
         """The round's reset, play and pause act on ``lockstep``: in compare mode the second world (the
-        paper's lights, say) plays the round beside the player's. ``post(fn, *args)`` runs on the app's
-        event thread: the paper's reference run reports there. ``after(seconds, fn, *args)`` (the event
-        queue's timers) shows the hint; without it there is none."""
+        paper's lights, say) plays the round beside the player's. ``events``: the app's event queue
+        (:mod:`sandbox.app.web.events`), where the paper's reference run reports and whose timer shows
+        the hint. Everything here runs on its thread."""
         self.gui, self.runner, self.lockstep, self.lamp, self._on_change = gui, runner, lockstep, lamp, on_change
-        self._post, self._after = post, after
+        self._events = events
         #: World steps a round lasts, and seconds without progress before the hint (tests shorten both).
         self.round_steps = ROUND_STEPS
         self.hint_seconds = HINT_SECONDS
         self.round: Round | None = None
         #: Each player's best score of the session (boxes brought in, as a share of those outside), by name.
         self.best: dict[str, float] = {}
-        self._lock = threading.RLock()
         self._stopped = False
-        self._pool: Any = None  # the reference run's process pool (multiprocessing's: it can be terminated)
+        #: The reference runs going, each a process pool (multiprocessing's: it can be terminated) with
+        #: its round. A worker starts the pool (that blocks) and hands it over here (:meth:`_adopt`).
+        self._pools: dict[Any, Round] = {}
+        #: The threads starting a pool: the app waits for them as it stops (:meth:`stop`).
+        self._starters: list[threading.Thread] = []
         self._hint_timer: Any = None
 
     def build(self, snap: Snapshot) -> None:
@@ -101,21 +107,18 @@ class ChallengeFolder:
         """A new world from the paper's seed; once built, the lamp lit where the robots are, playing."""
         player = " ".join(str(name).split())[:NAME_LENGTH] or "player"
         self._cancel_hint()
-        with self._lock:
-            r = self.round = Round(player, int(self.round_steps))
+        r = self.round = Round(player, int(self.round_steps))
         self.status.content = f"**{plain(player)}**: building the round's world..."
         self.hint.content = ""
         self.lockstep.set_playing(False)
 
         def built(world_key: int) -> None:
-            with self._lock:
-                r.built = world_key
+            r.built = world_key
             self._begin(r, self.runner.latest)  # its first frame may be here already
 
         def failed(exc: BaseException) -> None:
-            with self._lock:
-                if self.round is r:
-                    self.round = None
+            if self.round is r:
+                self.round = None
             self.status.content = ""
             notify_error(client, "Round not started", str(exc))
 
@@ -124,11 +127,10 @@ class ChallengeFolder:
     def _begin(self, r: Round, snap: Snapshot) -> None:
         """The round's world is built and ``snap`` may be its first frame: count the boxes already in the
         goal, light the lamp on the densest group of robots, and play."""
-        with self._lock:
-            if self.round is not r or r.world is not None or snap.world_key != r.built:
-                return
-            r.world = snap.world_key
-            r.started = r.most = int(np.count_nonzero(snap.box_in_goal))
+        if self.round is not r or r.world is not None or snap.world_key != r.built:
+            return
+        r.world = snap.world_key
+        r.started = r.most = int(np.count_nonzero(snap.box_in_goal))
         radius = float(self.lamp.radius.value)
         centre = lamp_start(snap.robot_positions, radius)
 
@@ -141,30 +143,29 @@ class ChallengeFolder:
                              on_error=lambda exc: self._abandon(r, f"the lamp could not be lit: {exc}"))
 
     def update(self, snap: Snapshot) -> None:
-        with self._lock:
-            r = self.round
-            if r is None or r.score is not None:
-                return
-            if r.world is None:
-                self._begin(r, snap)
-                return
-            if snap.world_key != r.world:
-                self._abandon(r, "a new world")
-                return
-            if snap.program != LAMP_PROGRAM:
-                if snap.step > 0:  # (at step 0 the lamp is being lit)
-                    self._abandon(r, "the lights went back to a controller")
-                return
-            now = int(np.count_nonzero(snap.box_in_goal))
-            if now > r.most:  # progress: the hint goes, and waits again
-                r.most = now
-                self.hint.content = ""
-                self._arm_hint(r)
-            if snap.step < r.steps:
-                self.status.content = (f"**{plain(r.player)}**: step {snap.step:,} of {r.steps:,}, "
-                                       f"{describe(Gain(r.started, now, len(snap.box_in_goal)))}")
-                return
-            r.score, r.at_step = Gain(r.started, now, len(snap.box_in_goal)), int(snap.step)
+        r = self.round
+        if r is None or r.score is not None:
+            return
+        if r.world is None:
+            self._begin(r, snap)
+            return
+        if snap.world_key != r.world:
+            self._abandon(r, "a new world")
+            return
+        if snap.program != LAMP_PROGRAM:
+            if snap.step > 0:  # (at step 0 the lamp is being lit)
+                self._abandon(r, "the lights went back to a controller")
+            return
+        now = int(np.count_nonzero(snap.box_in_goal))
+        if now > r.most:  # progress: the hint goes, and waits again
+            r.most = now
+            self.hint.content = ""
+            self._arm_hint(r)
+        if snap.step < r.steps:
+            self.status.content = (f"**{plain(r.player)}**: step {snap.step:,} of {r.steps:,}, "
+                                   f"{describe(Gain(r.started, now, len(snap.box_in_goal)))}")
+            return
+        r.score, r.at_step = Gain(r.started, now, len(snap.box_in_goal)), int(snap.step)
         self._cancel_hint()
         self.hint.content = ""
         self.lockstep.set_playing(False)
@@ -174,10 +175,9 @@ class ChallengeFolder:
                                on_error=lambda exc: self._show(r, problem=f"no reference: {exc}"))
 
     def _abandon(self, r: Round, why: str) -> None:
-        with self._lock:
-            if self.round is not r:
-                return
-            self.round = None
+        if self.round is not r:
+            return
+        self.round = None
         self._cancel_hint()
         self.hint.content = ""
         self.status.content = f"**{plain(r.player)}**: round abandoned ({plain(why)})."
@@ -186,8 +186,7 @@ class ChallengeFolder:
     def _arm_hint(self, r: Round) -> None:
         """The hint shows after :attr:`hint_seconds` unless a box is brought in first (or the round ends)."""
         self._cancel_hint()
-        if self._after is not None:
-            self._hint_timer = self._after(self.hint_seconds, self._show_hint, r)
+        self._hint_timer = self._events.after(self.hint_seconds, self._show_hint, r)
 
     def _cancel_hint(self) -> None:
         if self._hint_timer is not None:
@@ -195,9 +194,8 @@ class ChallengeFolder:
             self._hint_timer = None
 
     def _show_hint(self, r: Round) -> None:
-        with self._lock:
-            if self.round is not r or r.score is not None:
-                return
+        if self.round is not r or r.score is not None:
+            return
         self._hint_timer = None
         # In the folder, under the round's status, not as a notice: a notice covers the floor (on a phone,
         # the page's shortcut opened the drawer at this folder).
@@ -205,42 +203,64 @@ class ChallengeFolder:
 
     # ------------------------------------------------------------ the score
     def _score_the_paper(self, r: Round, spec: tuple) -> None:
-        config, seed, shape = spec
+        """The paper's controller in the round's world over its steps, in a process pool of its own.
+        Starting a pool blocks (the fork server may still be loading the model), so a worker starts it
+        and hands it to this thread, which owns it from then on: it sets the run going, hears its answer
+        (the pool's callbacks only post it here) and ends it."""
+        if self._stopped:
+            return
+        starter = threading.Thread(target=self._start_pool, args=(r, spec), daemon=True, name="challenge-reference")
+        self._starters = [thread for thread in self._starters if thread.is_alive()] + [starter]
+        starter.start()
 
-        def run() -> None:  # in a thread of its own: the result goes back to the event thread
+    def _start_pool(self, r: Round, spec: tuple) -> None:
+        """In a worker: start the reference run's pool and hand it to the event thread. Until that took
+        it, the pool is this worker's: if the app stopped first, the worker ends it."""
+        try:
             pool = simulation_context().Pool(1)
-            self._pool = pool
-            try:
-                result = pool.apply_async(paper_gain, (config, seed, r.at_step, shape))
-                while not result.ready() and not self._stopped:  # a terminated pool never answers
-                    result.wait(0.5)
-                if self._stopped:
-                    raise RuntimeError("the app stopped")
-                paper = result.get()
-            except Exception as exc:  # a worker that could not run, or the app stopping: the round counts
-                self._post(self._show, r, None, f"no reference: {exc}")
-                return
-            finally:
-                pool.terminate()
-                self._pool = None
-            self._post(self._show, r, paper)
+        except Exception as exc:  # noqa: BLE001 - no process to run it in: the round counts, without a reference
+            self._events.post(self._show, r, None, f"no reference: {exc}")
+            return
+        if self._events.submit(self._adopt, r, spec, pool).exception() is not None:
+            pool.terminate()  # the queue stopped before it ran: nobody else will end it
 
-        threading.Thread(target=run, daemon=True, name="challenge-reference").start()
+    def _adopt(self, r: Round, spec: tuple, pool: Any) -> None:
+        """The worker's pool, now this thread's: the reference run starts in it (or, the app stopping,
+        it ends at once)."""
+        if self._stopped:
+            pool.terminate()
+            self._show(r, None, "no reference: the app stopped")
+            return
+        self._pools[pool] = r
+        config, seed, shape = spec
+        post = self._events.post  # the pool's callbacks run on its own thread: they only post
+        pool.apply_async(paper_gain, (config, seed, r.at_step, shape),
+                         callback=lambda paper: post(self._scored, pool, paper),
+                         error_callback=lambda exc: post(self._scored, pool, None, f"no reference: {exc}"))
 
-    def stop(self) -> None:
-        """The app is stopping: a reference run still going ends now, not when it finishes."""
+    def _scored(self, pool: Any, paper: Gain | None, problem: str = "") -> None:
+        r = self._pools.pop(pool, None)
+        if r is None:
+            return  # ended by stop()
+        pool.close()  # its one task is done: its process ends by itself, nothing waits for it here
+        self._show(r, paper, problem)
+
+    def stop(self) -> list[threading.Thread]:
+        """The app is stopping (on the event thread): a reference run still going ends now, not when it
+        finishes. Returns the workers still starting a pool, for the app to wait for."""
         self._stopped = True
         self._cancel_hint()
-        pool = self._pool
-        if pool is not None:
-            pool.terminate()
+        pools, self._pools = self._pools, {}
+        for pool, r in pools.items():
+            pool.terminate()  # a terminated pool never answers
+            self._show(r, None, "no reference: the app stopped")
+        return [thread for thread in self._starters if thread.is_alive()]
 
     def _show(self, r: Round, paper: Gain | None = None, problem: str = "") -> None:
         """The round's end: its score beside the paper's (or why there is none), and the best scores."""
-        with self._lock:
-            self.best[r.player] = max(self.best.get(r.player, -1.0), r.score.share)
-            r.paper = paper
-            ranked = sorted(self.best.items(), key=lambda item: -item[1])
+        self.best[r.player] = max(self.best.get(r.player, -1.0), r.score.share)
+        r.paper = paper
+        ranked = sorted(self.best.items(), key=lambda item: -item[1])
         against = (f"the paper's controller: **{describe(r.paper)}** in the same world and steps"
                    if r.paper is not None else plain(problem))
         verdict = "" if r.paper is None else (" You beat it!" if r.score.brought > r.paper.brought else "")

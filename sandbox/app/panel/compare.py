@@ -1,5 +1,9 @@
 """The Compare folder: a second world beside the running one (issue 25, item 1; see
-:mod:`sandbox.app.world.lockstep`)."""
+:mod:`sandbox.app.world.lockstep`).
+
+Runs on the app's event thread. A new world's process starts in a worker (it
+blocks for a second or two), which changes nothing here: it posts what
+happened back to the event thread."""
 
 from __future__ import annotations
 
@@ -26,12 +30,15 @@ CHOICES = (NOTHING, SAME, *COMPARE_CASES)
 
 
 class CompareFolder:
-    def __init__(self, gui: Any, runner: Any, comparison: Comparison, on_change: Callable[[str], None],
-                 post: Callable[..., None] = lambda fn, *args: fn(*args)):
-        """``post(fn, *args)``: run on the app's event thread (the worker that starts a world reports there)."""
+    def __init__(self, gui: Any, runner: Any, comparison: Comparison, on_change: Callable[[str], None], *,
+                 events: Any):
+        """``events``: the app's event queue (:mod:`sandbox.app.web.events`; the worker that starts a world
+        reports there)."""
         self.gui, self.runner, self.comparison, self._on_change = gui, runner, comparison, on_change
-        self._post = post
-        self._busy = threading.Lock()  # one change of comparison at a time
+        self._post = events.post
+        # Shared by the compare workers (no state behind it): one change of comparison at a time, so
+        # that a choice made while a world starts waits for it, and comes after it.
+        self._busy = threading.Lock()
         self._starting = False
         self._quiet = False  # set while the dropdown is set from here, not by a page
         self._shown = NOTHING  # what this panel last set the dropdown to show
@@ -60,23 +67,27 @@ class CompareFolder:
             return
         self.show(choice)
         self._starting = choice != NOTHING  # until it runs, the dropdown keeps showing it
-        threading.Thread(target=self._choose, args=(choice, client), daemon=True, name="compare").start()
+        threading.Thread(target=self._choose, args=(choice, client, tall(client)), daemon=True,
+                         name="compare").start()
 
-    def _choose(self, choice: str, client: Any) -> None:
-        """In a thread of its own (a world's process starting blocks); what it changes, it changes on
-        the app's event thread."""
+    def _choose(self, choice: str, client: Any, stacked: bool) -> None:
+        """In a worker (a world's process starting blocks); what it changes, it posts to the app's event
+        thread, the page's status line too."""
         with self._busy:
             if choice == NOTHING:
                 self._post(self._ended, client)
                 return
-            self.status.content = "Starting the second world..."
+            self._post(self._say_starting)
             try:
                 config, shape = self._partner(choice)
-                self.comparison.begin(config, shape, choice, stacked=tall(client))
+                self.comparison.begin(config, shape, choice, stacked=stacked)
             except Exception as exc:  # a refused goal or a process that would not start: say so
                 self._post(self._refused, client, exc)
                 return
             self._post(self._began, choice, client)
+
+    def _say_starting(self) -> None:
+        self.status.content = "Starting the second world..."
 
     def _ended(self, client: Any) -> None:
         self._starting = False

@@ -113,15 +113,16 @@ def _warm_up(config: Any) -> None:
 class DrawFolder:
     """The drawing state and its controls. ``use(vertices, name, client)`` hands a finished goal on."""
 
-    def __init__(self, gui: Any, runner: Any, scene: Any, use: Callable[..., None]):
+    def __init__(self, gui: Any, runner: Any, scene: Any, use: Callable[..., None],
+                 run_to_the_end: Callable[[Any], None] | None = None):
+        """``run_to_the_end(client)``: *Run to the end* of the Run folder, for a page (None: the button is
+        not offered)."""
         self.gui, self.runner, self._use = gui, runner, use
-        #: *Run to the end* of the Run folder, for a page (set by the panel; None: the button is not offered).
-        self.run_to_the_end: Callable[[Any], None] | None = None
+        self.run_to_the_end = run_to_the_end
         self.points: list[Point] = []
         #: The index of the selected point (its handle clicked or dragged; Delete removes it), or None.
         self.selected: int | None = None
         self.drawing = False
-        self._lock = threading.RLock()
         self._problem = ""
         self._red: list[str] = []  # the crossing edges, by vertex numbers
         self._typed_error = ""
@@ -130,15 +131,15 @@ class DrawFolder:
         config = runner.latest.world_config
         self.view = DrawView(scene, config.arena_size, self.pad_drag, self.vertex_drag)
         self._centre = (config.centre, config.centre)
-        self._warmed = threading.Event()
+        self._warmed = False
 
     def warm_up(self) -> None:
         """Load the preview's compiled geometry (numba), aside, once: its first call takes most of a
         second. The first viewer's arrival starts it, long before that page has loaded and a point is
         dragged; a server that nobody watches never pays for it."""
-        if self._warmed.is_set():
+        if self._warmed:
             return
-        self._warmed.set()
+        self._warmed = True
         config = self.runner.latest.world_config
         threading.Thread(target=_warm_up, args=(config,), daemon=True, name="draw-preview-warm-up").start()
 
@@ -200,10 +201,9 @@ class DrawFolder:
         config = snap.world_config
         if config == self._preview_config:
             return
-        with self._lock:
-            self._centre = (config.centre, config.centre)
-            self.view.set_arena(config.arena_size)
-            self._refresh()
+        self._centre = (config.centre, config.centre)
+        self.view.set_arena(config.arena_size)
+        self._refresh()
 
     # ------------------------------------------------------------ input
     @property
@@ -214,60 +214,56 @@ class DrawFolder:
         """A click on the floor by ``client``'s page (returns whether the drawing took it). On a point's
         handle: selects that point, drawing or not. While drawing, elsewhere: on an edge, inserts a
         point there between its two ends; anywhere else, adds the next point."""
-        with self._lock:
-            scale = metres_per_pixel(client, point) if client is not None else None
-            radius = self.view.handle_radius
-            vertex = vertex_at(self.points, point, max(radius, PICK_PIXELS * scale) if scale else radius)
-            if vertex is not None:
-                self._select(vertex)
-                return True
-            if not self.drawing:
-                return False
-            edge = edge_at(self.points, point, EDGE_PIXELS * scale if scale else radius)
-            if edge is not None and edge + 1 < len(self.points):
-                self._insert(edge + 1, point)
-            else:  # on the closing edge, the new point goes last all the same
-                self._add(point)
+        scale = metres_per_pixel(client, point) if client is not None else None
+        radius = self.view.handle_radius
+        vertex = vertex_at(self.points, point, max(radius, PICK_PIXELS * scale) if scale else radius)
+        if vertex is not None:
+            self._select(vertex)
             return True
+        if not self.drawing:
+            return False
+        edge = edge_at(self.points, point, EDGE_PIXELS * scale if scale else radius)
+        if edge is not None and edge + 1 < len(self.points):
+            self._insert(edge + 1, point)
+        else:  # on the closing edge, the new point goes last all the same
+            self._add(point)
+        return True
 
     def delete_selected(self) -> None:
         """Remove the selected point (the Delete point button, the Delete and Backspace keys)."""
-        with self._lock:
-            if self.selected is None or not 0 <= self.selected < len(self.points):
-                return
-            self._change([p for k, p in enumerate(self.points) if k != self.selected])
+        if self.selected is None or not 0 <= self.selected < len(self.points):
+            return
+        self._change([p for k, p in enumerate(self.points) if k != self.selected])
 
     def pad_drag(self, phase: str, point: Point | None) -> None:
         """Press, drag and release on the floor while drawing: the next point where released."""
-        with self._lock:
-            if not self.drawing:
-                return
-            last = self.points[-1] if self.points else None
-            if phase == "end":
-                self.view.show_rubber(None, None)
-                if point is not None:
-                    self._add(point)
-            elif last is not None and point is not None:
-                self.view.show_rubber(last, snap(point, self.step))
+        if not self.drawing:
+            return
+        last = self.points[-1] if self.points else None
+        if phase == "end":
+            self.view.show_rubber(None, None)
+            if point is not None:
+                self._add(point)
+        elif last is not None and point is not None:
+            self.view.show_rubber(last, snap(point, self.step))
 
     def vertex_drag(self, index: int, phase: str, point: Point | None) -> None:
         """A numbered handle dragged: its vertex follows, snapped; the preview returns on release."""
-        with self._lock:
-            if not 0 <= index < len(self.points):
-                return
-            if point is not None:
-                moved = snap(point, self.step)
-                if moved != self.points[index]:
-                    self.points[index] = moved
-                    self.view.show(self.points, crossing_edges(self.points), self.selected)
-            if phase == "start":
-                self.selected = index  # the dragged point is the selected one: Delete removes it
-                self.view.show_preview(None)
+        if not 0 <= index < len(self.points):
+            return
+        if point is not None:
+            moved = snap(point, self.step)
+            if moved != self.points[index]:
+                self.points[index] = moved
                 self.view.show(self.points, crossing_edges(self.points), self.selected)
-                self._sync_controls()
-            elif phase == "end":
-                kept = without_repeats(self.points)
-                self._change(kept, selected=index if len(kept) == len(self.points) else None)
+        if phase == "start":
+            self.selected = index  # the dragged point is the selected one: Delete removes it
+            self.view.show_preview(None)
+            self.view.show(self.points, crossing_edges(self.points), self.selected)
+            self._sync_controls()
+        elif phase == "end":
+            kept = without_repeats(self.points)
+            self._change(kept, selected=index if len(kept) == len(self.points) else None)
 
     # ---------------------------------------------------------- actions
     def _add(self, point: Point) -> None:
@@ -276,42 +272,38 @@ class DrawFolder:
     def _insert(self, index: int, point: Point, select: bool = True) -> None:
         """A new point at ``index`` (snapped), selected unless it is the last one added by a click;
         nothing where a point already is."""
-        with self._lock:
-            p = snap(point, self.step)
-            if self._on_a_vertex(p) or self._on_a_vertex(point):
-                return
-            self._change([*self.points[:index], p, *self.points[index:]], selected=index if select else None)
+        p = snap(point, self.step)
+        if self._on_a_vertex(p) or self._on_a_vertex(point):
+            return
+        self._change([*self.points[:index], p, *self.points[index:]], selected=index if select else None)
 
     def _select(self, index: int) -> None:
-        with self._lock:
-            self.selected = index
-            self.view.show(self.points, crossing_edges(self.points), self.selected)
-            self._sync_controls()
+        self.selected = index
+        self.view.show(self.points, crossing_edges(self.points), self.selected)
+        self._sync_controls()
 
     def _on_a_vertex(self, p: Point) -> bool:
         r = self.view.handle_radius
         return any((p[0] - x) ** 2 + (p[1] - y) ** 2 < r * r for x, y in self.points)
 
     def _set_drawing(self, on: bool) -> None:
-        with self._lock:
-            self.drawing = on
-            self.view.set_pad(on)
-            self._refresh()
+        self.drawing = on
+        self.view.set_pad(on)
+        self._refresh()
 
     def _close_and_use(self, event: viser.GuiEvent, to_the_end: bool = False) -> None:
         """*Close and use* (``to_the_end``: and then *Run to the end*)."""
-        with self._lock:
-            try:
-                vertices = validate_polygon(self.points, SOURCE)
-            except ShapeError as exc:
-                notify_error(event.client, "Shape not used", str(exc))
-                return
-            run, client = self.run_to_the_end, event.client
-            then = (lambda: run(client)) if to_the_end and run is not None else None
-            self._use(vertices, "drawn", client, then=then)
-            self.drawing = False  # the points stay: the goal can be tweaked and used again
-            self.view.set_pad(False)
-            self._refresh()
+        try:
+            vertices = validate_polygon(self.points, SOURCE)
+        except ShapeError as exc:
+            notify_error(event.client, "Shape not used", str(exc))
+            return
+        run, client = self.run_to_the_end, event.client
+        then = (lambda: run(client)) if to_the_end and run is not None else None
+        self._use(vertices, "drawn", client, then=then)
+        self.drawing = False  # the points stay: the goal can be tweaked and used again
+        self.view.set_pad(False)
+        self._refresh()
 
     def edit_running_goal(self) -> None:
         """The running goal as the drawing's points (the circle as its polygon), to tweak and use again."""
@@ -323,22 +315,20 @@ class DrawFolder:
         name = self.template.value
         if event.client is None or name == PICK_TEMPLATE:
             return  # this panel putting the dropdown back, not a pick
-        with self._lock:
-            self._change([tuple(p) for p in placed(template_vertices(name), self._centre, self.step).tolist()])
-            self.template.value = PICK_TEMPLATE  # so that the same template can be picked again
+        self._change([tuple(p) for p in placed(template_vertices(name), self._centre, self.step).tolist()])
+        self.template.value = PICK_TEMPLATE  # so that the same template can be picked again
 
     def _apply_typed(self, event: viser.GuiEvent) -> None:
-        with self._lock:
-            try:
-                points = parse_coordinates(self.typed.value)
-            except ShapeError as exc:
-                self._typed_error = str(exc)
-                notify_error(event.client, "Points not applied", str(exc))
-                self._sync_controls()
-                return
-            # Typed points are a shape in their own coordinates: shown centred in the arena at the size it
-            # will be built (not snapped: they are what was asked).
-            self._change(self._centred_at_goal_size(without_repeats(points)))
+        try:
+            points = parse_coordinates(self.typed.value)
+        except ShapeError as exc:
+            self._typed_error = str(exc)
+            notify_error(event.client, "Points not applied", str(exc))
+            self._sync_controls()
+            return
+        # Typed points are a shape in their own coordinates: shown centred in the arena at the size it
+        # will be built (not snapped: they are what was asked).
+        self._change(self._centred_at_goal_size(without_repeats(points)))
 
     def _centred_at_goal_size(self, points: list[Point]) -> list[Point]:
         """``points`` scaled to the goal's area (the boxes' total area, as the running goal has it) and
@@ -357,26 +347,24 @@ class DrawFolder:
     def _change(self, points: list[Point], selected: int | None = None) -> None:
         """The drawing is now ``points``, with point ``selected`` selected (None: none): redraw,
         re-check, re-preview, and show them as text."""
-        with self._lock:
-            self.points = list(points)
-            self.selected = selected if selected is not None and 0 <= selected < len(self.points) else None
-            self._typed_error = ""
-            self._refresh()
-            self.typed.value = format_coordinates(self.points)
+        self.points = list(points)
+        self.selected = selected if selected is not None and 0 <= selected < len(self.points) else None
+        self._typed_error = ""
+        self._refresh()
+        self.typed.value = format_coordinates(self.points)
 
     # ---------------------------------------------------------- display
     def _refresh(self) -> None:
-        with self._lock:
-            crossings = crossing_edges(self.points)
-            n = len(self.points)
-            self._red = [edge_name(e, n) for e in sorted({e for pair in crossings for e in pair})]
-            self._problem, self._preview = self._check()
-            self.view.show(self.points, crossings, self.selected)
-            if self._preview is not None and self.show_preview.value:
-                self.view.show_preview(self._preview.goal, self._preview.smallest, self._preview.largest)
-            else:
-                self.view.show_preview(None)
-            self._sync_controls()
+        crossings = crossing_edges(self.points)
+        n = len(self.points)
+        self._red = [edge_name(e, n) for e in sorted({e for pair in crossings for e in pair})]
+        self._problem, self._preview = self._check()
+        self.view.show(self.points, crossings, self.selected)
+        if self._preview is not None and self.show_preview.value:
+            self.view.show_preview(self._preview.goal, self._preview.smallest, self._preview.largest)
+        else:
+            self.view.show_preview(None)
+        self._sync_controls()
 
     def _check(self) -> tuple[str, GoalPreview | None]:
         """Why the drawing cannot be used ('' if it can), and its preview when it can."""

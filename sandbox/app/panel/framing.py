@@ -13,11 +13,12 @@ In compare mode every view frames both worlds (issue 41, item 1): the whole
 arenas, or both construction areas with their captions, readouts and the
 difference between them; the presenter's legend then lies on the floor
 between the worlds (or left of them, stacked).
+
+Runs on the app's event thread, which owns every page's view and legend.
 """
 
 from __future__ import annotations
 
-import threading
 from typing import Any, Callable
 
 from sandbox.app.view.legend import legend_picture
@@ -45,25 +46,22 @@ class Framing:
         self.offset: tuple[float, float] | None = None
         self._views: dict[int, str] = {}
         self._legends: dict[int, Any] = {}
-        self._lock = threading.RLock()
         picture = legend_picture()
         self._legend_aspect = picture.shape[0] / picture.shape[1]
 
     def of(self, client_id: int) -> str:
-        with self._lock:
-            return self._views.get(client_id, self.default)
+        return self._views.get(client_id, self.default)
 
     def choose(self, client: Any, view: str) -> None:
         """This viewer frames the floor as ``view`` from now on; its page is laid out for it."""
         if client is None or view not in VIEWS:
             return
-        with self._lock:
-            was = self.of(client.client_id)
-            self._views[client.client_id] = view
-            if view == PRESENTER and was != PRESENTER:
-                client.gui.main_panel.minimize()
-            elif view != PRESENTER and was == PRESENTER:
-                client.gui.main_panel.expand()
+        was = self.of(client.client_id)
+        self._views[client.client_id] = view
+        if view == PRESENTER and was != PRESENTER:
+            client.gui.main_panel.minimize()
+        elif view != PRESENTER and was == PRESENTER:
+            client.gui.main_panel.expand()
         if (view == PRESENTER) != (was == PRESENTER):
             self.on_presenter(client, view == PRESENTER)
         self.apply(client)
@@ -76,24 +74,23 @@ class Framing:
     def apply(self, client: Any) -> None:
         """Frame this viewer's camera for its view and window; the presenter's legend on its floor.
 
-        All of it on the app's event thread (and under the lock, for callers outside it), from reading
-        the view to moving the camera: a View button chosen while a page's camera is fitted must not be
-        framed first and then overwritten by the view read before it (seen on a loaded machine when
-        the fitting ran in a thread of its own: the whole arena chosen, the presenter's camera left)."""
+        All of it in one event of the app's event thread, from reading the view to moving the camera:
+        a View button chosen while a page's camera is fitted is framed after the fit, never overwritten
+        by a view read before it (seen on a loaded machine when the fitting ran in a thread of its own:
+        the whole arena chosen, the presenter's camera left)."""
         config = self.runner.latest.world_config
         aspect = float(getattr(client.camera, "aspect", 0.0) or 1.4)
-        with self._lock:
-            view = self.of(client.client_id)
-            presenter = view == PRESENTER and (aspect >= PHONE_ASPECT or self.offset is not None)
-            self._show_legend(client, config, presenter)
-            if self.offset is not None:
-                aim_camera(client, *compare_camera(config, aspect, self.offset, whole=view == WHOLE_ARENA,
-                                                   legend_height_per_width=self._legend_aspect if presenter
-                                                   else None))
-            elif presenter:
-                aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect))
-            else:
-                frame_arena(client, config, whole=view == WHOLE_ARENA)
+        view = self.of(client.client_id)
+        presenter = view == PRESENTER and (aspect >= PHONE_ASPECT or self.offset is not None)
+        self._show_legend(client, config, presenter)
+        if self.offset is not None:
+            aim_camera(client, *compare_camera(config, aspect, self.offset, whole=view == WHOLE_ARENA,
+                                               legend_height_per_width=self._legend_aspect if presenter
+                                               else None))
+        elif presenter:
+            aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect))
+        else:
+            frame_arena(client, config, whole=view == WHOLE_ARENA)
 
     def arrive(self, client: Any) -> None:
         """A page that connected: the default view's layout (its camera is framed as it reports its shape).
@@ -102,13 +99,11 @@ class Framing:
         if self.of(client.client_id) == PRESENTER:
             client.gui.main_panel.minimize()
             self.on_presenter(client, True)
-            with self._lock:
-                self._show_legend(client, self.runner.latest.world_config, True)
+            self._show_legend(client, self.runner.latest.world_config, True)
 
     def forget(self, client_id: int) -> None:
-        with self._lock:
-            self._views.pop(client_id, None)
-            self._legends.pop(client_id, None)
+        self._views.pop(client_id, None)
+        self._legends.pop(client_id, None)
 
     def _show_legend(self, client: Any, config: Any, shown: bool) -> None:
         """The legend on this viewer's floor (placed for the world's construction area, and in compare

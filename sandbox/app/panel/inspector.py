@@ -11,11 +11,12 @@ like its camera: following a robot in one tab changes nothing in another.
 The followed robot's disc is drawn again in the viewer's own scene, in the
 same message as its ring: the shared scene reaches a page that draws slowly
 in windows (:mod:`sandbox.app.web.pacing`), its own messages at once, so the
-shared disc could lag a frame or two behind the ring and sit outside it."""
+shared disc could lag a frame or two behind the ring and sit outside it.
+
+Runs on the app's event thread, which owns every viewer's inspector."""
 
 from __future__ import annotations
 
-import threading
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -57,7 +58,6 @@ class InspectorFolder:
         self.viewers: dict[int, Viewer] = {}
         #: Viewers whose camera follows their robot: each viewer decides for itself.
         self.followers: set[int] = set()
-        self._lock = threading.RLock()
         self.folder: Any = None
 
     def build(self, snap: Snapshot) -> None:
@@ -76,32 +76,31 @@ class InspectorFolder:
     # ------------------------------------------------------------ viewers
     def attach(self, client: Any) -> None:
         """Give a page that connected its own read-outs (in the shared folder) and floor marks."""
-        with self._lock:
-            if self.folder is None or client.client_id in self.viewers:
-                return
-            with self.folder:  # a client's elements inside the server's folder
-                follows = client.gui.add_checkbox("Camera follows", True,
-                                                  hint="Your own view zoomed in on the robot you follow, kept "
-                                                       "centred; untick to see the whole arena")
-                status = client.gui.add_markdown("")
-                text = client.gui.add_markdown("")
-                charge_bar = client.gui.add_progress_bar(0.0, color="green", visible=False)
-                stop = client.gui.add_button("Stop following", icon=viser.Icon.X, disabled=True)
-            empty = np.zeros((1, 2, 3), np.float32)
-            ring = client.scene.add_line_segments("/inspect/ring", empty, pal.SELECTED, thickness=0.08, visible=False)
-            radius = self.runner.latest.world_config.robot_radius
-            # Its disc and heading dot as the shared scene draws them (sizes are radii), over them.
-            disc = client.scene.add_point_cloud("/inspect/robot", np.zeros((1, 3), np.float32), pal.SELECTED,
-                                                point_size=radius, point_shape="circle", point_shading="flat",
-                                                visible=False)
-            heading = client.scene.add_point_cloud("/inspect/heading", np.zeros((1, 3), np.float32),
-                                                   pal.HEADING_MARK, point_size=0.3 * radius, point_shape="circle",
-                                                   point_shading="flat", visible=False)
-            sensors = client.scene.add_point_cloud("/inspect/sensors", np.zeros((4, 3), np.float32),
-                                                   pal.SENSOR_COLOURS, point_size=0.09, point_shape="circle",
-                                                   visible=False)
-            self.viewers[client.client_id] = Viewer(client, status, text, charge_bar, stop, follows, ring, disc,
-                                                    heading, sensors)
+        if self.folder is None or client.client_id in self.viewers:
+            return
+        with self.folder:  # a client's elements inside the server's folder
+            follows = client.gui.add_checkbox("Camera follows", True,
+                                              hint="Your own view zoomed in on the robot you follow, kept "
+                                                   "centred; untick to see the whole arena")
+            status = client.gui.add_markdown("")
+            text = client.gui.add_markdown("")
+            charge_bar = client.gui.add_progress_bar(0.0, color="green", visible=False)
+            stop = client.gui.add_button("Stop following", icon=viser.Icon.X, disabled=True)
+        empty = np.zeros((1, 2, 3), np.float32)
+        ring = client.scene.add_line_segments("/inspect/ring", empty, pal.SELECTED, thickness=0.08, visible=False)
+        radius = self.runner.latest.world_config.robot_radius
+        # Its disc and heading dot as the shared scene draws them (sizes are radii), over them.
+        disc = client.scene.add_point_cloud("/inspect/robot", np.zeros((1, 3), np.float32), pal.SELECTED,
+                                            point_size=radius, point_shape="circle", point_shading="flat",
+                                            visible=False)
+        heading = client.scene.add_point_cloud("/inspect/heading", np.zeros((1, 3), np.float32),
+                                               pal.HEADING_MARK, point_size=0.3 * radius, point_shape="circle",
+                                               point_shading="flat", visible=False)
+        sensors = client.scene.add_point_cloud("/inspect/sensors", np.zeros((4, 3), np.float32),
+                                               pal.SENSOR_COLOURS, point_size=0.09, point_shape="circle",
+                                               visible=False)
+        self.viewers[client.client_id] = Viewer(client, status, text, charge_bar, stop, follows, ring, disc,
+                                                heading, sensors)
 
         @stop.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -113,42 +112,39 @@ class InspectorFolder:
 
     def detach(self, client_id: int) -> None:
         """A page left: forget what it followed (viser drops its elements)."""
-        with self._lock:
-            self.followers.discard(client_id)
-            if self.viewers.pop(client_id, None) is not None:
-                self._tell_runner()
+        self.followers.discard(client_id)
+        if self.viewers.pop(client_id, None) is not None:
+            self._tell_runner()
 
     def follow(self, client: Any, index: int) -> None:
         """This viewer follows robot ``index``."""
-        with self._lock:
+        viewer = self.viewers.get(client.client_id)
+        if viewer is None:
+            self.attach(client)
             viewer = self.viewers.get(client.client_id)
             if viewer is None:
-                self.attach(client)
-                viewer = self.viewers.get(client.client_id)
-                if viewer is None:
-                    return
-            viewer.robot = int(index)
-            viewer.status.content = f"Following robot **{index}** (click another, or stop)."
-            viewer.stop.disabled = False
-            self._tell_runner()
-            if viewer.follows.value:  # into view now, not at the next read-out
-                self.followers.add(client.client_id)
-                positions = self.runner.latest.robot_positions
-                if 0 <= viewer.robot < len(positions):
-                    self._move_camera(client, positions[viewer.robot])
+                return
+        viewer.robot = int(index)
+        viewer.status.content = f"Following robot **{index}** (click another, or stop)."
+        viewer.stop.disabled = False
+        self._tell_runner()
+        if viewer.follows.value:  # into view now, not at the next read-out
+            self.followers.add(client.client_id)
+            positions = self.runner.latest.robot_positions
+            if 0 <= viewer.robot < len(positions):
+                self._move_camera(client, positions[viewer.robot])
 
     def camera_follows(self, client_id: int, on: bool) -> None:
         """This viewer's camera follows its robot (``on``), or sees the arena as its View says."""
-        with self._lock:
-            viewer = self.viewers.get(client_id)
-            if viewer is None:
-                return
-            if not on:
-                if client_id in self.followers:
-                    self.followers.discard(client_id)
-                    self._reframe(viewer.client)
-            elif viewer.robot is not None:
-                self.follow(viewer.client, viewer.robot)
+        viewer = self.viewers.get(client_id)
+        if viewer is None:
+            return
+        if not on:
+            if client_id in self.followers:
+                self.followers.discard(client_id)
+                self._reframe(viewer.client)
+        elif viewer.robot is not None:
+            self.follow(viewer.client, viewer.robot)
 
     def follow_any(self, client: Any) -> None:
         """This viewer follows a robot drawn at random."""
@@ -168,26 +164,24 @@ class InspectorFolder:
 
     def stop_following(self, client_id: int) -> None:
         """This viewer follows nothing; its camera, if it followed, sees the arena again."""
-        with self._lock:
-            viewer = self.viewers.get(client_id)
-            if viewer is None:
-                return
-            viewer.robot = None
-            viewer.status.content = ""
-            viewer.text.content = ""
-            viewer.charge_bar.visible = False
-            viewer.stop.disabled = True
-            viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = viewer.sensors.visible = False
-            if client_id in self.followers:
-                self.followers.discard(client_id)
-                self._reframe(viewer.client)
-            self._tell_runner()
+        viewer = self.viewers.get(client_id)
+        if viewer is None:
+            return
+        viewer.robot = None
+        viewer.status.content = ""
+        viewer.text.content = ""
+        viewer.charge_bar.visible = False
+        viewer.stop.disabled = True
+        viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = viewer.sensors.visible = False
+        if client_id in self.followers:
+            self.followers.discard(client_id)
+            self._reframe(viewer.client)
+        self._tell_runner()
 
     def stop(self) -> None:
         """Every viewer stops following (a new world: its robots are not the ones followed)."""
-        with self._lock:
-            for client_id in list(self.viewers):
-                self.stop_following(client_id)
+        for client_id in list(self.viewers):
+            self.stop_following(client_id)
 
     def _tell_runner(self) -> None:
         self.runner.follow(v.robot for v in self.viewers.values() if v.robot is not None)
@@ -195,43 +189,41 @@ class InspectorFolder:
     # ------------------------------------------------------------ drawing
     def update(self, snap: Snapshot) -> None:
         """The read-outs, at the panel's refresh rate; cameras that follow move with them."""
-        with self._lock:
-            for client_id, viewer in list(self.viewers.items()):
-                robot = snap.robot(viewer.robot)
-                if robot is None:
-                    continue
-                viewer.text.content = self._text(snap, robot)
-                cap = snap.world_config.capacity
-                viewer.charge_bar.value = float(100.0 * robot.charge / cap) if cap > 0 else 0.0
-                # The bar in the robot's own colour on the floor (viser's names for them).
-                viewer.charge_bar.color = ("green", "orange", "red")[int(pal.charge_class([robot.charge], cap)[0])]
-                viewer.charge_bar.visible = True
-                if client_id in self.followers:
-                    self._move_camera(viewer.client, robot.position)
+        for client_id, viewer in list(self.viewers.items()):
+            robot = snap.robot(viewer.robot)
+            if robot is None:
+                continue
+            viewer.text.content = self._text(snap, robot)
+            cap = snap.world_config.capacity
+            viewer.charge_bar.value = float(100.0 * robot.charge / cap) if cap > 0 else 0.0
+            # The bar in the robot's own colour on the floor (viser's names for them).
+            viewer.charge_bar.color = ("green", "orange", "red")[int(pal.charge_class([robot.charge], cap)[0])]
+            viewer.charge_bar.visible = True
+            if client_id in self.followers:
+                self._move_camera(viewer.client, robot.position)
 
     def draw(self, snap: Snapshot) -> None:
         """Each viewer's ring and photocell dots on its robot, at every frame (they ride with it)."""
-        with self._lock:
-            for viewer in list(self.viewers.values()):
-                robot = snap.robot(viewer.robot)
-                if robot is None:  # following nothing, or a robot this world does not have (yet)
-                    if viewer.ring.visible:
-                        viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = False
-                        viewer.sensors.visible = False
-                    continue
-                cfg = snap.world_config
-                a = np.linspace(0, 2 * np.pi, 33)
-                ring = robot.position + cfg.robot_radius * 1.9 * np.stack([np.cos(a), np.sin(a)], axis=1)
-                pts = np.zeros((4, 3), np.float32)
-                pts[:, :2], pts[:, 2] = robot.sensor_points, Z_TOP
-                with viewer.client.atomic():
-                    viewer.ring.points = pal.closed_segments(ring[:-1], Z_TOP)
-                    disc, heading, colour = self._disc(robot, cfg)
-                    viewer.disc.points, viewer.disc.colors, viewer.heading.points = disc, colour, heading
-                    viewer.sensors.points = pts
-                    if not viewer.ring.visible:
-                        viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = True
-                        viewer.sensors.visible = True
+        for viewer in list(self.viewers.values()):
+            robot = snap.robot(viewer.robot)
+            if robot is None:  # following nothing, or a robot this world does not have (yet)
+                if viewer.ring.visible:
+                    viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = False
+                    viewer.sensors.visible = False
+                continue
+            cfg = snap.world_config
+            a = np.linspace(0, 2 * np.pi, 33)
+            ring = robot.position + cfg.robot_radius * 1.9 * np.stack([np.cos(a), np.sin(a)], axis=1)
+            pts = np.zeros((4, 3), np.float32)
+            pts[:, :2], pts[:, 2] = robot.sensor_points, Z_TOP
+            with viewer.client.atomic():
+                viewer.ring.points = pal.closed_segments(ring[:-1], Z_TOP)
+                disc, heading, colour = self._disc(robot, cfg)
+                viewer.disc.points, viewer.disc.colors, viewer.heading.points = disc, colour, heading
+                viewer.sensors.points = pts
+                if not viewer.ring.visible:
+                    viewer.ring.visible = viewer.disc.visible = viewer.heading.visible = True
+                    viewer.sensors.visible = True
 
     @staticmethod
     def _disc(robot: RobotView, cfg: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

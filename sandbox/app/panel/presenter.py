@@ -67,7 +67,7 @@ def title_lines(snap: Snapshot, compared: Snapshot | None, controls: bool) -> tu
 class PresenterScreen:
     """Each page's title card, on-screen bar and Start over offer (see the module docstring)."""
 
-    def __init__(self, runner: Any, lockstep: Any, run: Any, compared: Callable[[], Any], events: Any = None):
+    def __init__(self, runner: Any, lockstep: Any, run: Any, compared: Callable[[], Any], *, events: Any):
         """``run``: the Run folder, whose play, pause, step and reset these buttons are; ``compared()``:
         compare mode's second runner, or None; ``events``: the app's event queue (its timers)."""
         self.runner, self.lockstep, self.run, self._compared, self._events = runner, lockstep, run, compared, events
@@ -160,8 +160,7 @@ class PresenterScreen:
         keep.on_click(lambda event: self._withdraw(client.client_id))
         panel.float(x=-EDGE, y=-EDGE, width=OFFER_WIDTH)
         self.offers[client.client_id] = (panel, self.runner.latest.world_key)
-        if self._events is not None:
-            self._events.after(OFFER_SECONDS, self._withdraw, client.client_id)
+        self._events.after(OFFER_SECONDS, self._withdraw, client.client_id)
 
     def _withdraw(self, client_id: int) -> None:
         offer = self.offers.pop(client_id, None)

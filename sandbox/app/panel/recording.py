@@ -1,11 +1,12 @@
 """The Record folder: capture the scene and download it as one HTML file
-that replays without a server."""
+that replays without a server.
+
+Runs on the app's event thread, which owns the recorder."""
 
 from __future__ import annotations
 
 import datetime as _dt
 import re
-import threading
 import time
 from typing import Any
 
@@ -34,7 +35,6 @@ class RecordFolder:
         self.gui, self.server, self.runner = gui, server, runner
         self.recorder: Any = None
         self._finished_html: str | None = None
-        self._lock = threading.Lock()
         self._started = self._last_time = 0.0
         self._snap: Snapshot | None = None
         self._floor_legend: Any = None
@@ -67,20 +67,18 @@ class RecordFolder:
             self.status.content = f"Recording: {time.perf_counter() - self._started:.0f} s"
 
     def start(self) -> None:
-        with self._lock:
-            # The replay has no panel: its legend goes on the floor beside the arena while recording.
-            self._floor_legend = add_floor_legend(self.server.scene, self.runner.latest.world_config)
-            self.recorder = self.server.get_scene_serializer()
-            self._started = self._last_time = time.perf_counter()
+        # The replay has no panel: its legend goes on the floor beside the arena while recording.
+        self._floor_legend = add_floor_legend(self.server.scene, self.runner.latest.world_config)
+        self.recorder = self.server.get_scene_serializer()
+        self._started = self._last_time = time.perf_counter()
         self.button.label = "Stop and download"
         self.button.icon = viser.Icon.PLAYER_STOP
         self.status.content = "Recording..."
 
     def stop(self) -> str:
         """Finish the recording; returns it as standalone HTML."""
-        with self._lock:
-            recorder, self.recorder = self.recorder, None
-            html, self._finished_html = self._finished_html, None
+        recorder, self.recorder = self.recorder, None
+        html, self._finished_html = self._finished_html, None
         if recorder is not None:
             html = recorder.as_html(dark_mode=True)
         self._remove_floor_legend()
@@ -96,15 +94,14 @@ class RecordFolder:
 
     def on_frame_drawn(self) -> None:
         """Called after each frame is drawn: advance the recording clock."""
-        with self._lock:
-            if self.recorder is None:
-                return
-            now = time.perf_counter()
-            self.recorder.insert_sleep(now - self._last_time)
-            self._last_time = now
-            if now - self._started <= MAX_RECORD_SECONDS:
-                return
-            recorder, self.recorder = self.recorder, None
+        if self.recorder is None:
+            return
+        now = time.perf_counter()
+        self.recorder.insert_sleep(now - self._last_time)
+        self._last_time = now
+        if now - self._started <= MAX_RECORD_SECONDS:
+            return
+        recorder, self.recorder = self.recorder, None
         self._finished_html = recorder.as_html(dark_mode=True)
         self._remove_floor_legend()
         self.status.content = f"Stopped at {MAX_RECORD_SECONDS:.0f} s: press the button to download."

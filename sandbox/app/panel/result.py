@@ -9,13 +9,16 @@ the floor, following them, until it is turned off or a new world starts.
 After a run to the end the folder explains the result by itself and opens on
 the page that asked, scrolled into view (:mod:`sandbox.app.web.page_open`): the
 answer is not left below the fold in a closed folder (issue 56, item 4).
+
+Runs on the app's event thread; a design file is packed in a worker, which
+posts it back.
 """
 
 from __future__ import annotations
 
 import re
 import threading
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 import viser
@@ -56,9 +59,10 @@ def explanation(snap: Snapshot) -> str:
 
 
 class ResultFolder:
-    def __init__(self, gui: Any, runner: Any, scene: Any, post: Callable[..., None] | None = None):
-        """``post(fn, *args)``: run on the app's event thread (a design file is packed aside)."""
-        self.gui, self.runner, self.scene, self._post = gui, runner, scene, post
+    def __init__(self, gui: Any, runner: Any, scene: Any, *, events: Any):
+        """``events``: the app's event queue (:mod:`sandbox.app.web.events`; a design file is packed aside,
+        and sent from there)."""
+        self.gui, self.runner, self.scene, self._post = gui, runner, scene, events.post
         self.rings: Any = None
         self._world: int | None = None  # the world explained; a new one turns the rings off
         self._explain_at: tuple[int, int, Any] | None = None  # (world, step, page): explain the first frame there
@@ -96,8 +100,7 @@ class ResultFolder:
         def pack(design: Any) -> None:
             def packed() -> None:
                 data = file_bytes(design)
-                deliver = self._post or (lambda fn, *args: fn(*args))
-                deliver(lambda: client.send_file_download(design_file_name(design), data, save_immediately=True))
+                self._post(lambda: client.send_file_download(design_file_name(design), data, save_immediately=True))
 
             threading.Thread(target=packed, name="design-packer", daemon=True).start()
 

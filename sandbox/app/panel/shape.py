@@ -1,7 +1,10 @@
 """The Goal shape folder: pick a built-in shape, draw one on the floor (its
 Draw sub-folder is :mod:`.draw`), upload or download a polygon file. Every
 shape goes through the model's loader and validation; a refused one leaves
-the running simulation alone."""
+the running simulation alone.
+
+Runs on the app's event thread; an upload is read in a worker, which posts
+what it read back."""
 
 from __future__ import annotations
 
@@ -41,19 +44,22 @@ log = logging.getLogger("sandbox.app.panel.shape")
 
 
 class ShapeFolder:
-    def __init__(self, gui: Any, runner: Any, scene: Any, on_change: Callable[..., None] = lambda what, *a: None,
-                 reset: Callable[..., None] | None = None, post: Callable[..., None] | None = None):
-        """``reset(client, on_done=..., on_error=...)``: a new world with the same seed (the Run folder's,
-        which resets a compared world too); a goal used starts afresh with it. ``post(fn, *args)``: run on
-        the app's event thread (an upload is read aside, and its result comes back there)."""
+    def __init__(self, gui: Any, runner: Any, scene: Any, *, events: Any,
+                 on_change: Callable[..., None] = lambda what, *a: None, reset: Callable[..., None] | None = None,
+                 back_to_defaults: Callable[[Any], None] = lambda client: None,
+                 run_to_the_end: Callable[[Any], None] | None = None):
+        """``events``: the app's event queue (:mod:`sandbox.app.web.events`; an upload is read aside, and
+        its result comes back there). ``reset(client, on_done=..., on_error=...)``: a new world with the
+        same seed (the Run folder's, which resets a compared world too); a goal used starts afresh with
+        it. ``back_to_defaults(client)``: the outline and strategies back to their defaults, shown and
+        applied (the Strategies folder's). ``run_to_the_end(client)``: the Draw folder's *Use and run to
+        the end* (None: not offered)."""
         self.gui, self.runner = gui, runner
-        self._post = post
+        self._events = events
         self._on_change = on_change
         self._reset = reset
-        #: Puts the outline and strategies back to their defaults, shown and applied (the Strategies
-        #: folder's; the panel wires it once both folders exist).
-        self.back_to_defaults: Callable[[Any], None] = lambda client: None
-        self.draw = DrawFolder(gui, runner, scene, use=self.use)
+        self.back_to_defaults = back_to_defaults
+        self.draw = DrawFolder(gui, runner, scene, use=self.use, run_to_the_end=run_to_the_end)
         #: What this panel last put in the dropdown: if it shows something else, a viewer picked it.
         self._shown: str | None = None
 
@@ -124,23 +130,22 @@ class ShapeFolder:
     def take_upload(self, filename: Any, content: bytes, client: Any) -> None:
         """An uploaded polygon file: read aside (in a thread that waits for the reader's process, up to its
         time limit), then used or refused on the event thread; nothing waits for it meanwhile."""
-        if self._post is None:
-            self.use_shape_file(filename, content, client)
-            return
         name = upload_name(filename)
         config = self.runner.latest.world_config  # the goal is fitted to the running world, as the simulation will
 
         def read() -> None:
-            self._post(self._take_read, name, self._read(name, content, config), client)
+            self._events.post(self._take_read, name, self._read(name, content, config), client)
 
         threading.Thread(target=read, name="upload-reader", daemon=True).start()
 
     def use_shape_file(self, filename: Any, content: bytes, client: Any) -> bool:
         """Validate an uploaded polygon file with the model's loader, in a process of its own (a slow
-        file must not stall anyone's scene); use it or say why not. Every refusal is told to the page.
-        Waits for the reader: call it off the event thread (:meth:`take_upload` does)."""
+        file must not stall anyone's scene); use it or say why not, on the event thread. Every refusal is
+        told to the page. Waits for the reader and the event: call it off the event thread (the tests do;
+        a page's upload goes through :meth:`take_upload`)."""
         name = upload_name(filename)
-        return self._take_read(name, self._read(name, content, self.runner.latest.world_config), client)
+        read = self._read(name, content, self.runner.latest.world_config)
+        return self._events.call(self._take_read, name, read, client)
 
     @staticmethod
     def _read(name: str, content: bytes, config: Any = None) -> tuple[Any, str]:

@@ -1,6 +1,7 @@
 """The compared world on the floor (compare mode, :mod:`sandbox.app.world.lockstep`): its runner,
 held in the lockstep with the running one, and its nodes in the scene beside the running world's, with
-the difference between the two. Runs on the app's event thread."""
+the difference between the two. Runs on the app's event thread, but for :meth:`Comparison.begin`: a
+worker (or, at start-up, the main thread) starts the new world's process and hands it over."""
 
 from __future__ import annotations
 
@@ -34,12 +35,12 @@ class Comparison:
     def __init__(self, server: Any, lockstep: Lockstep, make_runner: Callable[..., Any],
                  on_layout: Callable[[float | None], None],
                  on_crash: Callable[[str], None] = lambda why: None, caption_over_construction: bool = False,
-                 events: Any = None):
+                 *, events: Any):
         """``on_crash(why)`` hears that the compared world's process died (compare mode then ends: a
         restarted world would start again from step 0, far behind the running one);
         ``caption_over_construction``: where its caption sits, as the running world's (a classroom's
         pages frame the construction areas); ``events``: the app's event queue, where the compared
-        world is adopted and dropped (None: in the calling thread)."""
+        world is adopted and dropped."""
         self.caption_over_construction = caption_over_construction
         self.server, self.lockstep, self._make_runner = server, lockstep, make_runner
         self._on_layout, self._on_crash = on_layout, on_crash
@@ -50,7 +51,9 @@ class Comparison:
         self.stacked = False
         self._difference: Any = None  # the label between the worlds
         self._drawn: int | None = None  # the compared world's frame last drawn
-        self._starting = threading.Lock()  # one new world's process starting at a time
+        # Shared by the threads that call begin() (the Compare folder's workers, the main thread at
+        # start-up); nothing behind it: one new world's process starting at a time.
+        self._starting = threading.Lock()
 
     @property
     def runner(self) -> Any:
@@ -69,10 +72,6 @@ class Comparison:
         (dx, dy), (x, y) = self.offset, point
         return bool(dx - 1.0 <= x <= dx + size + 1.0 and dy - 1.0 <= y <= dy + size + 1.0)
 
-    def _on_events(self, fn: Callable, *args: Any) -> Any:
-        """Run ``fn`` on the app's event thread and wait for it (inline when already there)."""
-        return fn(*args) if self._events is None else self._events.call(fn, *args, timeout=60.0)
-
     def begin(self, config: Config, shape: Any, label: str, stacked: bool = False) -> None:
         """Compare with a world of ``config`` and ``shape`` from the running world's seed: both start
         again from step 0, playing if the running one was; ``stacked``: the second world below the
@@ -84,7 +83,7 @@ class Comparison:
             partner = self._make_runner(config, shape=shape, seed=seed, playing=False)
             try:
                 partner.start()
-                self._on_events(self._adopt, partner, label, stacked)
+                self._events.call(self._adopt, partner, label, stacked, timeout=60.0)
             except BaseException:
                 partner.stop()
                 raise

@@ -25,11 +25,13 @@ view), and only what changed since the last frame.
 
 Works on any viser scene API (the live server, or a headless server that is
 only being recorded).
+
+Runs on the app's event thread (or on the one thread of ``phototaxis
+record``).
 """
 
 from __future__ import annotations
 
-import threading
 from typing import Any
 
 import numpy as np
@@ -378,7 +380,6 @@ class SceneView:
         #: Compare mode: the caption's anchor over the construction wall (it is in two lines), the share
         #: in the goal under the wall in large figures (:meth:`set_compared`); None: not compared.
         self.compared: str | None = None
-        self._lock = threading.RLock()
         self._built_for: tuple | None = None
         self._lights_key: tuple | None = None
         self._field_key: tuple | None = None
@@ -476,15 +477,14 @@ class SceneView:
         """Compare mode began, the second world at ``offset`` (this world is it: ``second``), or ended
         (None): the caption moves over the construction wall in two lines, and the readout shows, or back."""
         anchor = None if offset is None else caption_anchor(offset, second)
-        with self._lock:
-            if anchor == self.compared:
-                return
-            self.compared = anchor
-            if "caption" in self.handles:
-                self.handles["caption"].remove()
-                self.handles["caption"] = self._add_caption(snap)
-                self._sent.remember(self.handles["caption"], "text", self._caption(snap))
-                self.handles["readout"].visible = anchor is not None
+        if anchor == self.compared:
+            return
+        self.compared = anchor
+        if "caption" in self.handles:
+            self.handles["caption"].remove()
+            self.handles["caption"] = self._add_caption(snap)
+            self._sent.remember(self.handles["caption"], "text", self._caption(snap))
+            self.handles["readout"].visible = anchor is not None
 
     def _remove_nodes(self) -> None:
         for h in [*([self.hexagons] if self.hexagons else []), *reversed(self.handles.values())]:  # the root last
@@ -497,62 +497,59 @@ class SceneView:
 
     def remove(self) -> None:
         """Take this world's nodes off the scene (compare mode ends)."""
-        with self._lock:
-            self._remove_nodes()
-            self._built_for = None
+        self._remove_nodes()
+        self._built_for = None
 
     # ----------------------------------------------------------- dynamic
     def update(self, snap: Snapshot) -> None:
-        with self._lock:
-            cfg = snap.world_config
-            n, m = len(snap.robot_positions), len(snap.box_positions)
-            if self._built_for != _geometry_key(cfg, n, m):
-                self._build(snap)
-            h = self.handles
-            if snap.lights_key != self._lights_key:
-                self._show_lit(snap)
-                self._lights_key = snap.lights_key
-            if self.show_field and snap.field is not None and snap.lights_key != self._field_key:
-                h["field"].image = pal.field_image(snap.field, top_first=False)
-                self._field_key = snap.lights_key
-            if snap.goal_key != self._goal_key:
-                h["goal"].points = pal.closed_segments(snap.goal_outline, Z_LINES + 0.01)
-                self._goal_key = snap.goal_key
-            outline_bytes = snap.outline.tobytes()
-            if outline_bytes != self._outline_bytes:
-                h["light_outline"].points = pal.closed_segments(snap.outline, Z_LINES)
-                self._outline_bytes = outline_bytes
-            # The orange line is the paper's controller's outline: while a light program or a person's lamp
-            # lights the floor, it is not what the lights follow.
-            paper = snap.program == PAPER_PROGRAM
-            if h["light_outline"].visible != paper:
-                h["light_outline"].visible = paper
-            centre = cfg.arena_size / 2.0
-            send = self._sent.send
-            if n:
-                send(h["robots"], "points", self._points(n, snap.robot_positions - centre))
-                send(h["robots"], "colors", pal.robot_colours(snap.robot_charges, cfg.capacity))
-                front = 0.6 * cfg.robot_radius * np.stack([np.cos(snap.robot_headings),
-                                                            np.sin(snap.robot_headings)], axis=1)
-                send(h["headings"], "points", self._points(n, snap.robot_positions - centre + front))
-            if m:
-                self.hexagons.update(self._points(m, snap.box_positions - centre), snap.box_angles,
-                                     pal.box_mesh_colours(snap.box_in_goal), np.full(2, cfg.centre - centre))
-            send(h["caption"], "text", self._caption(snap))
-            if self.compared:
-                send(h["readout"], "text", readout(snap))
+        cfg = snap.world_config
+        n, m = len(snap.robot_positions), len(snap.box_positions)
+        if self._built_for != _geometry_key(cfg, n, m):
+            self._build(snap)
+        h = self.handles
+        if snap.lights_key != self._lights_key:
+            self._show_lit(snap)
+            self._lights_key = snap.lights_key
+        if self.show_field and snap.field is not None and snap.lights_key != self._field_key:
+            h["field"].image = pal.field_image(snap.field, top_first=False)
+            self._field_key = snap.lights_key
+        if snap.goal_key != self._goal_key:
+            h["goal"].points = pal.closed_segments(snap.goal_outline, Z_LINES + 0.01)
+            self._goal_key = snap.goal_key
+        outline_bytes = snap.outline.tobytes()
+        if outline_bytes != self._outline_bytes:
+            h["light_outline"].points = pal.closed_segments(snap.outline, Z_LINES)
+            self._outline_bytes = outline_bytes
+        # The orange line is the paper's controller's outline: while a light program or a person's lamp
+        # lights the floor, it is not what the lights follow.
+        paper = snap.program == PAPER_PROGRAM
+        if h["light_outline"].visible != paper:
+            h["light_outline"].visible = paper
+        centre = cfg.arena_size / 2.0
+        send = self._sent.send
+        if n:
+            send(h["robots"], "points", self._points(n, snap.robot_positions - centre))
+            send(h["robots"], "colors", pal.robot_colours(snap.robot_charges, cfg.capacity))
+            front = 0.6 * cfg.robot_radius * np.stack([np.cos(snap.robot_headings),
+                                                        np.sin(snap.robot_headings)], axis=1)
+            send(h["headings"], "points", self._points(n, snap.robot_positions - centre + front))
+        if m:
+            self.hexagons.update(self._points(m, snap.box_positions - centre), snap.box_angles,
+                                 pal.box_mesh_colours(snap.box_in_goal), np.full(2, cfg.centre - centre))
+        send(h["caption"], "text", self._caption(snap))
+        if self.compared:
+            send(h["readout"], "text", readout(snap))
 
     def set_show_field(self, show: bool, snap: Snapshot) -> None:
-        with self._lock:
-            self.show_field = bool(show)
-            if not show:
-                self._field_key = None
-            elif snap.field is not None and snap.lights_key != self._field_key:
-                self.handles["field"].image = pal.field_image(snap.field, top_first=False)
-                self._field_key = snap.lights_key
-            self.handles["field"].visible = self.show_field
-            self.handles["lights"].visible = not self.show_field
-            self._show_lit(snap)
+        self.show_field = bool(show)
+        if not show:
+            self._field_key = None
+        elif snap.field is not None and snap.lights_key != self._field_key:
+            self.handles["field"].image = pal.field_image(snap.field, top_first=False)
+            self._field_key = snap.lights_key
+        self.handles["field"].visible = self.show_field
+        self.handles["lights"].visible = not self.show_field
+        self._show_lit(snap)
 
     def _show_lit(self, snap: Snapshot) -> None:
         """The lit lights as square points (none: the node hides; under the heat map too)."""

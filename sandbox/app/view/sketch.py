@@ -11,11 +11,12 @@ the rubber band following the pointer meanwhile. A plain click still reaches
 the scene's click callback, which adds a point.
 
 Only the live page has these nodes: recordings do not show a drawing.
+
+Runs on the app's event thread, as the Draw folder that drives it.
 """
 
 from __future__ import annotations
 
-import threading
 from typing import Any, Callable
 
 import numpy as np
@@ -109,7 +110,6 @@ class DrawView:
     def __init__(self, scene: Any, arena_size: float, on_pad_drag: PadDrag, on_vertex_drag: VertexDrag):
         self.scene, self.arena_size = scene, float(arena_size)
         self._on_pad_drag, self._on_vertex_drag = on_pad_drag, on_vertex_drag
-        self._lock = threading.RLock()
         self._handles: Any = None
         self.handles_shown = 0  # the handles in use: the mesh has room for more
         self._labels: list[Any] = []
@@ -134,47 +134,43 @@ class DrawView:
 
     def set_arena(self, arena_size: float) -> None:
         """A new world of another size: the pad and the handles are sized from the arena."""
-        with self._lock:
-            if float(arena_size) == self.arena_size:
-                return
-            self.arena_size = float(arena_size)
-            if self._pad is not None:
-                self.set_pad(False)
-                self.set_pad(True)
-            if self._handles is not None:
-                self._handles.remove()  # rebuilt at the next show, at the new size
-                self._handles = None
+        if float(arena_size) == self.arena_size:
+            return
+        self.arena_size = float(arena_size)
+        if self._pad is not None:
+            self.set_pad(False)
+            self.set_pad(True)
+        if self._handles is not None:
+            self._handles.remove()  # rebuilt at the next show, at the new size
+            self._handles = None
 
     # ----------------------------------------------------------- outline
     def show(self, points: list, crossings: list[tuple[int, int]], selected: int | None = None) -> None:
         """The outline through ``points`` (closed back to the first in a dimmer line), its
         numbered handles (point ``selected`` larger and in cyan), and the edges of ``crossings``
         (pairs of edge indices) in red."""
-        with self._lock:
-            pts = np.asarray(points, dtype=float).reshape(-1, 2)
-            n = len(pts)
-            self._set(self.line, pal.open_segments(pts, Z_LINE) if n >= 2 else None)
-            self._set(self.closing, pal.open_segments(pts[[-1, 0]], Z_LINE) if n >= 3 else None)
-            red = sorted({e for pair in crossings for e in pair})
-            self._set(self.crossing, _segments([(pts[e], pts[(e + 1) % n]) for e in red], Z_LINE + 0.01)
-                      if red else None)
-            self._show_handles(pts, red, selected)
-            self._show_labels(pts)
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        n = len(pts)
+        self._set(self.line, pal.open_segments(pts, Z_LINE) if n >= 2 else None)
+        self._set(self.closing, pal.open_segments(pts[[-1, 0]], Z_LINE) if n >= 3 else None)
+        red = sorted({e for pair in crossings for e in pair})
+        self._set(self.crossing, _segments([(pts[e], pts[(e + 1) % n]) for e in red], Z_LINE + 0.01)
+                  if red else None)
+        self._show_handles(pts, red, selected)
+        self._show_labels(pts)
 
     def show_rubber(self, start, end) -> None:
         """A line from ``start`` to ``end`` (the pointer during a drag); None hides it."""
-        with self._lock:
-            pairs = [(np.asarray(start, float), np.asarray(end, float))] if start is not None and end is not None \
-                else []
-            self._set(self.rubber, _segments(pairs, Z_LINE + 0.02) if pairs else None)
+        pairs = [(np.asarray(start, float), np.asarray(end, float))] if start is not None and end is not None \
+            else []
+        self._set(self.rubber, _segments(pairs, Z_LINE + 0.02) if pairs else None)
 
     def show_preview(self, goal: np.ndarray | None, smallest: np.ndarray | None = None,
                      largest: np.ndarray | None = None) -> None:
         """Dashed: the goal at its final size, and its smallest and largest light outlines. None hides them."""
-        with self._lock:
-            self._set(self.preview_goal, None if goal is None else dashed(goal, Z_PREVIEW))
-            band = [dashed(o, Z_PREVIEW) for o in (smallest, largest) if o is not None]
-            self._set(self.preview_band, np.concatenate(band) if band and goal is not None else None)
+        self._set(self.preview_goal, None if goal is None else dashed(goal, Z_PREVIEW))
+        band = [dashed(o, Z_PREVIEW) for o in (smallest, largest) if o is not None]
+        self._set(self.preview_band, np.concatenate(band) if band and goal is not None else None)
 
     @staticmethod
     def _set(handle: Any, segments: np.ndarray | None) -> None:
@@ -244,19 +240,18 @@ class DrawView:
     def set_pad(self, active: bool) -> None:
         """The drag surface over the floor, while drawing (else the camera orbits as usual): a dark veil
         over everything the simulation draws and under the drawing, so that the outline reads."""
-        with self._lock:
-            if active and self._pad is None:
-                s = self.arena_size
-                lo, hi = -PAD_MARGIN * s, (1 + PAD_MARGIN) * s
-                corners = np.array([(lo, lo, Z_PAD), (hi, lo, Z_PAD), (hi, hi, Z_PAD), (lo, hi, Z_PAD)], np.float32)
-                self._pad = self.scene.add_mesh_simple("/draw/pad", corners, np.array([(0, 1, 2), (0, 2, 3)],
-                                                                                      np.uint32),
-                                                       color=DIM_COLOUR, opacity=DIM_OPACITY, side="double",
-                                                       cast_shadow=False, receive_shadow=False)
-                self._pad.on_drag(self._pad_drag)
-            elif not active and self._pad is not None:
-                self._pad.remove()
-                self._pad = None
+        if active and self._pad is None:
+            s = self.arena_size
+            lo, hi = -PAD_MARGIN * s, (1 + PAD_MARGIN) * s
+            corners = np.array([(lo, lo, Z_PAD), (hi, lo, Z_PAD), (hi, hi, Z_PAD), (lo, hi, Z_PAD)], np.float32)
+            self._pad = self.scene.add_mesh_simple("/draw/pad", corners, np.array([(0, 1, 2), (0, 2, 3)],
+                                                                                  np.uint32),
+                                                   color=DIM_COLOUR, opacity=DIM_OPACITY, side="double",
+                                                   cast_shadow=False, receive_shadow=False)
+            self._pad.on_drag(self._pad_drag)
+        elif not active and self._pad is not None:
+            self._pad.remove()
+            self._pad = None
 
     # ------------------------------------------------------------- drags
     # Plain functions: viser hands them to the app's event queue (sandbox.app.web.events), which runs
