@@ -205,6 +205,59 @@ def test_a_page_whose_grant_has_no_programs_cannot_load_one(app, tmp_path):
     client.close()
 
 
+def test_the_inbox_and_its_refusal_logs_are_touched_on_the_servers_event_loop_alone(monkeypatch):
+    """The inbox and the refusal logs take no lock (sandbox/app/web/inbox.py): a page's message checked,
+    its refusal logged and its leaving all run on the server's event loop, one thread."""
+    import contextlib
+    import io
+    import threading
+
+    from sandbox.app.web.gate import start_server
+    from sandbox.app.web.inbox import Inbox
+    from sandbox.app.web.refusals import RefusalLog
+    from sandbox.commands.serve import free_port
+
+    touched: list[tuple[str, threading.Thread, bool]] = []
+
+    def noted(cls: type, name: str) -> None:
+        method = getattr(cls, name)
+
+        def on_its_thread(self, *args, **kwargs):
+            touched.append((f"{cls.__name__}.{name}", threading.current_thread(), _in_an_event_loop()))
+            return method(self, *args, **kwargs)
+
+        monkeypatch.setattr(cls, name, on_its_thread)
+
+    for cls, names in ((Inbox, ("admit", "admit_local", "forget")), (RefusalLog, ("refused", "forget"))):
+        for name in names:
+            noted(cls, name)
+    server, _ = start_server(Access.for_server("127.0.0.1"), host="127.0.0.1", port=free_port(), label="loop")
+    try:
+        client = RawClient(server.get_port(), {"Origin": f"http://127.0.0.1:{server.get_port()}"})
+        client.say_hello()
+        wait_until(lambda: server.get_clients(), what="the page to connect")
+        client.set_value("no such control", 1)  # refused, and logged
+        client.close()
+        wanted = {"Inbox.admit", "RefusalLog.refused", "Inbox.forget", "RefusalLog.forget"}
+        wait_until(lambda: wanted <= {name for name, _, _ in touched}, what="the check, the refusal, the leaving")
+    finally:
+        with contextlib.redirect_stdout(io.StringIO()):
+            server.stop()
+    threads = {thread for _, thread, _ in touched}
+    assert len(threads) == 1 and threading.main_thread() not in threads, touched
+    assert all(in_loop for _, _, in_loop in touched), touched
+
+
+def _in_an_event_loop() -> bool:
+    import asyncio
+
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        return False
+    return True
+
+
 def _rss() -> int:
     for line in Path("/proc/self/status").read_text().splitlines():
         if line.startswith("VmRSS:"):

@@ -60,9 +60,14 @@ class EventQueue:
         self._timers: list[tuple[float, int, Timer]] = []  # a heap, touched on the event thread only
         self._order = itertools.count()
         self._latest: dict[Hashable, tuple[Callable, tuple]] = {}
+        # Shared by the thread that posts each new frame (a runner's receiver, or its publisher thread in
+        # process) and the event thread, which takes it (_run_latest): _latest.
         self._latest_lock = threading.Lock()
         self._thread = threading.Thread(target=self._serve, name=name, daemon=True)
         self._stopped = False
+        # Shared by every thread that puts an event (the main thread, viser's event loop, the event thread,
+        # a runner's receiver or its threads in process, workers) and stop(), so that none slips in after
+        # the queue stopped: _stopped.
         self._put_lock = threading.Lock()
         #: What went wrong in events (logged too); the queue went on.
         self.errors: deque = deque(maxlen=100)

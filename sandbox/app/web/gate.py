@@ -34,6 +34,10 @@ and :func:`start_server` refuses to start on a viser that lacks any):
 
 The page is not a boundary: everything a control can trigger is checked here
 or in the callback, whatever the page shows.
+
+The gate runs on viser's event loop (the server's thread: handshakes, connections,
+every message's check); the app's event thread asks it a page's grant, and
+:func:`start_server` runs on the thread that builds the app (the main thread).
 """
 
 from __future__ import annotations
@@ -91,6 +95,8 @@ class Gate:
         self.inbox: Inbox | None = None
         self._handshaken: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # raw connection -> Grant
         self._grants: dict[int, Grant] = {}
+        # Shared by viser's event loop (a page arriving and leaving, each message's check) and the app's
+        # event thread, which asks a page's grant (when it arrives, when it loads a program): _grants.
         self._lock = threading.Lock()
         self.pacer = Pacer()
 
@@ -226,6 +232,9 @@ class Gate:
 
 
 # --------------------------------------------------------------- building
+# Shared by the thread that builds a server (the main thread) and the new server's event loop thread,
+# which reads _gate_being_built (_gated_serve) while its builder waits: one build at a time, so a
+# second builder cannot swap the gate under it.
 _building = threading.Lock()
 _gate_being_built: Gate | None = None
 _serve = websockets.asyncio.server.serve
@@ -289,6 +298,8 @@ class QuietHandshakes(logging.Filter):
     def __init__(self, every: float = 1.0):
         super().__init__()
         self.every, self._said_at, self._unsaid = every, float("-inf"), 0
+        # Shared by the event loop threads of every viser server in the process: one filter on websockets'
+        # logger serves them all (`serve` runs one server; a process may run more, as the tests do).
         self._lock = threading.Lock()
 
     def filter(self, record: logging.LogRecord) -> bool:

@@ -6,6 +6,8 @@ the panel's 18 icons, every time a server starts. :func:`read_icons_once`
 puts in its place a reader with the same answers that indexes the archive
 once per process (through :mod:`sandbox.app.web.viser_seam`). If viser's layout
 changes, it leaves viser as it is.
+
+The reader serves every viser server in the process, on whichever thread adds a control with an icon.
 """
 
 from __future__ import annotations
@@ -16,6 +18,8 @@ import zipfile
 
 from sandbox.app.web import viser_seam
 
+# Shared by the threads that add controls with icons: the main thread (building the panel) and the app's
+# event thread (a folder that adds a button later); the archive is one open file for the whole process.
 _lock = threading.Lock()
 
 
@@ -28,7 +32,7 @@ def _reader(path: str):
     @functools.cache
     def svg_from_icon(icon_name: str) -> str:
         assert isinstance(icon_name, str)
-        with _lock:  # one open archive, read from the server's threads
+        with _lock:
             return _archive(path).read(f"{icon_name}.svg").decode("utf-8")
 
     return svg_from_icon

@@ -17,6 +17,9 @@ time, and the acknowledgements go to the uploading page alone (viser
 broadcasts them into the backlog every new page replays). A whole file
 reaches the button's callbacks in its own event, not through the button's
 value, which every page shares.
+
+Everything here runs on viser's event loop, the server's thread that reads every connection (the
+checks, the uploads, a page leaving): no other thread touches the inbox, so it takes no lock.
 """
 
 from __future__ import annotations
@@ -25,7 +28,6 @@ import asyncio
 import logging
 import math
 import re
-import threading
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -92,7 +94,7 @@ class _Transfer:
 
 
 class Inbox:
-    """The checks of one server's incoming messages (see the module docstring)."""
+    """The checks of one server's incoming messages (see the module docstring), on its event loop."""
 
     def __init__(self, server: Any, gate: Any, *, upload_limit: int = UPLOAD_LIMIT):
         self.server, self.gate = server, gate
@@ -101,7 +103,6 @@ class Inbox:
         self._refusals: dict[int, int] = {}
         self._refusal_log = RefusalLog(log)
         self._told_watching: set[int] = set()
-        self._lock = threading.Lock()
 
     # ---------------------------------------------------------------- entry
     def admit(self, client_id: int, grant: Grant | None, message: Any) -> bool:
@@ -137,11 +138,9 @@ class Inbox:
 
     def forget(self, client_id: int) -> None:
         """A page left: drop its upload and its counts."""
-        with self._lock:
-            for uuid in [u for u, t in self._transfers.items() if t.client_id == client_id]:
-                del self._transfers[uuid]
-            self._refusals.pop(client_id, None)
-            self._told_watching.discard(client_id)
+        self.forget_upload_of(client_id)
+        self._refusals.pop(client_id, None)
+        self._told_watching.discard(client_id)
         self._refusal_log.forget(client_id)
 
     # --------------------------------------------------------------- checks
@@ -231,30 +230,28 @@ class Inbox:
             raise
         transfer = _Transfer(client_id, message.source_component_uuid, str(message.filename)[:255],
                              str(message.mime_type)[:255], size, parts)
-        with self._lock:
-            self._transfers[message.transfer_uuid] = transfer
+        self._transfers[message.transfer_uuid] = transfer
         if parts == 0:
             self._finish(message.transfer_uuid, transfer)
 
     def _upload_part(self, client_id: int, message: Any) -> None:
         content = bytes(message.content)
-        with self._lock:
-            transfer = self._transfers.get(message.transfer_uuid)
-            if transfer is None or transfer.client_id != client_id:
-                raise Refused("a part of no upload in progress")
-            index = _whole(message.part_index)
-            if index is None or index in transfer.parts or not 0 <= index < transfer.part_count:
-                raise Refused(f"part {message.part_index!r} of {transfer.part_count} again or out of range")
-            over = transfer.received + len(content) > transfer.size
-            if over:  # drop the whole transfer: what it holds is freed now
-                del self._transfers[message.transfer_uuid]
-            else:
-                transfer.parts[index] = content
-                transfer.received += len(content)
-            complete = not over and len(transfer.parts) == transfer.part_count
-            if complete:
-                del self._transfers[message.transfer_uuid]
-            short = complete and transfer.received != transfer.size
+        transfer = self._transfers.get(message.transfer_uuid)
+        if transfer is None or transfer.client_id != client_id:
+            raise Refused("a part of no upload in progress")
+        index = _whole(message.part_index)
+        if index is None or index in transfer.parts or not 0 <= index < transfer.part_count:
+            raise Refused(f"part {message.part_index!r} of {transfer.part_count} again or out of range")
+        over = transfer.received + len(content) > transfer.size
+        if over:  # drop the whole transfer: what it holds is freed now
+            del self._transfers[message.transfer_uuid]
+        else:
+            transfer.parts[index] = content
+            transfer.received += len(content)
+        complete = not over and len(transfer.parts) == transfer.part_count
+        if complete:
+            del self._transfers[message.transfer_uuid]
+        short = complete and transfer.received != transfer.size
         if over:
             self._tell(client_id, "File not uploaded", f"{_safe_name(transfer.filename)}: more bytes arrived "
                                                       f"than the {transfer.size} announced.")
@@ -271,9 +268,8 @@ class Inbox:
             self._finish(message.transfer_uuid, transfer)
 
     def forget_upload_of(self, client_id: int) -> None:
-        with self._lock:
-            for uuid in [u for u, t in self._transfers.items() if t.client_id == client_id]:
-                del self._transfers[uuid]
+        for uuid in [u for u, t in self._transfers.items() if t.client_id == client_id]:
+            del self._transfers[uuid]
 
     def _finish(self, transfer_uuid: str, transfer: _Transfer) -> None:
         """Hand the whole file to the upload button's callbacks, in their event: the page that sent it
@@ -308,10 +304,9 @@ class Inbox:
             client.add_notification(title, body, color="red", auto_close_seconds=10.0)
 
     def _tell_watching(self, client_id: int) -> None:
-        with self._lock:
-            if client_id in self._told_watching:
-                return
-            self._told_watching.add(client_id)
+        if client_id in self._told_watching:
+            return
+        self._told_watching.add(client_id)
         client = self._client(client_id)
         if client is not None:
             client.add_notification("Watching only", "This page watches the sandbox. To control it, open the "
@@ -319,8 +314,7 @@ class Inbox:
                                     color="yellow", auto_close_seconds=12.0)
 
     def _refused(self, client_id: int, message: Any, why: str) -> None:
-        with self._lock:
-            self._refusals[client_id] = self._refusals.get(client_id, 0) + 1
+        self._refusals[client_id] = self._refusals.get(client_id, 0) + 1
         self._refusal_log.refused(client_id, f"{type(message).__name__}: {why}")
 
 

@@ -33,6 +33,9 @@ websocket client of our own), or says it is calm, is not paced.
 
 :data:`CLIENT` is what the script relies on in viser's client, checked against the installed viser's
 bundle (:mod:`sandbox.app.web.client_seam`).
+
+:class:`Pacer` runs on viser's event loop (the gate's answer to a report, a page arriving and leaving,
+its windows), but for :meth:`Pacer.drawing_rates`, which the app's event thread calls.
 """
 
 from __future__ import annotations
@@ -112,8 +115,10 @@ class Pacer:
         self._drawn: dict[int, asyncio.Event] = {}
         self.paced: set[int] = set()  # pages that reported a drawn frame and have not said calm since
         #: per page that said how it draws (busy or calm; a websocket client never does): when it reported
-        #: its last drawn frames, emptied by its calm (read from another thread: under the lock)
+        #: its last drawn frames, emptied by its calm
         self._report_times: dict[int, deque] = {}
+        # Shared by viser's event loop (a page's report, a page leaving) and the app's event thread, which
+        # reads the rates twice a second (drawing_rates): the one state here another thread reads.
         self._rates_lock = threading.Lock()
         #: per page: reports heard, and windows of the shared scene sent
         self.reports: Counter = Counter()
