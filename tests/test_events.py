@@ -158,6 +158,8 @@ def test_call_from_an_event_runs_inline_instead_of_waiting_for_itself(events):
 # ------------------------------------------------- who shares a lock (docs/code.md, "Threads")
 #: The rooms whose classes the event thread owns: a lock there is for state another thread shares.
 OWNED_BY_THE_EVENT_THREAD = ("panel", "view")
+#: The room where viser's event loop meets the app's threads: a lock there says which threads share it too.
+WHERE_THREADS_MEET = ("web",)
 #: A lock's comment says it is shared, and by which thread: one of the Threads table's.
 LOCK = re.compile(r"(threading\.)?R?Lock")
 SHARED_BY = re.compile(r"\bshared\b.*\b(main thread|event thread|event loop|receiver|workers?|threads)\b",
@@ -192,15 +194,28 @@ def test_the_lock_check_finds_a_lock_without_its_sharers():
     assert locks_without_their_sharers("# Shared by the workers: one at a time.\nlock = threading.Lock()\n") == []
 
 
-def test_a_lock_in_a_room_the_event_thread_owns_says_which_threads_share_it():
-    """No state the event thread owns needs a lock (sandbox/app/web/events.py): a lock in the panel or
-    the view guards something another thread really shares, and says which (issue 55)."""
+def locks_without_their_sharers_in(rooms: tuple[str, ...]) -> list[str]:
+    """``path:line`` of each lock in these rooms of sandbox/app without a comment naming its sharers."""
     import sandbox.app
 
     app = Path(sandbox.app.__file__).parent
-    missing = [f"{path.relative_to(app.parent.parent)}:{line}"
-               for room in OWNED_BY_THE_EVENT_THREAD for path in sorted((app / room).rglob("*.py"))
-               for line in locks_without_their_sharers(path.read_text(encoding="utf-8"))]
+    return [f"{path.relative_to(app.parent.parent)}:{line}"
+            for room in rooms for path in sorted((app / room).rglob("*.py"))
+            for line in locks_without_their_sharers(path.read_text(encoding="utf-8"))]
+
+
+def test_a_lock_in_a_room_the_event_thread_owns_says_which_threads_share_it():
+    """No state the event thread owns needs a lock (sandbox/app/web/events.py): a lock in the panel or
+    the view guards something another thread really shares, and says which (issue 55)."""
+    missing = locks_without_their_sharers_in(OWNED_BY_THE_EVENT_THREAD)
+    assert not missing, f"a lock without a comment saying which threads share it: {', '.join(missing)}"
+
+
+def test_a_lock_in_web_says_which_threads_share_it():
+    """web/ runs on viser's event loop, but for what the app's threads ask of it (a page's grant, the
+    drawing rates, the queue itself): a lock there guards what another thread really shares, and says
+    which; state the loop alone touches has none (the inbox, the refusal logs)."""
+    missing = locks_without_their_sharers_in(WHERE_THREADS_MEET)
     assert not missing, f"a lock without a comment saying which threads share it: {', '.join(missing)}"
 
 
