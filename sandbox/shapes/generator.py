@@ -13,12 +13,17 @@ The families (:data:`FAMILIES`):
 - ``curved``: a crescent, a ring segment, a spiral arm (:data:`CURVED_KINDS`).
 
 Every shape is drawn at the default goal's size, in metres: the area of the default 500 boxes
-(:data:`GOAL_AREA`), its centroid at the origin; the model fits a goal to the boxes' area anyway, so
-only its shape matters to a run. It fits the construction area (:data:`MAX_EXTENT` each way), is a
-valid simple polygon without holes, has at most :data:`MAX_VERTICES` vertices (what the outlines
-afford: the model keeps a goal's file as it is below that), no part narrower than :data:`MIN_WIDTH`
-and no gap narrower than :data:`MIN_GAP` (docs/shapes.md says why those two). Corners and tips aside:
-a convex corner is a point.
+(:data:`GOAL_AREA`), its centroid at the origin, as the model places a goal (it fits a goal to the
+boxes' area anyway, so only the shape matters to a run). It spans at most :data:`MAX_EXTENT` each way,
+so it fits the construction area with room to spare (the model moves a goal that reaches past the
+area's wall inside when the band follows its edge); it is a valid simple polygon without holes
+or a point where it touches itself, with at most :data:`MAX_VERTICES` vertices (what the outlines
+afford: the model leaves a goal with fewer as it is); no part of it is narrower than
+:data:`MIN_WIDTH` and no gap narrower than :data:`MIN_GAP` (docs/shapes.md says why those two). The
+widths are kept by opening and closing the outline: by a disc, which rounds the convex corners of
+stars, trees and curves to half the width; by a square for rectilinear shapes, whose corners stay
+square. A convex shape is too wide for either and keeps its corners, none sharper than
+:data:`MIN_CORNER_ANGLE`.
 
 Each draw keeps its parameters (:attr:`GeneratedShape.params`): :func:`from_params` makes the same
 vertices from them without the random numbers. A draw that breaks a rule above is drawn again from the
@@ -299,10 +304,15 @@ def _fitted(polygon: Polygon) -> Polygon:
                                   origin=(0.0, 0.0))
 
 
+#: How much the cleaning may change a shape's area, by whether it is rectilinear.
+CLEANING_CHANGES = {False: 0.1, True: 0.001}
+
+
 def _finished(family: str, outline) -> np.ndarray | None:
     """The outline as a generated shape's vertices: fitted, its gaps closed and thin parts opened away (none
-    for a convex one), simplified, fitted again, rounded; None when that leaves no polygon or changes it
-    by more than a tenth."""
+    for a convex one), simplified, fitted again, rounded; None when that leaves no polygon or changes its
+    area by more than :data:`CLEANING_CHANGES` (a grid's cells are drawn wide enough, so a rectilinear
+    shape the cleaning changes at all is drawn again: it would no longer be the comb its parameters say)."""
     polygon = _largest(outline)
     if polygon is None or polygon.area <= 0.0:
         return None
@@ -311,7 +321,7 @@ def _finished(family: str, outline) -> np.ndarray | None:
         square = family == "rectilinear"
         before = polygon.area
         cleaned = _largest(_opening(_closing(polygon, MIN_GAP * MARGIN, square), MIN_WIDTH * MARGIN, square))
-        if cleaned is None or abs(cleaned.area / before - 1.0) > 0.1:
+        if cleaned is None or abs(cleaned.area / before - 1.0) > CLEANING_CHANGES[square]:
             return None
         polygon = _fitted(Polygon(cleaned.exterior))
     simpler = polygon.simplify(SIMPLIFY_WITHIN, preserve_topology=True)
@@ -501,13 +511,17 @@ _KINDS: dict[str, Callable] = {"letter": _letter, "comb": _comb, "fork": _fork, 
                                "stem": _stem, "handle": _handle, "channel": _channel}
 
 
+#: The grid's columns and rows are drawn between these sizes (relative: the shape is scaled to the goal's area).
+CELL_SIZES = (0.7, 1.8)
+
+
 def _draw_rectilinear(rng: np.random.Generator, kind: str) -> dict:
     details, cells = _KINDS[kind](rng)
     columns = max(x for x, _ in cells) + 1
     rows = max(y for _, y in cells) + 1
     return {"kind": kind, **details, "cells": sorted(cells),
-            "columns": [_uniform(rng, 0.8, 1.3, 2) for _ in range(columns)],
-            "rows": [_uniform(rng, 0.8, 1.3, 2) for _ in range(rows)],
+            "columns": [_uniform(rng, *CELL_SIZES, 2) for _ in range(columns)],
+            "rows": [_uniform(rng, *CELL_SIZES, 2) for _ in range(rows)],
             "turns": int(rng.integers(0, 4)), "mirror": bool(rng.random() < 0.5)}
 
 
