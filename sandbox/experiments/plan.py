@@ -1,7 +1,8 @@
 """What a sweep runs: its *cases* (named configurations) and their trials.
 
 The cases come from the paper (``--cases paper`` or a comma-separated list
-of names) or from a grid file that sweeps any declared parameter.
+of names), from a grid file that sweeps any declared parameter, or from a
+draw of generated shapes (``--generated N``, :mod:`.draws`: one case a shape).
 
 Grid file (TOML)::
 
@@ -64,7 +65,8 @@ def _resolve_shape(config: Config, label: str) -> list | None:
     return None if vertices is None else vertices.tolist()
 
 
-def _make_case(label: str, overrides: dict, base: dict, typed: dict, where: str = "") -> Case:
+def make_case(label: str, overrides: dict, base: dict, typed: dict, where: str = "") -> Case:
+    """The case ``label``: ``overrides`` on the base and the flags, its shape's vertices resolved."""
     # One replace, so that a profile named anywhere only fills in what none of them sets.
     try:
         config = Config().replace(**{**base, **typed, **overrides})
@@ -84,7 +86,7 @@ def paper_cases(names: str, base: dict, typed: dict) -> list[Case]:
         raise SweepError(f"unknown case(s) {', '.join(map(repr, unknown))}; the cases are: paper, {', '.join(CASES)}")
     if len(set(wanted)) != len(wanted):
         raise SweepError("--cases lists a case twice")
-    return [_make_case(n, CASES[n], base, typed) for n in wanted]
+    return [make_case(n, CASES[n], base, typed) for n in wanted]
 
 
 def _value_text(name: str, value: Any) -> str:
@@ -172,7 +174,7 @@ def grid_cases(path: str, base: dict, typed: dict) -> tuple[list[Case], list[tup
                 overrides.update(fix_shape({key: value}))
                 if key in labelled:
                     parts.append(f"{key}={_value_text(key, value)}")
-        cases.append(_make_case(",".join(parts), overrides, base, typed, where))
+        cases.append(make_case(",".join(parts), overrides, base, typed, where))
     labels = [c.label for c in cases]
     dupes = sorted({slug(x) for x in labels if [slug(y) for y in labels].count(slug(x)) > 1})
     if dupes:

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from sandbox.cli import UserError
-from sandbox.experiments import reference, stats, versus
+from sandbox.experiments import distribution, reference, stats, versus
 from sandbox.experiments.storage import ResultStore, load_meta
 from sandbox.experiments.trials import METRICS, SweepError
 from sandbox.model.config import Config, params
@@ -53,6 +53,8 @@ def build_report(out: str | Path, dest: str | Path | None = None, against: str |
     except OSError as exc:
         raise SweepError(f"cannot write the report to {dest}: {exc.strerror or exc}") from None
 
+    generated = meta.get("generated")
+    shapes = distribution.shape_results(generated, by_case) if generated else None
     pairs = stats.default_pairs(list(by_case), [tuple(p) for p in meta.get("compare", [])])
     tables = {m: stats.summaries(by_case, m) for m in METRICS}
     first = {m: stats.summaries(by_case, m, when="first-cycle") for m in METRICS}
@@ -63,9 +65,15 @@ def build_report(out: str | Path, dest: str | Path | None = None, against: str |
     _write_final_csv(by_case, dest / "final.csv")
     _write_rows(dest / "summary.csv", [dataclasses.asdict(r) for m in METRICS for r in tables[m]])
     _write_rows(dest / "ks_tests.csv", [dataclasses.asdict(r) for m in METRICS for r in tests[m]])
-    figs = _draw_figures(by_case, dest / FIGURES_DIR) if figures else {}
+    figs = _draw_figures(by_case, dest / FIGURES_DIR, shapes) if figures else {}
 
     text = _markdown(meta, by_case, tables, first, last, tests, figs, dest, store.load_failures())
+    if shapes is not None:
+        distribution.write_csv(shapes, dest / "generated.csv")
+        worst = figs.get("worst")
+        lines = distribution.section(generated, shapes, worst and Path(worst).relative_to(dest).as_posix())
+        head, sep, tail = text.partition("\n## Table II.")
+        text = head + "\n".join(lines) + "\n" + sep + tail
     if against is not None:
         lines, rows = versus.versus_section(by_case, against, against_label)
         _write_rows(dest / "versus.csv", rows)
@@ -76,9 +84,17 @@ def build_report(out: str | Path, dest: str | Path | None = None, against: str |
     return report
 
 
-def _draw_figures(by_case: dict[str, list[dict]], folder: Path) -> dict[str, Path]:
+def _draw_figures(by_case: dict[str, list[dict]], folder: Path,
+                  shapes: list[distribution.ShapeResult] | None = None) -> dict[str, Path]:
+    """The metrics over time (a line per case) and every case's final layout; for a draw of generated
+    shapes, a line per family and the layouts of the worst shapes only (a hundred would not be read)."""
     from sandbox.experiments import figures  # matplotlib: only when a report is drawn, not on every command
 
+    if shapes is not None:
+        families = distribution.by_family(shapes, by_case)
+        figs = {m: figures.plot_metric(families, m, folder / m) for m in METRICS}
+        figs["worst"] = distribution.draw_worst(shapes, by_case, folder / "worst_layouts")
+        return figs
     figs = {m: figures.plot_metric(by_case, m, folder / m) for m in METRICS}
     figs["layouts"] = figures.plot_layouts(by_case, folder / "final_layouts")
     return figs
@@ -300,7 +316,8 @@ def _markdown(meta, by_case, tables, first, last, tests, figs, dest: Path, failu
             *(_figures_section(figs, rel) if figs else
               ["", "Figures not drawn (`--no-figures`): `phototaxis report` without it draws them."]),
             "", "## Files", "",
-            "- `summary.csv`: Tables II and III; `ks_tests.csv`: Tables IV and V",
+            "- `summary.csv`: Tables II and III; `ks_tests.csv`: Tables IV and V"
+            + ("; `generated.csv`: the generated shapes, one row each" if meta.get("generated") else ""),
             "- `results.csv`: every sample of every trial; `final.csv`: one row per trial with its final "
             "metrics, its controller, what it sensed, its light energy and full configuration",
             "- `trials/<case>/seed-<seed>.csv|json` (in the sweep folder): the raw per-trial records", ""]
@@ -310,7 +327,13 @@ def _markdown(meta, by_case, tables, first, last, tests, figs, dest: Path, failu
 def _figures_section(figs: dict, rel) -> list[str]:
     """The one figure report.md shows, the final layouts (compact: the repository keeps it of every committed
     evaluation), and where the others are; links only to what is shown, so a committed report links to
-    nothing that is not committed."""
+    nothing that is not committed. A draw of generated shapes shows its worst shapes' layouts in its own
+    section instead, and its metrics a line per family."""
+    if "layouts" not in figs:
+        return ["", "## Figures", "",
+                f"The fraction of boxes in the goal over time and the mean distance of the boxes outside it, mean "
+                f"± 1 s.d. over the trials of each family of generated shapes, are `{rel(figs['fraction_in_goal'])}` "
+                f"and `{rel(figs['mean_outside_distance'])}`; every figure is also an SVG beside its PNG."]
     return ["", "## Figures 6 and 7. Final box layouts", "",
             "For each case, the trial whose final fraction in goal is nearest the case's median. Green boxes "
             "are in the goal (black outline), orange ones outside; the dashed square is the construction area.",

@@ -20,6 +20,7 @@ from typing import Any
 
 from sandbox.cli import (UserError, add_config_arguments, add_controller_argument, controller_from_args,
                          program_time_limit)
+from sandbox.experiments import draws
 from sandbox.experiments.executors import dask_executor, local_executor, run_trials
 from sandbox.experiments.plan import Case, grid_cases, make_trials, paper_cases
 from sandbox.experiments.report import build_report
@@ -27,6 +28,7 @@ from sandbox.experiments.storage import SWEEP_FILE, ResultStore, load_meta
 from sandbox.experiments.trials import SweepError, check_program
 from sandbox.model import watchdog
 from sandbox.model.config import CASES, Config, params, read_config_values
+from sandbox.shapes.generator import FAMILIES, SEEDS_PER_DRAW
 
 
 def _typed_flags(args: argparse.Namespace) -> dict[str, Any]:
@@ -34,15 +36,17 @@ def _typed_flags(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _base(args: argparse.Namespace) -> dict[str, Any]:
-    """The config file's values (checked, not yet applied: see _make_case)."""
+    """The config file's values (checked, not yet applied: see make_case)."""
     return read_config_values(args.config) if getattr(args, "config", None) else {}
 
 
 # ---------------------------------------------------------- sweep.json
 
 
-def write_meta(out: Path, cases: list[Case], compare: list, command: str, trials: int, seed_start: int) -> None:
-    """Record the sweep's cases in ``sweep.json``, merged with a previous run's into the same folder."""
+def write_meta(out: Path, cases: list[Case], compare: list, command: str, trials: int, seed_start: int,
+               generated: dict | None = None) -> None:
+    """Record the sweep's cases in ``sweep.json``, merged with a previous run's into the same folder; and a
+    draw of generated shapes (:mod:`.draws`), refused ones too, when it runs one."""
     meta = load_meta(out)
     known = {c["label"]: c for c in meta.get("cases", [])}
     for case in cases:
@@ -57,6 +61,8 @@ def write_meta(out: Path, cases: list[Case], compare: list, command: str, trials
     pairs += [list(p) for p in compare if list(p) not in pairs]
     meta.update(command=command, cases=list(known.values()), compare=pairs,
                 trials=max(trials, int(meta.get("trials", 0))), seed_start=seed_start)
+    if generated:
+        meta[draws.META_KEY] = draws.merged(meta.get(draws.META_KEY, {}), generated)
     tmp = out / (SWEEP_FILE + ".tmp")
     tmp.write_text(json.dumps(meta, indent=1, default=str))
     os.replace(tmp, out / SWEEP_FILE)
@@ -66,7 +72,11 @@ def _command_line(args: argparse.Namespace) -> str:
     """The sweep command for the report, with paths made relative (a report
     should not carry the folders of the machine it ran on)."""
     parts = ["phototaxis", "sweep"]
-    parts += ["--grid", _portable(args.grid)] if args.grid else ["--cases", args.cases]
+    if getattr(args, "generated", None) is not None:
+        parts += ["--generated", str(args.generated), "--families", args.families,
+                  "--generator-seed", str(args.generator_seed)]
+    else:
+        parts += ["--grid", _portable(args.grid)] if args.grid else ["--cases", args.cases]
     parts += ["--trials", str(args.trials)]
     if args.seeds is not None:
         parts += ["--seeds", str(args.seeds)]
@@ -119,10 +129,20 @@ def _term_as_interrupt():
 def sweep_cases(args: argparse.Namespace) -> tuple[list[Case], list]:
     """The cases a parsed ``sweep`` command runs and its extra pairs to compare, built and checked (its
     grid file, parameters and shapes) without running anything: ``regenerate --dry-run`` checks with it."""
+    cases, compare, _ = sweep_plan(args)
+    return cases, compare
+
+
+def sweep_plan(args: argparse.Namespace) -> tuple[list[Case], list, dict]:
+    """:func:`sweep_cases`, and the record of a draw of generated shapes ({} for any other sweep)."""
     base, typed = _base(args), _typed_flags(args)
+    if getattr(args, "generated", None) is not None:
+        wanted = draws.Draw.from_flags(args.generated, args.families, args.generator_seed)
+        cases, generated = draws.generated_cases(wanted, base, typed)
+        return cases, [], generated
     if args.grid:
-        return grid_cases(args.grid, base, typed)
-    return paper_cases(args.cases or "paper", base, typed), []
+        return (*grid_cases(args.grid, base, typed), {})
+    return paper_cases(args.cases or "paper", base, typed), [], {}
 
 
 def sweep_command(args: argparse.Namespace) -> int:
@@ -143,11 +163,11 @@ def _sweep(args: argparse.Namespace) -> int:
         raise SweepError(f"--seeds must be 0 or more (got {args.seeds})")
     base, typed = _base(args), _typed_flags(args)
     seed_start = args.seeds if args.seeds is not None else Config().replace(**{**base, **typed}).seed
-    cases, compare = sweep_cases(args)
+    cases, compare, generated = sweep_plan(args)
     out = Path(args.out)
     store = ResultStore(out)
     store.check_writable()
-    write_meta(out, cases, compare, _command_line(args), args.trials, seed_start)
+    write_meta(out, cases, compare, _command_line(args), args.trials, seed_start, generated)
     trials = make_trials(cases, args.trials, seed_start, controller_from_args(args)[0], program_time_limit(args))
     if trials and trials[0].controller:
         check_program(trials[0])  # a program that fails at once says so here, not after the workers start
@@ -160,6 +180,10 @@ def _sweep(args: argparse.Namespace) -> int:
         executor = lambda: local_executor(workers)  # noqa: E731
         where = f"{workers} local worker process(es)"
     steps = sorted({t.config["steps"] for t in trials})
+    if generated:
+        refused = sum(1 for s in generated["shapes"] if s["refused"])
+        print(f"sweep: {len(generated['shapes'])} generated shape(s), {refused} refused by the model (counted, "
+              f"not run)", file=sys.stderr)
     print(f"sweep: {len(cases)} case(s) x {args.trials} trial(s) of {', '.join(map(str, steps))} steps "
           f"(seeds {seed_start}..{seed_start + args.trials - 1}) on {where}; results in {out}", file=sys.stderr)
     try:
@@ -194,14 +218,25 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "  robots = [100, 200]\n  flare = [0.0, 1.75]\n"
         "optional: [cases.NAME] tables of values, a [grid] key case = [NAME, ...] (also the\n"
         "paper's case names), and compare = [[CASE, CASE], ...] for extra KS tests.\n\n"
+        "generated shapes: --generated N draws N shapes of --families (the families in turn), one case\n"
+        "each, named gen-FAMILY-SEED; the report adds their distribution and the ten worst.\n\n"
         "examples:\n"
         "  phototaxis sweep --cases paper --trials 20 --out runs/paper\n"
+        "  phototaxis sweep --generated 100 --trials 2 --steps 100000 --out runs/generated\n"
         "  phototaxis sweep --grid grid.toml --trials 10 --scheduler tcp://head:8786 --out runs/grid")
     what = p.add_mutually_exclusive_group()
     what.add_argument("--cases", default=None, metavar="paper|NAME,NAME,...",
                       help=f"'paper' (the seven cases of SPEC §7) or names among: {', '.join(CASES)} "
                       "[default: paper]")
     what.add_argument("--grid", metavar="FILE.toml", help="a TOML grid of parameter values (see the docs)")
+    what.add_argument("--generated", type=int, default=None, metavar="N",
+                      help="N goal shapes from the shape generator, one case each (docs/shapes.md)")
+    p.add_argument("--families", default="all", metavar="all|FAMILY,...",
+                   help=f"with --generated: the generator's families to draw, in turn: all, or names among "
+                   f"{', '.join(FAMILIES)} [default: all]")
+    p.add_argument("--generator-seed", type=int, default=0, metavar="S",
+                   help=f"with --generated: the draw; draw S takes each family's shapes from seed "
+                   f"S x {SEEDS_PER_DRAW:,} on, so two draws share none [default: 0]")
     p.add_argument("--trials", type=int, default=10, help="trials (seeds) per case [default: 10]")
     p.add_argument("--seeds", type=int, default=None, metavar="START",
                    help="first seed; trial i of every case uses seed START+i [default: the base seed, 0]")

@@ -7,7 +7,8 @@ validation, and the built-in shapes.
 - :mod:`.isolated`    a file read in a child process, under a time and memory limit (uploads)
 - :mod:`.validation`  what makes an outline usable
 - :mod:`.geometry`    pure polygon geometry, below the shapes' other modules and the model
-- :mod:`.builtin`     the shapes/ folder, by name
+- :mod:`.builtin`     the shapes/ folder, by name (and generated shapes, by theirs)
+- :mod:`.generator`   random goal shapes in families, each made again from its family and seed
 """
 
 from sandbox.shapes.builtin import builtin_shape_names, shape_vertices

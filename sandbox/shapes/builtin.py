@@ -10,6 +10,7 @@ import numpy as np
 
 from sandbox.shapes.errors import ShapeError
 from sandbox.shapes.formats import EXTENSIONS, load_polygon
+from sandbox.shapes.generator import generated_vertices
 
 # ``builtin`` is a link to the repository's shapes/ folder, copied into
 # wheels, so built-in names work in editable and regular installs.
@@ -35,7 +36,8 @@ def builtin_shape_names() -> list[str]:
 
 
 def shape_vertices(spec: str) -> np.ndarray | None:
-    """Vertices for a built-in shape name or a file path; None for "circle"."""
+    """Vertices for a built-in shape name, a file path or a generated shape's name (``gen-star-0007``,
+    :mod:`sandbox.shapes.generator`); None for "circle"."""
     spec = str(spec).strip()
     if spec.lower() == "circle":
         return None
@@ -44,5 +46,8 @@ def shape_vertices(spec: str) -> np.ndarray | None:
         return load_polygon(builtins[spec.lower()])
     if spec and Path(spec).expanduser().is_file():
         return load_polygon(spec)
-    raise ShapeError(f"{spec or '<empty>'}: not a built-in shape or an existing file; "
-                     f"built-in shapes are: {', '.join(builtin_shape_names())}")
+    generated = generated_vertices(spec)
+    if generated is not None:
+        return generated
+    raise ShapeError(f"{spec or '<empty>'}: not a built-in shape, an existing file or a generated shape "
+                     f"(gen-FAMILY-SEED); built-in shapes are: {', '.join(builtin_shape_names())}")

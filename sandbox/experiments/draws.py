@@ -1,0 +1,89 @@
+"""A draw of generated goal shapes as a sweep's cases (``phototaxis sweep --generated N``).
+
+Each shape of the draw (:func:`sandbox.shapes.generator.draw`) is one case, named after the shape
+(``gen-branching-0003``), its ``shape`` the shape's name, so that a trial, a report or ``phototaxis run
+--shape gen-branching-0003`` makes the same goal again from the name alone. A shape the model refuses
+(too large for the construction area, more vertices than the outlines afford, a smallest outline past the
+arena: the checks a world makes before it is built) is not run but counted: its record keeps why.
+``sweep.json`` keeps every shape's record (family, seed, kind, parameters, refusal) under ``generated``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sandbox.experiments.plan import Case, make_case
+from sandbox.experiments.trials import SweepError
+from sandbox.model.config import Config
+from sandbox.shapes import ShapeError
+from sandbox.shapes.generator import GeneratedShape, draw, families_from_text
+
+#: The key of ``sweep.json`` that holds a draw.
+META_KEY = "generated"
+
+
+@dataclass(frozen=True)
+class Draw:
+    """What ``--generated``, ``--families`` and ``--generator-seed`` ask for."""
+
+    count: int
+    families: tuple[str, ...]
+    generator_seed: int
+
+    @classmethod
+    def from_flags(cls, count: int, families: str, generator_seed: int) -> "Draw":
+        if count < 1:
+            raise SweepError(f"--generated must be at least 1 (got {count})")
+        try:
+            return cls(count, families_from_text(families), generator_seed)
+        except ShapeError as exc:
+            raise SweepError(f"--families: {exc}") from None
+
+    def record(self) -> dict:
+        return {"count": self.count, "families": list(self.families), "generator_seed": self.generator_seed}
+
+
+def refusal(config: Config, vertices: np.ndarray) -> str:
+    """Why the model refuses this goal under ``config``, in its own words ('' when it builds it): the same
+    checks a world makes before it is built (:func:`sandbox.model.preview.preview_goal`)."""
+    from sandbox.model.preview import preview_goal  # the outlines: only when a draw is planned
+
+    try:
+        preview_goal(config, vertices, config.flare)
+    except ShapeError as exc:
+        return str(exc)
+    return ""
+
+
+def generated_cases(wanted: Draw, base: dict, typed: dict) -> tuple[list[Case], dict]:
+    """The cases of a draw (the shapes the model builds) and the record ``sweep.json`` keeps of it
+    (:data:`META_KEY`): the draw asked for and every shape, refused ones with why."""
+    try:
+        shapes = draw(wanted.count, wanted.families, wanted.generator_seed)
+    except ShapeError as exc:
+        raise SweepError(f"--generated: {exc}") from None
+    cases, records = [], []
+    for shape in shapes:
+        case = make_case(shape.name, {"shape": shape.name}, base, typed)
+        why = refusal(case.config, shape.vertices)
+        records.append(shape_record(shape, why))
+        if not why:
+            cases.append(case)
+    return cases, {"draws": [wanted.record()], "shapes": records}
+
+
+def shape_record(shape: GeneratedShape, refused: str = "") -> dict:
+    return {**shape.record(), "refused": refused}
+
+
+def merged(old: dict, new: dict) -> dict:
+    """A draw's record merged into the one a previous run into the same folder left: shapes by name."""
+    if not old:
+        return new
+    draws = list(old.get("draws", []))
+    draws += [d for d in new.get("draws", []) if d not in draws]
+    shapes = {s["name"]: s for s in old.get("shapes", [])}
+    shapes.update({s["name"]: s for s in new.get("shapes", [])})
+    return {"draws": draws, "shapes": list(shapes.values())}
