@@ -1,5 +1,6 @@
 """The control panel: one small class per folder, each with ``build(snap)``
 and ``update(snap)``, in the order the page shows them.
+Built on the main thread before the event queue opens; runs on the app's event thread after.
 
 Every callback runs on the app's event thread (:mod:`sandbox.app.web.events`),
 one at a time, as do the frames' updates. None of them touches the simulation:

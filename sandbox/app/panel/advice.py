@@ -1,6 +1,7 @@
 """The *Which strategy builds my shape?* folder: the running goal's candidate
 outlines and strategies tried in short trials beside the live simulation
 (:mod:`sandbox.experiments.advise`), ranked, with one click to use the best.
+Runs on the app's event thread; the trials run in a pool started by a worker, whose answers are posted back.
 
 The trials run in one worker process at a lower priority, and while they run
 the folder compares the live simulation's speed with its speed before: when

@@ -1,4 +1,5 @@
 """The Challenge folder: build the goal by hand, against the paper (issue 25, item 3; issue 41, item 6).
+Runs on the app's event thread; its reference run starts in a worker, which hands the pool back to the event thread.
 
 *Start a round* builds a new world from the paper's first seed with the
 running goal and settings, lights the lamp where the robots are (the Be the

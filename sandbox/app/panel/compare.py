@@ -1,5 +1,6 @@
 """The Compare folder: a second world beside the running one (issue 25, item 1; see
 :mod:`sandbox.app.world.lockstep`).
+Runs on the app's event thread; the compared world starts in a worker, which posts what it finds.
 
 Runs on the app's event thread. A new world's process starts in a worker (it
 blocks for a second or two), which changes nothing here: it posts what

@@ -1,4 +1,4 @@
-"""The Draw folder of Goal shape: a polygon designer's tools.
+"""The Draw folder of Goal shape: a polygon designer's tools. Runs on the app's event thread.
 
 The drawing is a list of points, numbered from 1 on the floor. Ways to change it:
 click the floor (or press, drag and release: a rubber band follows the pointer)

@@ -1,5 +1,5 @@
 """How each viewer frames the floor: the construction area, the whole arena,
-or the presenter layout (issue 24, item 5).
+or the presenter layout (issue 24, item 5). Runs on the app's event thread.
 
 The presenter layout is for a projector: this viewer's panel collapses to
 its bar, and its camera frames the construction area with the legend drawn

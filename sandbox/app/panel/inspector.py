@@ -1,7 +1,7 @@
 """The Inspector folder: each viewer follows a robot of its own (clicked, or
 at random), reads its photocells, command and charge, and its camera follows
 it unless the viewer unticks *Camera follows* (issue 41, item 4: the f key
-said "Following robot 169" with the robot off-frame).
+said "Following robot 169" with the robot off-frame). Runs on the app's event thread.
 
 The folder and its button are shared; what a viewer follows, whether its
 camera follows, its read-outs and the ring, the robot's disc and photocell

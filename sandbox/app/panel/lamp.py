@@ -1,5 +1,5 @@
 """The Be the light folder: a student, not the controller, decides which
-lights are on (issue 25, item 2).
+lights are on (issue 25, item 2). Runs on the app's event thread.
 
 *Be the light* hands the floor to a lamp, a disc of lights that moves to
 wherever a controlling page clicks the floor; its radius is a slider. *A

@@ -1,4 +1,5 @@
 """The Learn panel: a short illustrated explanation of the model.
+Its text and pictures are built once; the folder runs on the app's event thread.
 
 The illustrations are drawn from the engine itself (its controller and light
 grid), so they always match what the simulation does. They are drawn once,

@@ -1,5 +1,5 @@
 """The Metrics folder: both success metrics and the charged robots, live and
-as charts over the run, and the series as a CSV download."""
+as charts over the run, and the series as a CSV download. Runs on the app's event thread."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """The parameter folders, generated from the model's declaration
 (:func:`sandbox.model.config.params`): the Model folder (the profile and
 every value it sets) first, then one folder per group. Values that need a
-new world wait for the next reset and are listed until then.
+new world wait for the next reset and are listed until then. Runs on the app's event thread.
 
 One group shows at a time, picked in the *group* dropdown. viser draws
 nothing for a hidden folder, but it draws every control of a collapsed

@@ -1,5 +1,5 @@
 """Text from outside shown as text: the one place a name, a file's content or an error quoting
-either is made safe to write into the panel's markdown (issue 54, item 1).
+either is made safe to write into the panel's markdown (issue 54, item 1). Pure functions; any thread.
 
 How viser 1.1.1's page shows what the server sends it (read from its client, ``viser/client/src``):
 

@@ -1,5 +1,5 @@
 """The presenter's screen (issue 41, items 2 and 3): what a page shows on the
-floor's side of the panel, for a room.
+floor's side of the panel, for a room. Runs on the app's event thread.
 
 - **The title card.** A page that arrives while the world waits at step 0
   (``serve --classroom`` or ``--paused``: a class before the lesson starts)

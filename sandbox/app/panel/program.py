@@ -1,5 +1,5 @@
 """The Light program folder: hand the lights to a program of your own (a
-``path.py:ClassName`` on the server's machine) and back, without a restart.
+``path.py:ClassName`` on the server's machine) and back, without a restart. Runs on the app's event thread.
 
 A program that cannot be loaded is refused with one line and the running one
 stays; one that fails while running (an exception, a pattern of the wrong

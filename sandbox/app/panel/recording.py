@@ -1,5 +1,5 @@
 """The Record folder: capture the scene and download it as one HTML file
-that replays without a server.
+that replays without a server. Runs on the app's event thread.
 
 Runs on the app's event thread, which owns the recorder."""
 

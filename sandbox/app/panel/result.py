@@ -1,4 +1,4 @@
-"""The Result folder: why the run stands where it does (issue 40, item 5).
+"""The Result folder: why the run stands where it does (issue 40, item 5). Runs on the app's event thread.
 
 *Explain the result* says how many boxes are in the goal, where the others lie
 (:mod:`sandbox.model.explain`: near the goal, heaped in a corner of the

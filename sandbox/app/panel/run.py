@@ -1,4 +1,4 @@
-"""The Run folder: play, step, reset, speed, the heat map switch, and status."""
+"""The Run folder: play, step, reset, speed, the heat map switch, and status. Runs on the app's event thread."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """The Goal shape folder: pick a built-in shape, draw one on the floor (its
 Draw sub-folder is :mod:`.draw`), upload or download a polygon file. Every
 shape goes through the model's loader and validation; a refused one leaves
-the running simulation alone.
+the running simulation alone. Runs on the app's event thread.
 
 Runs on the app's event thread; an upload is read in a worker, which posts
 what it read back."""

@@ -1,6 +1,6 @@
 """The Strategies folder: the paper's seven cases in one control, the outline
 the band follows (and why), then a checkbox and an amount per strategy,
-generated from their declaration (:data:`sandbox.model.config.STRATEGIES`).
+generated from their declaration (:data:`sandbox.model.config.STRATEGIES`). Runs on the app's event thread.
 
 Picking a paper case starts it: a new world (the same seed) with the case's
 goal and strategies, from step 0, so cases compare from the same start. The

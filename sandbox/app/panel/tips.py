@@ -2,7 +2,7 @@
 plain words each. The full reference of every value (formulas, where the
 paper's text and the authors' program differ) stays in its declaration in
 :mod:`sandbox.model.config`, which ``phototaxis run --help`` and docs/cli.md
-show."""
+show. Constant text; any thread."""
 
 from __future__ import annotations
 

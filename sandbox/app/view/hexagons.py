@@ -1,4 +1,4 @@
-"""The boxes as hexagons, as the paper's and the recordings' boxes are.
+"""The boxes as hexagons, as the paper's and the recordings' boxes are. Pure geometry; any thread.
 
 Each box is an instance of one flat hexagon (viser's batched meshes), turned
 by the box's angle and coloured by whether it is in the goal. An instance

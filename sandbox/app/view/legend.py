@@ -1,5 +1,6 @@
 """The legend of the scene, and the colour bar of the sensed-light heat map,
-drawn with Pillow in the palette's own colours (so they cannot drift apart)."""
+drawn with Pillow in the palette's own colours (so they cannot drift apart).
+Pictures made once with Pillow; any thread."""
 
 from __future__ import annotations
 

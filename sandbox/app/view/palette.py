@@ -1,5 +1,5 @@
 """Colours and picture-making shared by the live page, the recordings and the
-headless GIF / MP4 frames, so every view of a run looks the same.
+headless GIF / MP4 frames, so every view of a run looks the same. Constants and pure functions; any thread.
 
 Pure numpy: nothing here imports viser or touches a running simulation.
 """

@@ -1,4 +1,5 @@
 """The top-down scene: one viser node per kind of thing, updated from snapshots.
+Runs on the app's event thread (the main thread builds it before the queue opens).
 
 Layout (z up, arena on z = 0, camera above looking down):
 

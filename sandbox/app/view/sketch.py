@@ -1,7 +1,7 @@
 """The shape being drawn, on the floor: its outline, a numbered handle at each
 vertex, the edges that cross in red, a rubber band from the last point to the
 pointer, and a dashed preview of the goal at its final size with the smallest
-and largest outlines of its light band. The nodes live under ``/draw``.
+and largest outlines of its light band. The nodes live under ``/draw``. Runs on the app's event thread.
 
 viser reports no pointer movement, only clicks and drags of scene nodes, so
 the tools are built from drags: each vertex handle is an instance of one

@@ -1,4 +1,5 @@
 """Who may talk to the sandbox's server, decided from each request alone.
+Pure decisions, taken on viser's event loop as each request arrives.
 
 The rules follow Jupyter's server:
 

@@ -1,4 +1,5 @@
 """The app's one event queue: every change of the app's state runs here, one at a time.
+Its thread, ``phototaxis-events``, runs every event; any thread may post.
 
 viser's callbacks (controls, clicks on the floor, cameras, pages arriving and
 leaving), the runner's answers and frames, and the app's timers are all

@@ -1,4 +1,5 @@
 """The sandbox's viser server with a gate: :func:`start_server`.
+Built on the main thread; its checks run on viser's event loop, and the app's event thread asks it a page's grant.
 
 viser 1.1.1 answers any request: it checks neither ``Origin`` nor ``Host``,
 lets any client set any property of any control (``disabled`` is drawn by

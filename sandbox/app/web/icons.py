@@ -1,4 +1,5 @@
 """viser's button icons, read from its icon archive opened once.
+Read from the main thread and the app's event thread (one archive, under a lock).
 
 viser 1.1 reads each icon with ``svg_from_icon``, which opens and indexes its
 archive of about 5,000 icons for every new icon name: 0.07 s each, 1.3 s for

@@ -1,4 +1,5 @@
 """Every message a page sends, checked before viser acts on it: :class:`Inbox`.
+Runs on viser's event loop, as each message is read.
 
 viser applies whatever a client sends: a ``GuiUpdateMessage`` may set any
 attribute of a control's state (its value, but also ``disabled``, its

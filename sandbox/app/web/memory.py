@@ -1,4 +1,5 @@
 """Memory that pages leave behind goes back to the system (issue 39, hole 8).
+Runs on the app's event thread (a timer after pages leave).
 
 20 pages connecting and dropping, 5 rounds, against ``serve``: the server grew 5-8 MB a round, 25 MB
 after the first round. Nothing a page leaves stays reachable (tracemalloc from the third round to the

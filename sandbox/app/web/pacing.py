@@ -1,4 +1,5 @@
 """Send each viewer what it draws (issue 24, item 2).
+Its reports are read on viser's event loop; the app's event thread asks each page's rate.
 
 The frame thread changes the shared scene 30 times a second, and viser
 sends every change to every page. A page that draws in software (a

@@ -1,5 +1,6 @@
 """Keys the page gives a meaning stay with that meaning: viser's camera
 does not also move on them.
+The script runs in the page; the server sends it as a page connects, on viser's event loop.
 
 viser's client moves its camera on W A S D Q E and turns it on the arrow
 keys, wherever they are pressed except in a text field (its

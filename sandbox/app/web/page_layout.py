@@ -1,4 +1,5 @@
 """What a phone's page lays out differently, and a notice that leaves the floor (issue 41, item 5).
+The script runs in the page; the server sends it as a page connects, on viser's event loop.
 
 viser picks its layout from the page's width: under its ``xs`` breakpoint
 (36em, 576 px) the panel is a bottom sheet, 20em wide, open, over the

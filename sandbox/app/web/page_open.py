@@ -1,5 +1,6 @@
 """A folder of the panel opened on one page, and brought into view: what the server asks of the page
 that pressed a button whose answer is in another folder (the Result folder after *Run to the end*).
+The script runs in the page; the app's event thread sends it.
 
 The panel is one for every page, and viser 1.1.1 opens a folder only when it builds it
 (``expand_by_default``), for every page at once. So the server sends the one page a line of script

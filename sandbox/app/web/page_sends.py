@@ -1,4 +1,5 @@
 """Every click a page makes reaches the server, however busy the page is.
+The script runs in the page; the server sends it as a page connects, on viser's event loop.
 
 viser's client sends scene clicks, clicks on a node and drag updates through
 a *throttled sender* (``makeThrottledMessageSender``): it sends a message at

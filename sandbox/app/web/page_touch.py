@@ -1,4 +1,5 @@
 """Touch on the floor acts as a click does (issue 41, item 5).
+The script runs in the page; the server sends it as a page connects, on viser's event loop.
 
 viser's client sends a click on the scene (``ScenePointerMessage``) for a
 mouse's press and release, never for a finger's: in Chromium, with real

@@ -1,4 +1,5 @@
 """How much each page may send, applied as its messages are read: one :class:`Flow` per connection.
+Runs on viser's event loop, as each connection's messages are read.
 
 viser read each connection's messages as fast as they came, and made every one of them work: two tasks
 on the server's event loop and, for a camera or a control, a callback on the app's one event queue,

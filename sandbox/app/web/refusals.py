@@ -1,4 +1,5 @@
 """Refusals in the server's log, at most one line a second per page: :class:`RefusalLog`.
+Runs on viser's event loop.
 
 A page that sends thousands of refused messages a second must not write thousands of lines (a flood
 of malformed cameras grew the log by 32 MB in 20 s, issue 54). The first refusal of a page is logged

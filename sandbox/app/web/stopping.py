@@ -1,5 +1,6 @@
 """How ``phototaxis serve`` is stopped: a SIGTERM (a service manager, ``kill``) is a Ctrl+C, and
 either stops it cleanly at any moment, start-up included (issue 39, hole 4).
+Runs on the main thread (its signal handler and its wait).
 
 From the dispatcher's first line on (:func:`term_stops`), the first SIGTERM or Ctrl+C is a request to
 stop, acted on within 2 s whatever the program is doing (issue 54, E):

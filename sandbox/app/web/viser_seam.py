@@ -1,5 +1,6 @@
 """The one place the app touches viser's private code: the table :data:`USES`, its check, and the
 functions the rest of the app calls instead.
+Its check runs on the main thread before a server starts; each function runs on the thread that calls it, as the public API it stands in for would.
 
 viser 1.1.1 has no public hook for what the gate, the inbox and the pacing need (the opening
 handshake, each incoming message, the windows of the shared scene, a message to one page only), so

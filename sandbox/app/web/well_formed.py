@@ -1,4 +1,5 @@
 """The messages a page may send, decoded and checked in one pass: :func:`decode`.
+Pure functions, called on viser's event loop.
 
 viser decodes whatever a page sends into the message class its ``type`` names, converting each field
 as its annotation says (``float(value)``, ``int(value)``), and raises on anything else: a field that
