@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.view import palette
+from sandbox.app.world.orders import Apply, Follow, Reset, SetPlaying, SetShape, ShowEvery, StepOnce, WantField
 from sandbox.app.world.runner import Runner, frames_owed, next_frame_due
 from sandbox.model.config import Config
 from tests.waiting import frames_pass, paused_step, wait_until
@@ -26,24 +27,24 @@ def runner():
 
 
 def test_commands_run_in_the_simulation_thread(runner):
-    names = runner.call(lambda sim: threading.current_thread().name)
+    names = runner.call(Apply(lambda sim: threading.current_thread().name))
     assert names == "phototaxis-simulation"
-    assert runner.call(lambda sim: sim is runner.sim)  # the runner's own simulation, and the answer comes back
-    before = runner.call(lambda sim: sim.steps_done)
+    assert runner.call(Apply(lambda sim: sim is runner.sim))  # the runner's own simulation, and the answer comes back
+    before = runner.call(Apply(lambda sim: sim.steps_done))
     wait_until(lambda: runner.latest.step > before)
     shown = runner.latest.step
-    assert runner.call(lambda sim: sim.steps_done) >= shown  # the running world, at least as far as it was shown
+    assert runner.call(Apply(lambda sim: sim.steps_done)) >= shown  # the running world, at least as far as it was shown
 
 
 def test_runs_pauses_steps_and_resets(runner):
     wait_until(lambda: runner.sim.steps_done > 10)
-    runner.set_playing(False)
+    runner.submit(SetPlaying(False))
     steps = paused_step(runner)
     frames_pass(runner)
-    assert runner.call(lambda sim: sim.steps_done) == steps == runner.latest.step
-    runner.step_once(3)
+    assert runner.call(Apply(lambda sim: sim.steps_done)) == steps == runner.latest.step
+    runner.ask(StepOnce(3))
     wait_until(lambda: runner.latest.step == steps + 3)
-    runner.reset(7)
+    runner.ask(Reset(7))
     wait_until(lambda: runner.latest.seed == 7 and runner.latest.step == 0)
     assert [s.step for s in runner.series()] == [0]
 
@@ -52,7 +53,7 @@ def test_snapshots_are_copies_the_gui_can_keep(runner):
     snap = runner.latest
     assert snap.robot_positions.shape == (12, 2) and snap.box_positions.shape == (20, 2)
     assert snap.intensities.shape == (64, 64) and snap.field is None  # the heat map is off
-    runner.want_field = True
+    runner.submit(WantField(True))
     wait_until(lambda: runner.latest.field is not None)
     assert runner.latest.field.shape == (257, 257) and runner.latest.field.dtype == np.float32
     assert runner.latest.field.max() > 0
@@ -63,7 +64,7 @@ def test_snapshots_are_copies_the_gui_can_keep(runner):
 
 def test_errors_go_back_to_whoever_posted(runner):
     seen = []
-    runner.post(lambda sim: sim.update_config(robots=-1), on_error=seen.append)
+    runner.ask(Apply(lambda sim: sim.update_config(robots=-1)), on_error=seen.append)
     wait_until(lambda: seen)
     assert "robots" in str(seen[0])
     start = runner.latest.step
@@ -72,16 +73,16 @@ def test_errors_go_back_to_whoever_posted(runner):
 
 def test_shape_change_and_selection(runner):
     square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
-    runner.set_shape(square, "sq")
+    runner.ask(SetShape(square, "sq"))
     wait_until(lambda: runner.latest.shape_name == "sq" and runner.latest.goal_vertices is not None)
     assert len(runner.latest.goal_vertices) == 4
-    runner.follow([7, 3])  # two viewers' robots
+    runner.submit(Follow((7, 3)))  # two viewers' robots
     wait_until(lambda: len(runner.latest.followed) == 2)
     robot = runner.latest.robot(3)
     assert robot.index == 3 and robot.sensors.shape == (4,) and robot.sensor_points.shape == (4, 2)
     assert [r.index for r in runner.latest.followed] == [3, 7] and runner.latest.robot(5) is None
     assert np.array_equal(runner.latest.robot(7).position, runner.latest.robot_positions[7])
-    runner.follow([])
+    runner.submit(Follow(()))
     wait_until(lambda: runner.latest.followed == ())
 
 
@@ -121,8 +122,8 @@ def test_the_world_makes_up_for_a_stall_and_keeps_its_speed():
     r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2).start()  # 60 steps/s
     try:
         wait_until(lambda: r.latest.step > 10)
-        t0, s0 = r.call(_clock_and_step)
-        r.call(_stall)  # 0.6 s: 36 steps behind
+        t0, s0 = r.call(Apply(_clock_and_step))
+        r.call(Apply(_stall))  # 0.6 s: 36 steps behind
 
         def caught_up() -> bool:  # read without a command (a command would wake the loop)
             t, s = time.perf_counter(), r.sim.steps_done
@@ -142,12 +143,12 @@ def test_commands_do_not_make_the_world_run_faster():
     r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2).start()  # 60 steps/s
     try:
         wait_until(lambda: r.latest.step > 10)
-        t0, s0 = r.call(_clock_and_step)
+        t0, s0 = r.call(Apply(_clock_and_step))
         answered = 0
         while time.perf_counter() < t0 + 1.0:  # commands back to back for a second
-            r.call(_nothing)
+            r.call(Apply(_nothing))
             answered += 1
-        t1, s1 = r.call(_clock_and_step)
+        t1, s1 = r.call(Apply(_clock_and_step))
         assert answered > 60, "the commands were not answered between frames"
         assert s1 - s0 <= 60 * (t1 - t0) + 8
     finally:
@@ -158,11 +159,11 @@ def test_a_new_world_starts_on_the_clock_and_owes_nothing_for_its_build():
     r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2).start()
     try:
         wait_until(lambda: r.latest.step > 10)
-        r.post(_stall)  # the same turn as the reset below: as if the build took 0.6 s
-        r.reset(3).result(10)
-        t1, s1 = r.call(_clock_and_step)
+        r.ask(Apply(_stall))  # the same turn as the reset below: as if the build took 0.6 s
+        r.call(Reset(3))
+        t1, s1 = r.call(Apply(_clock_and_step))
         frames_pass(r, 10)
-        t2, s2 = r.call(_clock_and_step)
+        t2, s2 = r.call(Apply(_clock_and_step))
         assert s2 - s1 <= 60 * (t2 - t1) + 8, "the new world raced to make up for the time its build took"
     finally:
         r.stop()
@@ -175,18 +176,18 @@ def test_a_world_shown_every_third_frame_keeps_its_speed():
     r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2).start()
 
     def counts() -> tuple[int, int, int]:  # frames run, snapshots taken, steps
-        return r.call(lambda sim: (r._frames_run, r._frame, sim.steps_done))
+        return r.call(Apply(lambda sim: (r._frames_run, r._frame, sim.steps_done)))
 
     try:
         wait_until(lambda: r.latest.step > 10)
-        r.show_every(3).result(10)
+        r.submit(ShowEvery(3))
         frames0, shots0, steps0 = counts()
         wait_until(lambda: r._frames_run >= frames0 + 36, what="36 frames")
         frames1, shots1, steps1 = counts()
         frames, shots = frames1 - frames0, shots1 - shots0
         assert shots <= frames // 3 + 2, (frames, shots)  # every third, and the readings' own
         assert steps1 - steps0 >= 2 * frames  # each frame its 2 steps (or more, catching up): the same speed
-        r.show_every(1).result(10)
+        r.submit(ShowEvery(1))
         frames0, shots0, _ = counts()
         wait_until(lambda: r._frames_run >= frames0 + 12, what="12 frames")
         frames1, shots1, _ = counts()
@@ -198,7 +199,7 @@ def test_a_world_shown_every_third_frame_keeps_its_speed():
 def test_headless_advance_without_threads():
     r = Runner(SMALL, shape=None, playing=False)
     snap = r.advance(25)
-    assert snap.step == 25 and r.call(lambda sim: sim.steps_done) == 25
+    assert snap.step == 25 and r.call(Apply(lambda sim: sim.steps_done)) == 25
 
 
 # ------------------------------------------------------------------ palette
@@ -452,22 +453,22 @@ def test_the_simulation_runs_in_another_process(process_runner):
     from sandbox.model.simulation import Simulation
 
     r = process_runner
-    assert r.call(where_am_i) == r.process.pid != os.getpid()
+    assert r.call(Apply(where_am_i)) == r.process.pid != os.getpid()
     step = r.latest.step
     wait_until(lambda: r.latest.step > step + 10)
     seen = []
-    r.post(functools.partial(Simulation.update_config, robots=-1), on_error=seen.append)
+    r.ask(Apply(functools.partial(Simulation.update_config, robots=-1)), on_error=seen.append)
     wait_until(lambda: seen)
     assert "robots" in str(seen[0])
-    r.set_playing(False)
+    r.submit(SetPlaying(False))
     wait_until(lambda: not r.latest.playing)
     paused_at = r.latest.step
-    r.step_once(3)
+    r.ask(StepOnce(3))
     wait_until(lambda: r.latest.step == paused_at + 3)
-    r.reset(5)
+    r.ask(Reset(5))
     wait_until(lambda: r.latest.seed == 5 and r.latest.step == 0)
     wait_until(lambda: [s.step for s in r.series()] == [0])
-    r.set_playing(True)
+    r.submit(SetPlaying(True))
     wait_until(lambda: len(r.series()) >= 2)
 
 
@@ -495,7 +496,7 @@ def test_simulation_processes_are_forked_from_one_warmed_up_server(process_runne
         pytest.skip("the fork server is what Linux offers; elsewhere a fresh interpreter starts")
     assert simulation_context().get_start_method() == "forkserver"
     assert process_runner.process._popen.__class__.__module__ == "multiprocessing.popen_forkserver"
-    assert "sandbox.warm" in process_runner.call(sandbox_modules_loaded)
+    assert "sandbox.warm" in process_runner.call(Apply(sandbox_modules_loaded))
 
 
 def test_a_crashed_simulation_process_is_reported_and_restarted(process_runner):
@@ -505,8 +506,8 @@ def test_a_crashed_simulation_process_is_reported_and_restarted(process_runner):
     r = process_runner
     crashes = []
     r.on_crash(crashes.append)
-    r.follow([2])
-    r.reset(9)
+    r.submit(Follow((2,)))
+    r.ask(Reset(9))
     wait_until(lambda: r.latest.seed == 9 and r.latest.robot(2) is not None)
     old, world = r.process.pid, r.latest.world_key
     os.kill(old, signal.SIGKILL)  # as a crash in the engine would end it
@@ -711,7 +712,7 @@ def test_the_inspector_says_which_dot_is_which_photocell_and_what_doing_means(ru
     from sandbox.app.view import palette as pal
     from sandbox.app.panel.inspector import InspectorFolder
 
-    runner.follow([0])
+    runner.submit(Follow((0,)))
     snap = wait_until(lambda: runner.latest.robot(0) is not None and runner.latest)
     text = InspectorFolder._text(snap, snap.robot(0))
     rows = [line for line in text.splitlines() if line.startswith("| front") or line.startswith("| back")]
@@ -735,7 +736,7 @@ def test_explain_the_result_says_where_the_strays_lie_and_rings_them(app):
     assert "**Ran:** circle" in text and folder.highlight.value
     assert folder.rings.visible and len(folder.rings.points) == outside
     world = snap.world_key
-    app.runner.reset()
+    app.runner.ask(Reset())
     wait_until(lambda: app.runner.latest.world_key != world, what="a new world")
     wait_until(lambda: not folder.highlight.value and not folder.rings.visible, what="the rings off")
     assert "press *Explain the result* again" in folder.text.content
@@ -761,7 +762,7 @@ def test_run_to_the_end_skips_without_frames_then_explains(app):
     app.events.call(folder.skip_ahead, 10**7, client)
     wait_until(lambda: (folder._build_fraction or 0) > 0 and "without drawing" in folder.status.content,
                what="the progress line, past the first chunk")
-    app.runner.cancel_build()
+    app.events.call(app.lockstep.cancel)  # the Cancel button: the run to the end it asked for
     wait_until(lambda: folder._skipping is None, what="the stop")
     assert start + 3000 < app.runner.latest.step < 10**7
     assert any(note[0] == "Stopped" for note in client.notes)
@@ -793,9 +794,9 @@ def test_run_to_the_end_right_after_a_reset_explains_the_new_world(app):
     arrived = threading.Event()
 
     def reset_then_run() -> None:  # queued together: the runner takes them in one turn, with no frame
-        app.runner.reset(None)
+        app.runner.ask(Reset(None))
         folder.skip_ahead(old + 2000, client)
-        app.runner.post(lambda sim: arrived.wait(30))  # and its frame only after the page heard the answer
+        app.runner.ask(Apply(lambda sim: arrived.wait(30)))  # and its frame only after the page heard the answer
 
     app.events.call(reset_then_run)
     wait_until(lambda: folder._skipping is None, what="the answer, heard before any frame of the new world")
@@ -817,9 +818,9 @@ def test_a_run_to_the_end_shows_the_world_it_starts_from(app):
     release = threading.Event()
 
     def reset_then_run() -> None:
-        app.runner.reset(None)
+        app.runner.ask(Reset(None))
         folder.skip_ahead(old + 1000, FakeClient())
-        app.runner.post(lambda sim: release.wait(30))  # no frame after the run until released
+        app.runner.ask(Apply(lambda sim: release.wait(30)))  # no frame after the run until released
 
     try:
         app.events.call(reset_then_run)
@@ -834,7 +835,7 @@ def test_a_live_worlds_design_downloads_and_plays_back_bit_for_bit():
     """Issue 40, item 6: the page's design of a live world (its light program as it ran) replays it
     exactly: the same state at the same step (serve --design plays it the same way)."""
     from sandbox.app.world.orders import DesignOf, PlayDesign, SetLamp
-    from sandbox.app.world.runner import DESIGN_PROGRAM
+    from sandbox.app.world.snapshot import DESIGN_PROGRAM
 
     live = Runner(SMALL.replace(chase=0.5), shape=None, seed=4)
     live.advance(0)

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sandbox.app.world.orders import SetPlaying
 from tests.browsing import BROWSER_MARKS, small_app
 from tests.waiting import frames_pass, paused_step, wait_until, wait_until_steady
 
@@ -594,7 +595,7 @@ def test_light_program_from_the_page(app, page, tmp_path):
                        "            return np.ones(3)  # the wrong shape\n"
                        "        return None\n")
     runner = app.runner
-    runner.set_playing(True)  # the failing program fails while stepping
+    runner.submit(SetPlaying(True))  # the failing program fails while stepping
     open_folder(page, "Light program")
     # viser's text inputs are not tied to their label (its for= names another id): find the input in the row.
     label = page.locator("label:text-is('Program')")
@@ -628,7 +629,7 @@ def test_be_the_light_moves_a_lamp_the_robots_follow(app, page):
     from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 
     runner = app.runner
-    runner.set_playing(True)
+    runner.submit(SetPlaying(True))
     dismiss_notifications(page)
     open_folder(page, "Be the light")
     click_button(page, "Be the light")

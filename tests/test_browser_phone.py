@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.web.page_layout import SHORTCUTS_ID, SOFTWARE_NOTICE
+from sandbox.app.world.orders import SetPlaying
 from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 from tests.browsing import BROWSER_MARKS
 from tests.waiting import wait_until
@@ -86,7 +87,7 @@ def test_a_phone_gets_the_arena_whole_a_drawer_and_no_lasting_notice(app, phone)
 def test_touch_taps_and_a_drag_move_the_lamp_and_paint_lights(app, phone, tmp_path):
     context, page = phone
     runner, lamp = app.runner, app.panel.lamp
-    runner.set_playing(True)
+    runner.submit(SetPlaying(True))
     page.locator(f"#{SHORTCUTS_ID}").get_by_role("button", name="Be the light", exact=True).tap()
     wait_until(lambda: runner.latest.program == LAMP_PROGRAM, what="the lamp, from the shortcut")
     page.locator(f"#{SHORTCUTS_ID}").get_by_role("button", name="Give the light back", exact=True).wait_for()

@@ -62,8 +62,7 @@ def challenge_folder(reset, playing, events, lamps):
     """A challenge folder over stand-ins: a runner whose last frame is world 1's (the lamp lit at once,
     each centre kept in ``lamps``) and a lockstep whose ``reset`` is given (``playing`` hears play and pause)."""
     runner = SimpleNamespace(latest=frame(500, 0, world=1, program=PAPER_PROGRAM),
-                             set_lamp=lambda centre, radius, mode, on_done, on_error: (lamps.append(centre),
-                                                                                       on_done(None)))
+                             ask=lambda lamp, on_done, on_error: (lamps.append(lamp.centre), on_done(None)))
     lockstep = SimpleNamespace(set_playing=playing, reset=reset)
     lamp = SimpleNamespace(radius=SimpleNamespace(value=1.0))
     folder = ChallengeFolder(None, runner, lockstep, lamp, on_change=lambda what: None, events=events)
@@ -97,7 +96,7 @@ def test_a_round_lights_the_robots_counts_from_its_start_and_hints_after_no_prog
     assert len(timers.timers) == 1
     folder.update(frame(400, 6))
     assert len([t for t in timers.timers if not t.cancelled]) == 1  # each progress re-arms one wait
-    folder.runner.world_spec = lambda on_done, on_error: None
+    folder.runner.ask = lambda command, on_done, on_error: None  # the paper's reference run: not here
     folder.update(frame(10_000, 7))  # the round's end: the wait is cancelled
     assert folder.round.score == Gain(3, 7, 10) and timers.pass_time() == 0 and folder.hint.content == ""
 

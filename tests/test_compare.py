@@ -3,10 +3,14 @@ side; and the runner's hold and run-to that carry the lockstep."""
 
 from __future__ import annotations
 
+from concurrent.futures import Future
+
 import numpy as np
 import pytest
 
+from sandbox.app.web.events import EventQueue
 from sandbox.app.world.lockstep import COMPARE_CASES, LEAD_FRAMES, SAME, Lockstep, partner_config, side_config
+from sandbox.app.world.orders import Hold, Reset, RunTo, SetLamp, SetPlaying, SetSpeed
 from sandbox.app.world.runner import Runner
 from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
 from sandbox.model.config import CASES, Config, ConfigError
@@ -23,16 +27,16 @@ def started(config: Config, **kwargs) -> Runner:
 def test_a_held_runner_stops_at_the_held_step_and_runs_to_a_step_while_paused():
     runner = started(SMALL, playing=False)  # held before it plays: a runner that played first had passed 40
     try:
-        runner.hold(40)
-        runner.set_playing(True)
+        runner.submit(Hold(40))
+        runner.submit(SetPlaying(True))
         wait_until(lambda: runner.latest.step == 40, what="the runner to reach the held step")
         frame = runner.latest.frame
         wait_until(lambda: runner.latest.frame >= frame + 5, what="five more frames")
         assert runner.latest.step == 40  # playing, but held
-        runner.set_playing(False)
-        runner.run_to(73)
+        runner.submit(SetPlaying(False))
+        runner.ask(RunTo(73))
         wait_until(lambda: runner.latest.step == 73, what="the runner to run to step 73")
-        runner.run_to(50)  # behind it: nothing
+        runner.ask(RunTo(50))  # behind it: nothing
         frame = runner.latest.frame
         wait_until(lambda: runner.latest.frame >= frame + 3, what="three more frames")
         assert runner.latest.step == 73
@@ -43,11 +47,11 @@ def test_a_held_runner_stops_at_the_held_step_and_runs_to_a_step_while_paused():
 def test_steps_allowed_by_a_hold_are_counted_by_hand():
     runner = Runner(SMALL, steps_per_frame=25)
     assert runner._steps_allowed(25) == 25  # no hold
-    runner.hold(10)
+    runner.submit(Hold(10))
     assert runner._steps_allowed(25) == 10  # at step 0: ten to go
     runner.advance(10)
     assert runner._steps_allowed(25) == 0
-    runner.hold(None)
+    runner.submit(Hold(None))
     assert runner._steps_allowed(25) == 25
 
 
@@ -66,12 +70,61 @@ def test_the_lead_is_six_frames_of_steps_by_hand():
             return 3000.0
 
     main = Main()
-    lockstep = Lockstep(main)
+    lockstep = Lockstep(main, EventQueue())
     assert lockstep._lead() == 150
     main.steps_per_frame = 100  # FASTEST
     assert lockstep._lead() == 600
     main.steps_per_second = lambda: 10.0
     assert lockstep._lead() == 20
+
+
+class World:
+    """A runner as the lockstep sees it: its frames' listeners, its newest frame, what it was sent."""
+
+    def __init__(self, step: int):
+        from types import SimpleNamespace
+
+        self.latest = SimpleNamespace(step=step, world_key=0)
+        self.listeners, self.submitted = [], []
+        self.playing, self.steps_per_frame = True, 5
+
+    def subscribe(self, listener):
+        self.listeners.append(listener)
+
+    def submit(self, command):
+        self.submitted.append(command)
+
+
+class Posted:
+    """The app's event queue, held: what waits on it, the newest of each kind only (as post_latest)."""
+
+    def __init__(self):
+        self.waiting = {}
+
+    def post_latest(self, key, fn, *args):
+        self.waiting[key] = (fn, args)
+
+
+def test_frames_only_post_the_lockstep_to_the_event_queue():
+    """Issue 55: the lockstep ran on both worlds' receiving threads under a lock of its own. Their frames
+    now post its work to the app's event queue, where it owns its state: no lock, and nothing done on a
+    runner's thread."""
+    import threading
+
+    events, main, partner = Posted(), World(100), World(90)
+    lockstep = Lockstep(main, events)
+    lockstep.pair(partner)
+    main.submitted.clear(), partner.submitted.clear()
+    for world in (main, partner, main):  # frames, as the runners' threads hand them over
+        world.listeners[0](world.latest)
+    assert lockstep.target == 0 and not main.submitted and not partner.submitted
+    assert list(events.waiting) == [lockstep]  # one raise of the target waits, however many frames came
+    fn, args = events.waiting.pop(lockstep)
+    fn(*args)  # the event thread runs it
+    assert lockstep.target == 90 + LEAD_FRAMES * 5  # a lead ahead of the slower world
+    assert main.submitted == partner.submitted == [Hold(120)]
+    locks = (type(threading.Lock()), type(threading.RLock()))
+    assert not [name for name, value in vars(lockstep).items() if isinstance(value, locks)]
 
 
 def test_the_right_curve_is_read_at_the_left_worlds_steps_by_hand():
@@ -107,19 +160,34 @@ def test_a_side_is_a_case_or_a_config_file(tmp_path):
         side_config(str(tmp_path / "missing.toml"), Config())
 
 
+class OnTheQueue:
+    """The lockstep as the app drives it: every call, and every read, on the app's event thread."""
+
+    def __init__(self, lockstep: Lockstep, events: EventQueue):
+        self._lockstep, self._events = lockstep, events
+
+    def __getattr__(self, name: str):
+        value = self._events.call(getattr, self._lockstep, name)
+        if not callable(value):
+            return value
+        return lambda *args, **kwargs: self._events.call(lambda: value(*args, **kwargs))
+
+
 @pytest.fixture
 def pair():
-    main = started(SMALL.replace(shape="star"))
+    events = EventQueue().open()  # the runners' answers come there too, as in the app
+    main = started(SMALL.replace(shape="star"), deliver=events.post)
     partner = started(partner_config(SMALL.replace(shape="star"), "star-switch"), seed=main.latest.seed,
-                      playing=False)
-    lockstep = Lockstep(main)
-    lockstep.pair(partner)
-    yield lockstep, main, partner
+                      playing=False, deliver=events.post)
+    lockstep = Lockstep(main, events)
+    events.call(lockstep.pair, partner)
+    yield OnTheQueue(lockstep, events), main, partner
+    events.stop()
     main.stop()
     partner.stop()
 
 
-def _reset(lockstep: Lockstep, seed=None) -> None:
+def _reset(lockstep: OnTheQueue, seed=None) -> None:
     done = []
     lockstep.reset(seed, on_done=done.append, on_error=done.append)
     wait_until(lambda: done, what="both worlds rebuilt")
@@ -182,7 +250,7 @@ def test_worlds_shown_every_third_frame_go_on_in_step(pair):
 def test_a_slow_world_sets_the_pace(pair):
     lockstep, main, partner = pair
     _reset(lockstep)
-    partner.set_speed(1)  # as if its machine were five times slower
+    partner.submit(SetSpeed(1))  # as if its machine were five times slower
     lockstep.set_playing(True)
     wait_until(lambda: partner.latest.step >= 40, what="the slow world to step")
     assert main.latest.step <= partner.latest.step + LEAD_FRAMES * main.steps_per_frame + main.steps_per_frame
@@ -258,7 +326,7 @@ def test_compare_with_the_same_world_under_the_papers_lights():
 
     app = App(SMALL, port=free_port(), fps=60, steps_per_frame=5, process=False).start()
     try:
-        app.runner.set_lamp((32.0, 32.0), 6.0)
+        app.runner.ask(SetLamp((32.0, 32.0), 6.0))
         app.events.call(app.panel.compare.choose, SAME, None)
         wait_until(lambda: app.comparison.runner is not None, what="the second world")
         wait_until(lambda: app.comparison.runner.latest.world_key == app.runner.latest.world_key == 1,
@@ -342,11 +410,20 @@ def test_a_refused_reset_leaves_both_worlds_going_on_in_step(pair):
     lockstep.set_playing(True)
     wait_until(lambda: partner.latest.step > 60, what="both playing")
     key = partner.latest.world_key
-    real_reset = main.reset
-    main.reset = lambda seed, on_done=None, on_error=None: on_error(RuntimeError("refused"))
+    real_submit = main.submit
+
+    def refusing(command):
+        if not isinstance(command, Reset):
+            return real_submit(command)
+        refused: Future = Future()
+        refused.set_exception(RuntimeError("refused"))
+        return refused
+
+    main.submit = refusing
     errors = []
     lockstep.reset(None, on_error=errors.append)
-    main.reset = real_reset
+    main.submit = real_submit
+    wait_until(lambda: errors, what="the refusal")
     assert [str(e) for e in errors] == ["refused"]
     step = partner.latest.step
     wait_until(lambda: partner.latest.step > step + 40, what="the worlds to go on")

@@ -19,6 +19,7 @@ import pytest
 
 from sandbox.app.world.faults import CRASH_BUILD
 from sandbox.app.world.child import ProcessRunner, SimulationCrashed
+from sandbox.app.world.orders import Reset, UpdateConfig
 from sandbox.model.config import Config
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until
@@ -54,8 +55,8 @@ def kill(r: ProcessRunner) -> None:
 
 def test_settings_that_kill_the_process_while_building_go_back_to_the_last_that_ran(runner):
     """Before: restarted with light pitch 0.5 and killed again, for ever."""
-    runner.update_config({"light_pitch": 0.5, "field_samples": 16}).result(10)
-    refused = runner.reset()
+    runner.call(UpdateConfig({"light_pitch": 0.5, "field_samples": 16}), 10)
+    refused = runner.ask(Reset())
     assert isinstance(refused.exception(timeout=30), SimulationCrashed)
     running_again(runner, 1)
     assert runner.heard == [f"{KILLED} with light pitch 0.5, field samples 16; back to the last settings that ran "
@@ -73,7 +74,7 @@ def test_a_setting_changed_while_the_process_is_down_waits_for_the_next_one(runn
     changes: list[Future] = []
     runner.restart_pause = 0.5
     # Heard on the thread that restarts the process, before it does: the process is down.
-    runner.on_crash(lambda why: changes.append(runner.update_config({"light_pitch": 2.0})))
+    runner.on_crash(lambda why: changes.append(runner.ask(UpdateConfig({"light_pitch": 2.0}))))
     kill(runner)
     wait_until(lambda: changes, what="the crash")
     pending, settings = changes[0].result(30)  # answered by the next process, not refused
@@ -85,8 +86,8 @@ def test_a_setting_changed_while_the_process_is_down_waits_for_the_next_one(runn
 
 def test_a_second_crash_with_the_settings_that_ran_goes_back_to_those_before(runner):
     runner.proven_steps = 20
-    runner.update_config({"robots": 14}).result(10)
-    runner.reset().result(30)
+    runner.call(UpdateConfig({"robots": 14}), 10)
+    runner.call(Reset(), 30)
     wait_until(lambda: runner.standing.config.robots == 14, what="the new world to count as having run")
     runner.proven_steps = runner.proven_seconds = NEVER
     kill(runner)  # the settings that stand: restarted from them
@@ -109,7 +110,7 @@ def test_crashes_far_apart_with_no_world_running_between_give_up(runner):
     wait_until(lambda: runner.failed, what="the runner to give up")
     assert runner.failed == (f"the simulation cannot start: it stopped 3 times with no world running in between "
                              f"(last: {KILLED})")
-    refused = runner.update_config({"robots": 20})  # no process will take it: refused at once, with why
+    refused = runner.ask(UpdateConfig({"robots": 20}))  # no process will take it: refused at once, with why
     assert "cannot start" in str(refused.exception(timeout=0))
 
 

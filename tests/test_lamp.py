@@ -65,6 +65,7 @@ def test_the_lamp_radius_stays_within_what_the_page_offers():
 
 def test_the_runner_hands_the_lights_to_the_lamp_and_back():
     from sandbox.app.world.runner import Runner
+    from sandbox.app.world.orders import SetLamp
     from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
     from tests.waiting import wait_until
 
@@ -73,13 +74,13 @@ def test_the_runner_hands_the_lights_to_the_lamp_and_back():
     runner.start()
     try:
         centre = (20.5, 40.5)
-        runner.set_lamp(centre, 3.0)
+        runner.ask(SetLamp(centre, 3.0))
         wait_until(lambda: runner.latest.program == LAMP_PROGRAM and runner.latest.intensities.any(),
                    what="the lamp's lights")
         lit = np.argwhere(runner.latest.intensities > 0) + 0.5  # light centres (1 m pitch)
         assert np.hypot(*(lit - centre).T).max() <= 3.0 and len(lit) >= 25  # 29 lights within 3 m
         step = runner.latest.step
-        runner.set_lamp(None)
+        runner.ask(SetLamp(None))
         wait_until(lambda: runner.latest.program == PAPER_PROGRAM, what="the paper's controller back")
         assert runner.latest.step >= step  # the same world goes on
     finally:

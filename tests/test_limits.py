@@ -7,7 +7,8 @@ import threading
 import numpy as np
 import pytest
 
-from sandbox.app.world.runner import BuildCancelled, Runner
+from sandbox.app.world.orders import BuildCancelled, CancelBuild, Reset, SetPlaying, UpdateConfig
+from sandbox.app.world.runner import Runner
 from sandbox.model.config import Config, ConfigError
 from sandbox.model.simulation import Simulation
 from sandbox.model.world import World
@@ -64,10 +65,12 @@ def test_building_a_world_reports_progress_and_can_be_cancelled():
     try:
         seen, outcome = [], {}
         done = threading.Event()
-        runner.on_progress(lambda f: (seen.append(f), f is not None and f > 0.2 and runner.cancel_build()))
-        runner.update_config({"robots": 3_000, "boxes": 900})
-        runner.reset(on_done=lambda r: (outcome.setdefault("done", r), done.set()),
-                     on_error=lambda e: (outcome.setdefault("error", e), done.set()))
+        reset = Reset()
+        runner.on_progress(lambda f: (seen.append(f), f is not None and f > 0.2
+                                      and runner.submit(CancelBuild(reset.build))))
+        runner.ask(UpdateConfig({"robots": 3_000, "boxes": 900}))
+        runner.ask(reset, on_done=lambda r: (outcome.setdefault("done", r), done.set()),
+                   on_error=lambda e: (outcome.setdefault("error", e), done.set()))
         assert done.wait(60)
         assert isinstance(outcome.get("error"), BuildCancelled)
         assert seen[-1] is None and any(f is not None and 0 < f < 1 for f in seen)
@@ -75,7 +78,7 @@ def test_building_a_world_reports_progress_and_can_be_cancelled():
         wait_until(lambda: runner.latest.config.robots == 3_000, 10)
         snap = runner.latest
         assert len(snap.robot_positions) == 10 and snap.config.robots == 3_000  # old world on; change still waits
-        runner.set_playing(True)  # and it goes on stepping, its speed measured
+        runner.submit(SetPlaying(True))  # and it goes on stepping, its speed measured
         wait_until(lambda: runner.latest.step > 0, 30)
         assert len(runner.latest.robot_positions) == 10
         assert runner.steps_per_second() > 0.0

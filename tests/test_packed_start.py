@@ -58,15 +58,16 @@ def test_bad_starts_are_refused_with_a_reason():
 def test_the_app_keeps_its_world_when_a_packed_start_cannot_be_built():
     import threading
 
+    from sandbox.app.world.orders import Reset, UpdateConfig
     from sandbox.app.world.runner import Runner
 
     runner = Runner(Config(robots=10, boxes=20), shape=None, playing=False)
     runner.start()
     try:
         outcome, done = {}, threading.Event()
-        runner.update_config({"box_start": "packed", "box_skin": 0.6, "boxes": 400})
-        runner.reset(on_done=lambda r: (outcome.setdefault("done", r), done.set()),
-                     on_error=lambda e: (outcome.setdefault("error", e), done.set()))
+        runner.ask(UpdateConfig({"box_start": "packed", "box_skin": 0.6, "boxes": 400}))
+        runner.ask(Reset(), on_done=lambda r: (outcome.setdefault("done", r), done.set()),
+                   on_error=lambda e: (outcome.setdefault("error", e), done.set()))
         assert done.wait(60)
         assert isinstance(outcome.get("error"), ConfigError)
         assert "do not tile the construction area" in str(outcome["error"])

@@ -15,6 +15,7 @@ import time
 
 import pytest
 
+from sandbox.app.world.orders import Apply, Reset, SetProgram, UpdateConfig
 from sandbox.commands import main
 from sandbox.model import watchdog
 from sandbox.model.config import Config
@@ -177,7 +178,7 @@ def test_the_app_hands_the_lights_back_when_a_program_overruns(programs):
 
     runner = Runner(SMALL, shape=None, fps=60, steps_per_frame=2, program_time_limit=0.3).start()
     try:
-        runner.set_program(f"{programs}:Spin")
+        runner.ask(SetProgram(f"{programs}:Spin"))
         wait_until(lambda: runner.latest.program_error, what="the program to be stopped")
         assert runner.latest.program == PAPER
         assert "Spin.update took longer than 0.3 s (at bad.py line" in runner.latest.program_error[1]
@@ -200,7 +201,7 @@ def test_a_program_that_cannot_be_stopped_or_crashes_costs_its_process_not_the_a
     runner.start()
     try:
         for name, restarts in (("Sleeps", 1), ("Crashes", 2)):
-            runner.set_program(f"{programs}:{name}")
+            runner.ask(SetProgram(f"{programs}:{name}"))
             wait_until(lambda: runner.restarts == restarts and runner.latest.program == PAPER,
                        what=f"a fresh simulation after {name}")
             frame = runner.latest.frame
@@ -226,13 +227,13 @@ def test_the_app_survives_a_raising_callback_a_kill_while_building_and_gives_up_
         def boom(result):
             raise RuntimeError("a broken callback")
 
-        runner.post(_steps_done, on_done=boom)
+        runner.ask(Apply(_steps_done), on_done=boom)
         wait_until(lambda: any("a broken callback" in str(e) for e in runner.errors), what="the callback to fail")
         frame = runner.latest.frame
         wait_until(lambda: runner.latest.frame > frame + 5, what="frames after the broken callback")
 
-        runner.update_config({"robots": 3000, "boxes": 3000})
-        runner.reset()  # a big world takes a while to build: kill the process in the middle
+        runner.ask(UpdateConfig({"robots": 3000, "boxes": 3000}))
+        runner.ask(Reset())  # a big world takes a while to build: kill the process in the middle
         wait_until(lambda: any(p is not None for p in progress), what="building to start")
         os.kill(runner.process.pid, signal.SIGKILL)
         wait_until(lambda: runner.restarts == 1, what="the restart")
@@ -244,7 +245,7 @@ def test_the_app_survives_a_raising_callback_a_kill_while_building_and_gives_up_
         wait_until(lambda: runner.failed, what="the runner to give up")
         assert "the simulation cannot start: it stopped 2 times within a minute" in heard[-1]
         done: list = []
-        runner.reset(on_error=done.append)
+        runner.ask(Reset(), on_error=done.append)
         assert done and "cannot start" in str(done[0])
     finally:
         runner.stop()
@@ -274,7 +275,7 @@ def test_after_a_restart_the_next_program_failure_is_announced_again(programs):
     runner.start()
     try:
         def fails_and_is_told(times: int) -> None:
-            runner.set_program(f"{programs}:Exits")
+            runner.ask(SetProgram(f"{programs}:Exits"))
             wait_until(lambda: sum("Light program stopped" in t for t in told) == times,
                        what=f"failure {times} on the page")
 

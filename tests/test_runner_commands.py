@@ -1,4 +1,5 @@
-"""Typed commands (sandbox.app.world.orders): each carried out in one place, every future settled.
+"""Typed commands (sandbox.app.world.orders): each written once, with what it does; every future settled;
+a cancel stops the build it names and no other.
 
 Whoever submits a command gets a future that resolves or fails: a stopped runner fails what it had not
 carried out, a crashed child fails what it owed, and a command sent while the child is swapped reaches
@@ -18,15 +19,16 @@ from concurrent.futures import wait
 import pytest
 
 from sandbox.app.world import orders as commands
-from sandbox.app.world.orders import Command, Control, RunnerStopped, Setting
+from sandbox.app.world.orders import (Apply, Arrival, Build, BuildCancelled, CancelBuild, Command, Control, Reset,
+                                      RunnerStopped, Setting, SetOutline, SkipAhead, StepOnce)
 from sandbox.app.world.child import ProcessRunner, SimulationCrashed
-from sandbox.app.world.runner import HANDLERS, Runner
+from sandbox.app.world.runner import Runner
 from sandbox.model.config import Config
 from tests.waiting import wait_until
 
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 COMMANDS = [kind for _, kind in inspect.getmembers(commands, inspect.isclass)
-            if issubclass(kind, Command) and kind not in (Command, Control, Setting)]
+            if issubclass(kind, Command) and kind not in (Command, Control, Setting, Build)]
 
 
 def where_am_i(sim) -> int:
@@ -41,19 +43,21 @@ def blocks_until(sim, path: str) -> None:
 
 
 @pytest.mark.parametrize("kind", COMMANDS, ids=lambda kind: kind.__name__)
-def test_every_command_has_a_handler(kind):
-    assert any(base in HANDLERS for base in kind.__mro__), f"Runner.handle does not carry out {kind.__name__}"
+def test_every_command_says_what_it_does(kind):
+    assert kind.carry_out is not Command.carry_out, f"{kind.__name__} has no carry_out: nothing carries it out"
+    if issubclass(kind, Setting) and kind is not Setting:
+        assert kind.settle is not Setting.settle, f"{kind.__name__} sets no control"
 
 
 def test_a_stopped_runner_fails_every_command_it_had_not_carried_out():
     runner = Runner(SMALL, shape=None)  # not started: the commands wait for the loop
     heard: list[BaseException] = []
-    futures = [runner.reset(3, on_error=heard.append), runner.set_outline("offset", on_error=heard.append),
-               runner.post(where_am_i, on_error=heard.append), runner.step_once(2)]
+    futures = [runner.ask(Reset(3), on_error=heard.append), runner.ask(SetOutline("offset"), on_error=heard.append),
+               runner.ask(Apply(where_am_i), on_error=heard.append), runner.ask(StepOnce(2))]
     runner.stop()
     assert all(isinstance(f.exception(timeout=0), RunnerStopped) for f in futures)
     assert len(heard) == 3 and all(isinstance(e, RunnerStopped) for e in heard)
-    late = runner.reset(4, on_error=heard.append)
+    late = runner.ask(Reset(4), on_error=heard.append)
     assert isinstance(late.exception(timeout=0), RunnerStopped) and len(heard) == 4
     assert not runner.errors  # stopping is no error of the commands'
 
@@ -63,7 +67,7 @@ def test_callbacks_go_through_deliver_when_given():
     runner = Runner(SMALL, shape=None, deliver=handed.append)
     built, progress = [], []
     runner.on_progress(progress.append)
-    future = runner.reset(5, on_done=built.append)
+    future = runner.ask(Reset(5), on_done=built.append)
     runner.advance(1)
     assert future.done() and not built and not progress  # handed over, not called on the runner's thread
     for thunk in handed:
@@ -74,12 +78,85 @@ def test_callbacks_go_through_deliver_when_given():
 def test_a_command_that_raises_fails_its_future_and_the_loop_goes_on():
     runner = Runner(SMALL, shape=None, fps=60, steps_per_frame=2).start()
     try:
-        refused = runner.update_config({"robots": -1})
+        refused = runner.submit(commands.UpdateConfig({"robots": -1}))
         assert "robots" in str(refused.exception(timeout=10))
         step = runner.latest.step
         wait_until(lambda: runner.latest.step > step, what="steps after the refusal")
     finally:
         runner.stop()
+
+
+# ------------------------------------------------------------------ a cancel belongs to its build
+# Issue 55: a cancel was one flag of the runner's. Set just after a run to the end ended, it stopped the
+# next one at its first step; a Reset cleared it as it started, so a cancel that waited its turn behind
+# the reset was lost. Now a cancel names its build. A runner that was not started carries out what
+# waits at call(), in order, on this thread: both orders below are run as they are written.
+def _nothing(sim) -> None:
+    return None
+
+
+def test_a_cancel_that_comes_after_its_run_to_the_end_leaves_the_next_one_alone():
+    runner = Runner(SMALL, shape=None, playing=False)
+    first = SkipAhead(300)
+    assert runner.call(first) == Arrival(300, False, runner.world_key)
+    runner.submit(CancelBuild(first.build))  # pressed as it ended: too late, and for that one only
+    assert runner.call(SkipAhead(700)) == Arrival(700, False, runner.world_key)
+
+
+def test_a_reset_keeps_the_cancel_of_the_run_to_the_end_behind_it():
+    runner = Runner(SMALL, shape=None, playing=False)
+    world = runner.world_key
+    skip = SkipAhead(500)
+    built, arrived = runner.submit(Reset()), runner.submit(skip)  # Use and run to the end
+    runner.submit(CancelBuild(skip.build))  # while both wait their turn
+    runner.call(Apply(_nothing))
+    assert built.result(0) == world + 1  # not the one cancelled: built
+    assert arrived.result(0) == Arrival(0, True, world + 1)  # stopped before its first step
+
+
+def test_a_cancel_of_a_reset_waiting_its_turn_stops_it_and_nothing_after_it():
+    runner = Runner(SMALL, shape=None, playing=False)
+    world, seed = runner.world_key, runner.sim.seed
+    reset = Reset(seed + 1)
+    built, arrived = runner.submit(reset), runner.submit(SkipAhead(400))
+    runner.submit(CancelBuild(reset.build))
+    runner.call(Apply(_nothing))
+    with pytest.raises(BuildCancelled):
+        built.result(0)
+    assert runner.world_key == world and runner.sim.seed == seed  # the old world goes on
+    assert arrived.result(0) == Arrival(400, False, world)
+
+
+def test_a_cancel_during_a_build_stops_it_and_one_after_it_does_nothing():
+    runner = Runner(SMALL, shape=None, playing=False)
+    skip = SkipAhead(10_000)
+    runner.on_progress(lambda fraction: fraction is not None and runner.submit(CancelBuild(skip.build)))
+    arrival = runner.call(skip)
+    assert arrival.cancelled and 0 < arrival.step < 10_000  # stopped after its first chunk, where it got to
+    runner.submit(CancelBuild(skip.build))
+    assert not runner._builds  # over: nothing of it is kept
+
+
+# ------------------------------------------------------------------ one owner of play
+def test_a_frame_that_fails_halts_the_world_and_leaves_play_to_its_owner(monkeypatch):
+    """Issue 55: the loop wrote ``controls.playing`` as the settings do. Now it writes no control: a frame
+    that fails halts the world (its frames say paused) and the on_halt listener, which owns play, decides;
+    its SetPlaying lifts the halt."""
+    runner = Runner(SMALL, shape=None, steps_per_frame=5)
+    told: list[str] = []
+    runner.on_halt(told.append)
+    real_step = runner.sim.step
+    monkeypatch.setattr(runner.sim, "step", lambda n=None: (_ for _ in ()).throw(RuntimeError("a bug")))
+    runner._frame_on_schedule(time.perf_counter(), 1 / 30)
+    assert runner.controls.playing and len(told) == 1 and "a bug" in told[0]  # nothing written: the owner is told
+    assert isinstance(runner.errors[-1], RuntimeError)
+    monkeypatch.setattr(runner.sim, "step", real_step)
+    runner._frame_on_schedule(time.perf_counter(), 1 / 30)
+    assert runner.sim.steps_done == 0 and not runner.latest.playing  # halted: no step, and it says paused
+    runner.submit(commands.SetPlaying(False))  # the owner pauses, as the app does (App: on_halt)
+    runner.submit(commands.SetPlaying(True))  # and later plays again
+    runner._frame_on_schedule(time.perf_counter(), 1 / 30)
+    assert runner.sim.steps_done == 5 and runner.latest.playing and len(told) == 1
 
 
 # ------------------------------------------------------------------ process runner
@@ -94,8 +171,8 @@ def process_runner():
 def test_stopping_fails_every_call_the_process_owes(process_runner, tmp_path):
     runner = process_runner
     heard: list[BaseException] = []
-    busy = runner.post(functools.partial(blocks_until, path=str(tmp_path / "never")))
-    owed = [runner.reset(1, on_error=heard.append), runner.post(where_am_i, on_error=heard.append), busy]
+    busy = runner.submit(Apply(functools.partial(blocks_until, path=str(tmp_path / "never"))))
+    owed = [runner.ask(Reset(1), on_error=heard.append), runner.ask(Apply(where_am_i), on_error=heard.append), busy]
     runner.stop(timeout=1)
     done, pending = wait(owed, timeout=10)
     assert not pending and all(isinstance(f.exception(), RunnerStopped) for f in owed)
@@ -107,12 +184,12 @@ def test_stopping_fails_every_call_the_process_owes(process_runner, tmp_path):
 def test_a_call_made_while_the_child_is_swapped_is_answered_or_refused(process_runner):
     runner = process_runner
     runner.restart_pause = 0.05
-    old = runner.call(where_am_i)
+    old = runner.call(Apply(where_am_i))
     futures, stop = [], threading.Event()
 
     def keep_calling() -> None:
         while not stop.is_set():
-            futures.append(runner.post(where_am_i))
+            futures.append(runner.submit(Apply(where_am_i)))
             time.sleep(0.002)  # a steady stream of calls across the crash and the restart
 
     caller = threading.Thread(target=keep_calling)
@@ -139,7 +216,7 @@ def test_stopping_during_the_pause_before_a_restart_starts_no_process(process_ru
     runner.on_crash(crashes.append)
     os.kill(runner.process.pid, signal.SIGKILL)
     wait_until(lambda: crashes, what="the crash to be reported")
-    refused = runner.reset()  # no process to take it: refused at once, not kept for ever
+    refused = runner.submit(Reset())  # no process to take it: refused at once, not kept for ever
     assert "restarting" in str(refused.exception(timeout=0))
     started = time.monotonic()
     runner.stop()

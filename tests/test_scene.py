@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.world.runner import Runner
+from sandbox.app.world.orders import SetPlaying, StepOnce
 from sandbox.app.view.scene import POINT_GRID, CompactSender, SceneView, compare_camera, compare_offset, top_down_camera
 from sandbox.app.world.snapshot import caption, case_name
 from sandbox.model.config import Config
@@ -49,8 +50,8 @@ def snapshot():
     r = Runner(Config(robots=12, boxes=20, update_every=10, hold_steps=3), shape=None, fps=60, steps_per_frame=2)
     r.start()
     try:
-        r.set_playing(False)
-        r.step_once(5)
+        r.submit(SetPlaying(False))
+        r.ask(StepOnce(5))
         snap = r.latest
         while snap.step == 0:
             snap = r.latest

@@ -22,6 +22,7 @@ import websockets.sync.client
 
 from sandbox.app.web.access import Access, Grant
 from sandbox.app.web.gate import MAX_CONNECTIONS, TOKEN_RESERVE, WATCHERS_PER_ADDRESS, WRITTEN_FOR
+from sandbox.app.world.orders import SetPlaying
 from sandbox.model.config import Config
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until, wait_until_steady
@@ -270,7 +271,7 @@ def test_an_endless_upload_never_grows_the_server(app):
     cid = connected(app, client)
     upload = uuid_of(app.panel.shape.upload)
     part = b"x" * (512 * 1024)
-    app.runner.set_playing(False)  # no new frames to draw: what grows is the upload's doing
+    app.runner.submit(SetPlaying(False))  # no new frames to draw: what grows is the upload's doing
     wait_until_steady(lambda: app.runner.latest.step)
     before = _rss()
     huge = client.start_upload(upload, size=300 * 1024 * 1024, parts=600)  # refused as announced

@@ -31,7 +31,8 @@ from sandbox.app.web.pacing import frames_per_snapshot
 from sandbox.app.panel import Panel
 from sandbox.app.panel.framing import PRESENTER, WHOLE_ARENA
 from sandbox.app.world.child import ProcessRunner, SimulationCrashed
-from sandbox.app.world.runner import Runner, wait_for
+from sandbox.app.world.orders import PlayDesign, SetProgram
+from sandbox.app.world.runner import Runner
 from sandbox.app.view.scene import SceneView, configure_scene
 from sandbox.app.world.snapshot import Snapshot
 from sandbox.app.web.stopping import interruptible, starting, term_stops
@@ -94,7 +95,7 @@ class App:
             return kind(partner_config, fps=fps, steps_per_frame=self.runner.steps_per_frame,
                         program_time_limit=program_time_limit, deliver=self.events.post, **kwargs)
 
-        self.lockstep = Lockstep(self.runner)
+        self.lockstep = Lockstep(self.runner, self.events)  # on the event queue
         try:
             self.server, self.gate = start_server(self.access, host=host, port=port, label=TITLE, verbose=verbose,
                                                   callbacks=self.events.submit)
@@ -124,6 +125,8 @@ class App:
             raise
         self.frames_drawn = 0
         self.runner.subscribe(lambda snap: self.events.post_latest("frame", self._on_frame, snap))
+        # A frame that failed halted the world: the event thread, which owns play, pauses it (both worlds).
+        self.runner.on_halt(lambda why: self.lockstep.set_playing(False))
         if process:
             self.runner.on_crash(self._on_crash)  # delivered on the event queue
             self.runner.on_settings_back(self.panel.show_settings)  # the panel shows the settings that stand
@@ -266,13 +269,13 @@ class App:
         self.runner.start()
         if self._controller:  # the light program given on the command line, before anyone looks
             try:
-                wait_for(self.runner.set_program, self._controller, 30.0)
+                self.runner.call(SetProgram(self._controller), 30.0)
             except Exception as exc:
                 self.stop()
                 raise UserError(str(exc)) from None
         if self._design is not None:  # its recorded light program, from its seed, before anyone looks
             try:
-                self.runner.play_design(self._design).result(60.0)
+                self.runner.call(PlayDesign(self._design), 60.0)
             except Exception as exc:
                 self.stop()
                 raise UserError(f"the design cannot play: {exc}") from None

@@ -27,6 +27,7 @@ import viser
 
 from sandbox.app.panel.common import notify_error
 from sandbox.app.panel.plain import plain
+from sandbox.app.world.orders import SetLamp, WorldSpec
 from sandbox.app.world.snapshot import LAMP_PROGRAM, Snapshot
 from sandbox.model.challenge import ROUND_SEED, ROUND_STEPS, Gain, lamp_start, paper_gain
 from sandbox.processes import simulation_context
@@ -140,8 +141,8 @@ class ChallengeFolder:
             self._on_change(f"round: {r.player}")
             self._arm_hint(r)
 
-        self.runner.set_lamp(centre, radius, "lamp", on_done=lit,
-                             on_error=lambda exc: self._abandon(r, f"the lamp could not be lit: {exc}"))
+        self.runner.ask(SetLamp(centre, radius, "lamp"), on_done=lit,
+                        on_error=lambda exc: self._abandon(r, f"the lamp could not be lit: {exc}"))
 
     def update(self, snap: Snapshot) -> None:
         r = self.round
@@ -172,8 +173,8 @@ class ChallengeFolder:
         self.lockstep.set_playing(False)
         self.status.content = (f"**{plain(r.player)}**: {describe(r.score)} after {r.at_step:,} steps. "
                                "The paper's controller is playing the same world...")
-        self.runner.world_spec(on_done=lambda spec: self._score_the_paper(r, spec),
-                               on_error=lambda exc: self._show(r, problem=f"no reference: {exc}"))
+        self.runner.ask(WorldSpec(), on_done=lambda spec: self._score_the_paper(r, spec),
+                        on_error=lambda exc: self._show(r, problem=f"no reference: {exc}"))
 
     def _abandon(self, r: Round, why: str) -> None:
         if self.round is not r:

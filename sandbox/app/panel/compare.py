@@ -17,8 +17,8 @@ from sandbox.app.view.partner import Comparison
 from sandbox.app.world.lockstep import COMPARE_CASES, SAME, partner_config, side_name
 from sandbox.app.panel.common import notify_error
 from sandbox.app.panel.plain import plain
-from sandbox.app.world.runner import wait_for
 from sandbox.app.view.scene import PHONE_ASPECT
+from sandbox.app.world.orders import WorldSpec
 from sandbox.app.world.snapshot import Snapshot
 
 NOTHING = "nothing"
@@ -125,7 +125,7 @@ class CompareFolder:
         config = self.runner.latest.config
         if choice != SAME:
             return partner_config(config, choice), "from-config"
-        _, _, vertices = wait_for(lambda command, **kw: self.runner.world_spec(**kw), None, 30.0)
+        _, _, vertices = self.runner.call(WorldSpec(), 30.0)  # in the worker: waiting here holds no event
         return config, ("from-config" if vertices is None else vertices)
 
     def update(self, snap: Snapshot) -> None:

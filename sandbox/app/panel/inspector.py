@@ -25,6 +25,7 @@ import viser
 
 from sandbox.app.view import palette as pal
 from sandbox.app.view.scene import Z_TOP
+from sandbox.app.world.orders import Follow
 from sandbox.app.world.snapshot import RobotView, Snapshot
 from sandbox.model.robots import PHOTOCELLS
 
@@ -184,7 +185,7 @@ class InspectorFolder:
             self.stop_following(client_id)
 
     def _tell_runner(self) -> None:
-        self.runner.follow(v.robot for v in self.viewers.values() if v.robot is not None)
+        self.runner.submit(Follow(tuple(v.robot for v in self.viewers.values() if v.robot is not None)))
 
     # ------------------------------------------------------------ drawing
     def update(self, snap: Snapshot) -> None:

@@ -19,6 +19,7 @@ from typing import Any
 import viser
 
 from sandbox.app.panel.common import notify_error
+from sandbox.app.world.orders import SetLamp
 from sandbox.app.world.snapshot import LAMP_PROGRAM, Snapshot
 from sandbox.model.lamp import DEFAULT_RADIUS, ERASE, LAMP, LARGEST_RADIUS, PAINT, SMALLEST_RADIUS
 
@@ -86,8 +87,8 @@ class LampFolder:
             if on != was_on:  # a dot on the charts where the lamp came or went, not at every move
                 self._on_change("be the light" if on else "the paper's controller")
 
-        self.runner.set_lamp(centre, float(self.radius.value), mode,
-                             on_done=done, on_error=lambda exc: notify_error(client, "Lamp not used", str(exc)))
+        self.runner.ask(SetLamp(centre, float(self.radius.value), mode),
+                        on_done=done, on_error=lambda exc: notify_error(client, "Lamp not used", str(exc)))
 
     def update(self, snap: Snapshot) -> None:
         self._sync(snap.program == LAMP_PROGRAM)

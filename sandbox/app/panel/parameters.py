@@ -19,6 +19,7 @@ import viser
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.plain import plain
 from sandbox.app.panel.tips import tip
+from sandbox.app.world.orders import UpdateConfig
 from sandbox.app.world.snapshot import Snapshot
 from sandbox.model.config import STRATEGY_NAMES, Config, ConfigError, params
 
@@ -151,7 +152,7 @@ class ParametersFolder:
         except ConfigError as exc:
             failed(exc)
             return
-        self.runner.update_config({name: value}, on_done=done, on_error=failed)
+        self.runner.ask(UpdateConfig({name: value}), on_done=done, on_error=failed)
 
     def _show_profile_values(self, settings: Config) -> None:
         """After a change of profile, show the values it set (they apply on reset)."""

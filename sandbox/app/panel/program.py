@@ -21,6 +21,7 @@ import viser
 
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.plain import plain
+from sandbox.app.world.orders import SetProgram
 from sandbox.app.world.snapshot import Snapshot
 
 
@@ -86,7 +87,7 @@ class ProgramFolder:
         def failed(exc: BaseException) -> None:
             notify_error(client, "Program not used", f"{exc} (the lights stay as they were)")
 
-        self.runner.set_program(spec, on_done=done, on_error=failed)
+        self.runner.ask(SetProgram(spec), on_done=done, on_error=failed)
 
     def update(self, snap: Snapshot) -> None:
         text = self._status(snap)

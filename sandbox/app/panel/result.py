@@ -24,7 +24,7 @@ import numpy as np
 import viser
 
 from sandbox.app.web import page_open
-from sandbox.app.world.orders import Arrival
+from sandbox.app.world.orders import Arrival, DesignOf
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.plain import plain
 from sandbox.app.world.snapshot import Snapshot, case_name
@@ -104,8 +104,8 @@ class ResultFolder:
 
             threading.Thread(target=packed, name="design-packer", daemon=True).start()
 
-        self.runner.design(on_done=pack, on_error=lambda exc: notify_error(client, "No design to download",
-                                                                           str(exc)))
+        self.runner.ask(DesignOf(), on_done=pack, on_error=lambda exc: notify_error(client, "No design to download",
+                                                                                    str(exc)))
 
     def explain_at(self, arrival: Arrival, client: Any = None) -> None:
         """Explain the world a run to the end arrived in once a frame at its step or later shows it (the

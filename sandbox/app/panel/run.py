@@ -8,7 +8,7 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
-from sandbox.app.world.orders import Arrival
+from sandbox.app.world.orders import Arrival, WantField
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.framing import VIEWS, Framing
 from sandbox.app.panel.plain import plain
@@ -68,7 +68,7 @@ class RunFolder:
 
         @self.cancel.on_click
         def _(event: viser.GuiEvent) -> None:
-            runner.cancel_build()
+            self.lockstep.cancel()  # the builds it asked for, each by its id
 
         self.run_to_end.on_click(lambda event: self.skip_ahead(int(self.end_step.value), event.client))
         self.play.on_click(lambda event: self.toggle_play())
@@ -97,7 +97,7 @@ class RunFolder:
 
         @self.show_field.on_update
         def _(event: viser.GuiEvent) -> None:
-            runner.want_field = bool(self.show_field.value)  # the next snapshots carry the field
+            runner.submit(WantField(bool(self.show_field.value)))  # the next snapshots carry the field
             self._show_field(self.show_field.value)
 
     def toggle_play(self) -> None:

@@ -19,6 +19,7 @@ import viser
 from sandbox.app.web import viser_seam
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.draw import DrawFolder
+from sandbox.app.world.orders import SetShape
 from sandbox.app.world.snapshot import Snapshot
 from sandbox.model.design import MAX_NAME_CHARS
 from sandbox.model.goal import fit_goal
@@ -189,7 +190,7 @@ class ShapeFolder:
             self.shape.value = self._shown  # the dropdown goes back to what runs
 
         if quiet:
-            self.runner.set_shape(vertices, name, on_error=refused)
+            self.runner.ask(SetShape(vertices, name), on_error=refused)
             return
         keep = bool(self.keep.value)
 
@@ -214,7 +215,7 @@ class ShapeFolder:
             if then is not None:
                 then()
 
-        self.runner.set_shape(vertices, name, on_done=fitted, on_error=refused)
+        self.runner.ask(SetShape(vertices, name), on_done=fitted, on_error=refused)
 
     # What tests and the security checks reach for, from before the Draw folder had its own module.
     draw_points = property(lambda self: self.draw.points)

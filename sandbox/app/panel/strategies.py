@@ -14,13 +14,13 @@ disabled for the server too: the inbox refuses a click on it from any page."""
 
 from __future__ import annotations
 
-import operator
 from typing import Any, Callable
 
 import viser
 
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.plain import plain
+from sandbox.app.world.orders import SetOutline, UpdateConfig
 from sandbox.app.world.snapshot import Snapshot, running_case
 from sandbox.model.config import CASES, STRATEGIES, param
 from sandbox.model.notes import inert_note, inert_strategies, strategy_effect_note
@@ -124,16 +124,15 @@ class StrategiesFolder:
         self.outline.value = outline
         self.use_outline(outline, client)
         values = {s.name: float(strategies.get(s.name, 0.0)) for s in STRATEGIES}
-        self.runner.post(operator.methodcaller("set_strategies", **values),
-                         on_error=lambda exc: notify_error(client, "Strategies not used", str(exc)))
+        self.runner.ask(UpdateConfig(values), on_error=lambda exc: notify_error(client, "Strategies not used", str(exc)))
         self._show_strategies(values)
         self._on_change(f"outline {outline}, " + ", ".join(f"{k} {v:g}" for k, v in values.items() if v > 0))
 
     def back_to_defaults(self, client: Any) -> None:
         """The outline back to auto and every strategy off, shown and applied (a new goal starts so)."""
         strategies = {s.name: 0.0 for s in STRATEGIES}
-        self.runner.update_config({"outline": "auto", **strategies},
-                                  on_error=lambda exc: notify_error(client, "Strategies not reset", str(exc)))
+        self.runner.ask(UpdateConfig({"outline": "auto", **strategies}),
+                        on_error=lambda exc: notify_error(client, "Strategies not reset", str(exc)))
         self.outline.value = "auto"
         self._show_strategies(strategies)
 
@@ -164,7 +163,7 @@ class StrategiesFolder:
         def refused(exc: BaseException) -> None:
             notify_error(client, "Outline not changed", str(exc))
 
-        self.runner.set_outline(outline, on_done=done, on_error=refused)
+        self.runner.ask(SetOutline(outline), on_done=done, on_error=refused)
 
     def use_case(self, name: str, client: Any, on_started: Callable[[], None] | None = None) -> None:
         """Start the case: its goal, its strategies (the others off) and the paper's outline, in a new
@@ -186,7 +185,7 @@ class StrategiesFolder:
         # In this order, in the simulation's queue: the goal, the paper's outline and the strategies,
         # then the new world (the reset says why if it cannot be built).
         self._use_shape(shape_vertices(case["shape"]), case["shape"], client, quiet=True)
-        self.runner.update_config({"outline": "auto", **strategies}, on_error=failed)
+        self.runner.ask(UpdateConfig({"outline": "auto", **strategies}), on_error=failed)
         self._reset(client, on_done=started, on_error=lambda exc: setattr(self, "_starting", None))
         self.outline.value = "auto"
         self._show_strategies(strategies)
@@ -200,7 +199,7 @@ class StrategiesFolder:
         def failed(exc: BaseException) -> None:
             notify_error(client, "Strategy not changed", str(exc))
 
-        self.runner.post(operator.methodcaller("set_strategies", **{name: value}), on_error=failed)
+        self.runner.ask(UpdateConfig({name: value}), on_error=failed)  # a strategy is live: no reset
         self._on_change(f"{name} {value:g}")
         chase = float(self.controls["chase"][1].value) if self.controls["chase"][0].value else 0.0
         snap = self.runner.latest

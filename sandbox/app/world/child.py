@@ -6,13 +6,18 @@ of the headless speed. :class:`ProcessRunner` runs an ordinary
 :class:`Runner` in a child process instead, so the two use two cores:
 
 - commands (:mod:`sandbox.app.world.orders`) go to the child as they are,
-  through a queue, with an id; the child's Runner handles them and sends
-  back the answer (or the exception) for that id, which settles the
-  command's future here. Controls go without an id: they act here at once
-  (this side keeps a copy of the controls) and there when they arrive;
-- every snapshot the child publishes (the newest one only, at the frame
-  rate) comes back through a pipe with the metric samples recorded since
-  the last one, and reaches this side's listeners;
+  through a queue, each in an :class:`Order` with an id; the child's Runner
+  carries them out and answers :class:`Done` (or :class:`Failed`) for that
+  id, which settles the command's future here. Controls go without an id:
+  they act here at once (this side keeps a copy of the controls) and there
+  when they arrive;
+- the child's answers are typed messages through a pipe, one class each
+  (:class:`Frame`, :class:`Done`, :class:`Failed`, :class:`Progress`,
+  :class:`Building`, :class:`Halted`, :class:`LastWords`), each taken here by
+  one method (``ProcessRunner._take``). Every snapshot the child publishes
+  (the newest one only, at the frame rate) comes back in a :class:`Frame`
+  with the metric samples recorded since the last one, and reaches this
+  side's listeners;
 - if the child dies, what it owed fails (SimulationCrashed), listeners of
   :meth:`ProcessRunner.on_crash` hear why, and a new child starts from the
   settings that stand (:mod:`sandbox.app.world.standing`): those of the running
@@ -43,14 +48,15 @@ import time
 import traceback
 from collections import deque
 from concurrent.futures import Future
-from typing import Any, Callable
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
 from sandbox.app.world import faults
-from sandbox.app.world.orders import Command, Controls, RunnerStopped, Setting, SetShape, Start, UpdateConfig
+from sandbox.app.world.orders import (SAME_GOAL, Command, Controls, RunnerStopped, Setting, SetShape, Start,
+                                      UpdateConfig)
 from sandbox.app.world.contract import Deliver, SimulationRunner
-from sandbox.app.world.runner import SAME_GOAL, Runner
+from sandbox.app.world.runner import Runner
 from sandbox.app.world.snapshot import Snapshot
 from sandbox.app.world.standing import PROVEN_SECONDS, PROVEN_STEPS, Settings, Standing, changed, gone_back
 from sandbox.model import watchdog
@@ -82,6 +88,61 @@ log = logging.getLogger("sandbox.app.world.child")
 
 class SimulationCrashed(RuntimeError):
     """The simulation process ended without being asked to."""
+
+
+# ------------------------------------------------------------------ messages
+# Named tuples: typed, immutable and the cheapest class to pickle (a frame's comes 30 times a second).
+class Order(NamedTuple):
+    """To the child: carry out ``command``; answer for ``ident`` (None: a control, no answer)."""
+
+    ident: int | None
+    command: Command
+
+
+class Frame(NamedTuple):
+    """From the child: a snapshot, with the metric samples of world ``world`` recorded since the last."""
+
+    snap: Snapshot
+    samples: list
+    world: int
+
+
+class Done(NamedTuple):
+    """From the child: the answer of the command ``ident``."""
+
+    ident: int
+    result: Any
+
+
+class Failed(NamedTuple):
+    """From the child: what the command ``ident`` raised."""
+
+    ident: int
+    error: BaseException
+
+
+class Progress(NamedTuple):
+    """From the child: how far a build has got (None: it is over)."""
+
+    fraction: float | None
+
+
+class Building(NamedTuple):
+    """From the child: the (config, goal, seed) a new world or goal is built from (None: over)."""
+
+    settings: tuple | None
+
+
+class Halted(NamedTuple):
+    """From the child: a frame failed and the world stepped no more (Runner.on_halt)."""
+
+    why: str
+
+
+class LastWords(NamedTuple):
+    """From the child, before it ends itself: why (a first world it cannot build, a stuck program)."""
+
+    why: str
 
 
 class Child:
@@ -163,6 +224,12 @@ class ProcessRunner(SimulationRunner):
         #: Changes of settings submitted while no child could take them, for the next child (command, future).
         self._waiting: list[tuple[UpdateConfig, Future]] = []
         self._progress_listeners: list[Callable[[float | None], None]] = []
+        self._halt_listeners: list[Callable[[str], None]] = []
+        #: Who takes each kind of message from the child (on the receiving thread).
+        self._takers: dict[type, Callable[[Any], None]] = {
+            Frame: self._take_frame, Done: self._take_done, Failed: self._take_failed,
+            Progress: self._take_progress, Building: self._take_building, Halted: self._take_halted,
+            LastWords: self._take_last_words}
         self._ids = itertools.count()
         self._series: list[Sample] = []
         self._series_world: int | None = None  # the world key of the samples in _series
@@ -212,14 +279,14 @@ class ProcessRunner(SimulationRunner):
         self._child = Child(self._context, settings)
         self._spawned, self._shape, self._building, self._framed = world, world.shape, None, False
         for setting in self.controls.settings():  # the robots followed, the heat map, the hold
-            self._child.send((None, setting))
+            self._child.send(Order(None, setting))
         waiting, self._waiting = self._waiting, []
         for command, future in waiting:
             ident = next(self._ids)
             self._owed[ident] = (future, command)
-            self._child.send((ident, command))
+            self._child.send(Order(ident, command))
         if self._started:
-            self._child.send((None, Start()))
+            self._child.send(Order(None, Start()))
         with self._series_lock:
             self._series, self._series_world = [], None
         self._state = STARTING
@@ -228,7 +295,7 @@ class ProcessRunner(SimulationRunner):
         """Read the new child's messages until its first frame; if none comes, end it and raise."""
         child = self._child
         message = child.read(timeout=START_TIMEOUT)
-        while message is not None and message[0] != "frame":  # its last words, say
+        while message is not None and not isinstance(message, Frame):  # its last words, say
             self._take_guarded(message)
             message = child.read(timeout=START_TIMEOUT)
         if message is None:
@@ -242,35 +309,44 @@ class ProcessRunner(SimulationRunner):
             if self._state == STARTING and self._child is child:
                 self._state = RUNNING
 
-    def _take(self, message: tuple) -> None:
-        kind = message[0]
-        if kind == "frame":
-            _, snap, samples, world = message
-            with self._series_lock:
-                if world != self._series_world:  # a new world: its samples start a new series
-                    self._series, self._series_world = [], world
-                self._series.extend(samples)
-            self._latest = snap
-            self._framed = True
-            self._watch_run(snap)
-            self._publish(snap)
-        elif kind == "done":
-            _, ident, result = message
-            future = self._take_owed(ident)
-            if future is not None:
-                future.set_result(result)
-        elif kind == "error":
-            _, ident, exc = message
-            future = self._take_owed(ident)
-            if future is not None:
-                future.set_exception(exc)
-        elif kind == "progress":
-            for listener in list(self._progress_listeners):
-                self._deliver(listener, message[1])
-        elif kind == "building":
-            self._building = None if message[1] is None else self._settings_built(*message[1])
-        elif kind == "last words":
-            self._last_words = message[1]
+    def _take(self, message: Any) -> None:
+        """Take one message of the child's (on the receiving thread)."""
+        self._takers[type(message)](message)
+
+    def _take_frame(self, message: Frame) -> None:
+        snap = message.snap
+        with self._series_lock:
+            if message.world != self._series_world:  # a new world: its samples start a new series
+                self._series, self._series_world = [], message.world
+            self._series.extend(message.samples)
+        self._latest = snap
+        self._framed = True
+        self._watch_run(snap)
+        self._publish(snap)
+
+    def _take_done(self, message: Done) -> None:
+        future = self._take_owed(message.ident)
+        if future is not None:
+            future.set_result(message.result)
+
+    def _take_failed(self, message: Failed) -> None:
+        future = self._take_owed(message.ident)
+        if future is not None:
+            future.set_exception(message.error)
+
+    def _take_progress(self, message: Progress) -> None:
+        for listener in list(self._progress_listeners):
+            self._deliver(listener, message.fraction)
+
+    def _take_building(self, message: Building) -> None:
+        self._building = None if message.settings is None else self._settings_built(*message.settings)
+
+    def _take_halted(self, message: Halted) -> None:
+        for listener in list(self._halt_listeners):
+            self._deliver(listener, message.why)
+
+    def _take_last_words(self, message: LastWords) -> None:
+        self._last_words = message.why
 
     def _settings_built(self, config: Config, goal: Any, seed: int | None) -> Settings:
         """What the child said it builds, with its goal as this side keeps goals."""
@@ -466,6 +542,9 @@ class ProcessRunner(SimulationRunner):
     def on_progress(self, listener: Callable[[float | None], None]) -> None:
         self._progress_listeners.append(listener)
 
+    def on_halt(self, listener: Callable[[str], None]) -> None:
+        self._halt_listeners.append(listener)
+
     def submit(self, command: Command) -> Future:
         """Send ``command`` to the child. A control acts on this side's copy of the controls at once
         and its future is done when it is sent (or, with no child, kept for the next one); any other
@@ -486,7 +565,7 @@ class ProcessRunner(SimulationRunner):
                 ident = None if command.at_once else next(self._ids)
                 if ident is not None:
                     self._owed[ident] = (future, command)
-                sent = self._child.send((ident, command))
+                sent = self._child.send(Order(ident, command))
                 if not sent and ident is not None:
                     self._owed.pop(ident, None)
             elif self._state == DOWN and self.failed is None and isinstance(command, UpdateConfig):
@@ -553,7 +632,8 @@ def _unpicklable(command: Command) -> BaseException | None:
 
 # ------------------------------------------------------------------ child
 def _child_main(settings: dict, commands: Any, send: Any) -> None:
-    """The simulation process: an ordinary Runner, driven by the queue (``(id, command)``; None ends it)."""
+    """The simulation process: an ordinary Runner, driven by the queue (an :class:`Order` each; None ends
+    it), answering with the typed messages above."""
     # Ctrl-C in a terminal reaches every process of the group: it is for the app, which stops this
     # one (before, each Ctrl-C printed this process's KeyboardInterrupt traceback under "stopped").
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -562,11 +642,11 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
     try:
         runner = Runner(**settings)
     except Exception as exc:  # noqa: BLE001 - its first world cannot be built: say why in a line
-        send.send(("last words", _not_built(exc)))
+        send.send(LastWords(_not_built(exc)))
         os._exit(1)
     sent = {"world": None, "count": 0}
 
-    def send_message(message: tuple) -> None:
+    def send_message(message: Any) -> None:
         with lock:
             try:
                 send.send(message)
@@ -577,24 +657,25 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
         world, series = runner.series_of_world()
         start = sent["count"] if sent["world"] == world else 0
         sent.update(world=world, count=len(series))
-        send_message(("frame", snap, series[start:], world))
+        send_message(Frame(snap, series[start:], world))
 
     def answer(ident: int, future: Future) -> None:
         exc = future.exception()
         if exc is None:
-            send_message(("done", ident, _picklable(future.result())))
+            send_message(Done(ident, _picklable(future.result())))
         else:
-            send_message(("error", ident, _picklable_error(exc)))
+            send_message(Failed(ident, _picklable_error(exc)))
 
     def stuck(why: str) -> None:  # a light program would not stop: say so, then end (no thread can unwind it)
-        send_message(("last words", f"{why}; the app restarts the simulation with the paper's controller"))
+        send_message(LastWords(f"{why}; the app restarts the simulation with the paper's controller"))
         os._exit(STUCK_EXIT)
 
     watchdog.on_stuck = stuck
     on_frame(runner.latest)
     runner.subscribe(on_frame)
-    runner.on_progress(lambda fraction: send_message(("progress", fraction)))
-    runner.on_build(lambda settings: send_message(("building", settings)))
+    runner.on_progress(lambda fraction: send_message(Progress(fraction)))
+    runner.on_build(lambda settings: send_message(Building(settings)))
+    runner.on_halt(lambda why: send_message(Halted(why)))  # the parent owns play: it pauses
     app = multiprocessing.parent_process()  # the app's process (the fork server is only this one's parent)
     while True:
         try:
@@ -605,10 +686,9 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
             continue
         if message is None:
             break
-        ident, command = message
-        future = runner.submit(command)
-        if ident is not None:
-            future.add_done_callback(lambda done, ident=ident: answer(ident, done))
+        future = runner.submit(message.command)
+        if message.ident is not None:
+            future.add_done_callback(lambda done, ident=message.ident: answer(ident, done))
     runner.stop()
     send.close()
 

@@ -5,11 +5,12 @@ The app (server, scene, panel, recorder) drives a simulation only through
 :class:`~sandbox.app.world.runner.Runner` (the simulation in a thread of this
 process: tests, headless recording) and
 :class:`~sandbox.app.world.child.ProcessRunner` (in a process of its own: the
-live app). Each method the app calls builds a command
-(:mod:`sandbox.app.world.orders`) and hands it to :meth:`SimulationRunner.submit`,
+live app). A caller makes a command (:mod:`sandbox.app.world.orders`, where
+each command says what it does) and hands it to :meth:`SimulationRunner.submit`,
 the one thing each runner does its own way; it returns a
-:class:`concurrent.futures.Future` of the answer, and the ``on_done`` /
-``on_error`` callbacks hear it too. Both publish frames through
+:class:`concurrent.futures.Future` of the answer. :meth:`SimulationRunner.ask`
+adds callbacks that hear the answer on the app's thread;
+:func:`wait_for` is the one way to wait for it. Both publish frames through
 :class:`FramePublisher`, which owns the listeners, counts the frames and
 keeps one broken listener from silencing the others.
 """
@@ -21,12 +22,9 @@ import time
 from collections import deque
 from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeout
-from typing import Any, Callable, Iterable
+from typing import Any, Callable
 
-from sandbox.app.world.orders import (Apply, CancelBuild, Command, Controls, Follow, Hold, Reset, RunnerStopped,
-                                  RunTo, SetLamp, SetOutline, SetPlaying, SetProgram, SetShape, SetSpeed,
-                                  ShowEvery, SkipAhead, StepOnce, UpdateConfig, WantField, WorldSpec, DesignOf,
-                                  PlayDesign)
+from sandbox.app.world.orders import Command, Controls, RunnerStopped
 from sandbox.app.world.snapshot import Snapshot
 from sandbox.model.metrics import Sample
 
@@ -84,8 +82,10 @@ class FramePublisher:
         return (len(self.publish_times) - 1) / span if span > 0 else 0.0
 
 
-def answer(future: Future, timeout: float) -> Any:
-    """The future's result within ``timeout`` seconds (raises its exception)."""
+def wait_for(future: Future, timeout: float) -> Any:
+    """The answer in ``future`` within ``timeout`` seconds (raises what the command raised): the one way
+    to wait for a command. The future itself, not a callback: a callback may be delivered on the very
+    thread that waits here (the app's event thread), and must never be waited for there."""
     try:
         return future.result(timeout)
     except FutureTimeout:
@@ -95,13 +95,15 @@ def answer(future: Future, timeout: float) -> Any:
 class SimulationRunner(FramePublisher):
     """The simulation as the app drives it (see the module docstring).
 
-    Commands run between steps; controls (play, speed, follow, hold, cancel) act at once. Each method
-    returns the command's future; ``on_done`` (or ``on_error``) hears its answer (or what it raised) on
-    the runner's thread, or through ``deliver``. A stopped runner fails every command it had not
-    carried out with :class:`~sandbox.app.world.orders.RunnerStopped`: nobody waits forever.
+    Commands run between steps; controls (play, speed, follow, hold, cancel) act at once. :meth:`submit`
+    returns the command's future; :meth:`ask` adds ``on_done`` (or ``on_error``), which hear its answer
+    (or what it raised) on the runner's thread, or through ``deliver``. A stopped runner fails every
+    command it had not carried out with :class:`~sandbox.app.world.orders.RunnerStopped`: nobody
+    waits forever.
 
-    A runner provides :meth:`submit`, :meth:`start`, :meth:`stop`, :attr:`latest`, :meth:`series`
-    and :meth:`on_progress`, and keeps :attr:`controls` (what the controls set)."""
+    A runner provides :meth:`submit`, :meth:`start`, :meth:`stop`, :attr:`latest`, :meth:`series`,
+    :meth:`on_progress` and :meth:`on_halt`, and keeps :attr:`controls` (what the settings set; only
+    they write it)."""
 
     controls: Controls
     fps: float
@@ -131,14 +133,20 @@ class SimulationRunner(FramePublisher):
         raise NotImplementedError
 
     def on_progress(self, listener: Callable[[float | None], None]) -> None:
-        """``listener(fraction)`` hears how far building a world has got; None when it is over."""
+        """``listener(fraction)`` hears how far a build (a new world, a run to the end) has got; None
+        when it is over."""
+        raise NotImplementedError
+
+    def on_halt(self, listener: Callable[[str], None]) -> None:
+        """``listener(why)`` hears that a frame failed (a bug): the world steps no more and its frames say
+        paused until the next SetPlaying. The listener owns play: the app pauses, as Pause does."""
         raise NotImplementedError
 
     # ------------------------------------------------- written once for both
     def ask(self, command: Command, on_done: Callable[[Any], None] | None = None,
             on_error: Callable[[BaseException], None] | None = None) -> Future:
         """Submit ``command``; ``on_done`` hears its answer, ``on_error`` what it raised (without
-        ``on_error``, that is kept in :attr:`errors`)."""
+        ``on_error``, that is kept in :attr:`errors`). Callbacks: keep them short."""
         future = self.submit(command)
         future.add_done_callback(lambda done: self._hear(done, on_done, on_error))
         return future
@@ -155,108 +163,10 @@ class SimulationRunner(FramePublisher):
         elif not isinstance(exc, RunnerStopped):  # stopping is no error of the command's
             self.errors.append(exc)
 
-    def post(self, command: Callable, *, on_done: Callable[[Any], None] | None = None,
-             on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """Run ``command(sim)`` between steps (for a process runner, ``command`` must pickle: a
-        module-level function or a ``functools.partial`` of one). Callbacks: keep them short."""
-        return self.ask(Apply(command), on_done, on_error)
-
-    def call(self, command: Callable, timeout: float = 10.0) -> Any:
-        """Post a command and wait for its result (raises its exception)."""
-        return answer(self.submit(Apply(command)), timeout)
-
-    def reset(self, seed: int | None = None, *, on_done: Callable[[Any], None] | None = None,
-              on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """Rebuild the world with the waiting changes; ``seed`` None keeps the current seed. ``on_done``
-        gets the new world's key (its frames' ``world_key``: a frame of an older world may still come
-        after the answer, from a reset asked for earlier). Building reports to the :meth:`on_progress`
-        listeners and stops at :meth:`cancel_build` (BuildCancelled; the old world goes on)."""
-        return self.ask(Reset(seed), on_done, on_error)
-
-    def update_config(self, changes: dict[str, Any], *, on_done: Callable[[Any], None] | None = None,
-                      on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """Change parameters: the live ones at once, the others at the next :meth:`reset`. ``on_done``
-        receives (names waiting for a reset, the settings with them)."""
-        return self.ask(UpdateConfig(dict(changes)), on_done, on_error)
-
-    def set_shape(self, vertices: Any, name: str, *, on_done: Callable[[Any], None] | None = None,
-                  on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """Change the goal; ``on_done`` gets the notes about its fit, ``on_error`` a refusal."""
-        return self.ask(SetShape(vertices, name), on_done, on_error)
-
-    def set_program(self, spec: str | None, *, on_done: Callable[[Any], None] | None = None,
-                    on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """Light the floor with a program loaded from ``path.py:Class`` (None: the paper's controller
-        again), keeping the world. A program that cannot be loaded or started is refused and the
-        running one stays."""
-        return self.ask(SetProgram(spec), on_done, on_error)
-
-    def set_outline(self, outline: str, *, on_done: Callable[[Any], None] | None = None,
-                    on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """Choose the outline family; ``on_done`` gets the notes about the goal, ``on_error`` a refusal."""
-        return self.ask(SetOutline(outline), on_done, on_error)
-
-    def world_spec(self, *, on_done: Callable[[Any], None] | None = None,
-                   on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """(config, seed, goal vertices as given or None) of the running world: what builds it again
-        elsewhere (a challenge's reference run)."""
-        return self.ask(WorldSpec(), on_done, on_error)
-
-    def set_lamp(self, centre: tuple[float, float] | None, radius: float | None = None, mode: str = "lamp", *,
-                 on_done: Callable[[Any], None] | None = None,
-                 on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """Be the light: a click at ``centre`` moves the lamp there (the lights within ``radius`` metres
-        on, the others off), or paints or erases the lights there (``mode``: see
-        :mod:`sandbox.model.lamp`), keeping the world; None gives the lights back to the paper's
-        controller."""
-        return self.ask(SetLamp(centre, radius, mode), on_done, on_error)
-
-    def step_once(self, n: int = 1) -> Future:
-        """Advance ``n`` steps now (used while paused)."""
-        return self.ask(StepOnce(int(n)))
-
-    def run_to(self, step: int) -> Future:
-        """Step until the world's step count is ``step`` (nothing if it is there or past): two paused
-        worlds in compare mode end on the same step."""
-        return self.ask(RunTo(int(step)))
-
-    def set_playing(self, playing: bool) -> Future:
-        return self.submit(SetPlaying(bool(playing)))
-
-    def set_speed(self, steps_per_frame: int) -> Future:
-        return self.submit(SetSpeed(int(steps_per_frame)))
-
-    def follow(self, indices: Iterable[int]) -> Future:
-        """Carry these robots' photocells, commands and charge in the snapshots (the inspectors' robots)."""
-        return self.submit(Follow(tuple(int(i) for i in indices)))
-
-    def show_every(self, frames: int) -> Future:
-        """A snapshot at every ``frames``-th frame only (1: every frame); the speed is unchanged."""
-        return self.submit(ShowEvery(max(1, int(frames))))
-
-    def hold(self, step: int | None) -> Future:
-        """Playing, step no further than ``step`` (None: no limit)."""
-        return self.submit(Hold(None if step is None else int(step)))
-
-    def skip_ahead(self, step: int, *, on_done: Callable[[Any], None] | None = None,
-                   on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """Run to ``step`` without frames, as fast as headless (*Run to the end*); the progress listeners
-        hear the fraction done, :meth:`cancel_build` stops it. ``on_done`` gets an :class:`Arrival`."""
-        return self.ask(SkipAhead(int(step)), on_done, on_error)
-
-    def design(self, *, on_done: Callable[[Any], None] | None = None,
-               on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """The running world's design (sandbox.model.design.Design): goal, settings, seed, light program."""
-        return self.ask(DesignOf(), on_done, on_error)
-
-    def play_design(self, design: Any, *, on_done: Callable[[Any], None] | None = None,
-                    on_error: Callable[[BaseException], None] | None = None) -> Future:
-        """A new world from ``design``, lit by its recorded light program (``serve --design``)."""
-        return self.ask(PlayDesign(design), on_done, on_error)
-
-    def cancel_build(self) -> Future:
-        """Stop a world being built by :meth:`reset`, or a :meth:`skip_ahead` (safe from any thread)."""
-        return self.submit(CancelBuild())
+    def call(self, command: Command, timeout: float = 10.0) -> Any:
+        """Submit ``command`` and wait for its answer (raises what it raised): :func:`wait_for`. Never on
+        the thread its callbacks are delivered on."""
+        return wait_for(self.submit(command), timeout)
 
     # ------------------------------------------------------------ read-outs
     @property
@@ -279,10 +189,6 @@ class SimulationRunner(FramePublisher):
     @property
     def want_field(self) -> bool:
         return self.controls.want_field
-
-    @want_field.setter
-    def want_field(self, on: bool) -> None:
-        self.submit(WantField(bool(on)))
 
     def steps_per_second(self) -> float:
         """The speed the world ran at, as its newest frame measured it (in the simulation's thread:

@@ -1,32 +1,52 @@
-"""What the app can ask of a simulation runner: one frozen dataclass per command.
+"""What the app can ask of a simulation runner: one frozen dataclass per command, with what it does.
 
-A command is data. The runner in this process (:class:`~sandbox.app.world.runner.Runner`) carries every
-command out in one place, ``Runner.handle``; the process runner
-(:class:`~sandbox.app.world.child.ProcessRunner`) sends the command as it is to its child process, whose
-Runner handles it, and the answer comes back. Whoever submits a command gets a
-:class:`concurrent.futures.Future` of its answer (:meth:`SimulationRunner.submit
-<sandbox.app.world.contract.SimulationRunner.submit>`); a new command is one class here and one handler in
-the Runner.
+A command is written once, here: its fields, and :meth:`Command.carry_out`, what it does to the
+world when the runner that owns the world (:class:`~sandbox.app.world.runner.Runner`) carries it out.
+Whoever wants it done submits it (:meth:`SimulationRunner.submit
+<sandbox.app.world.contract.SimulationRunner.submit>`) and gets a :class:`concurrent.futures.Future`
+of its answer; the process runner (:class:`~sandbox.app.world.child.ProcessRunner`) sends the same
+object to its child process, whose Runner carries it out. A new command is one class here.
 
 There are two kinds:
 
 - a command proper runs in the simulation thread between steps (it touches the world); its future
-  holds what it returned, or what it raised;
+  holds what ``carry_out`` returned, or what it raised;
 - a :class:`Control` acts at once, on the thread that submits it, and does not touch the world (play,
   speed, hold, cancel a build): the simulation loop reads what it set at its next frame. Its future is
   done at once. Most controls are a :class:`Setting`: they set a field of the runner's
   :class:`Controls`, of which the process runner keeps a copy (what the app reads back, and what a
-  restarted child gets).
+  restarted child gets). Only settings write the controls: the loop reads them.
+
+A :class:`Build` (a new world, a run to the end) may take long: it reports its progress, and a
+:class:`CancelBuild` that names its :attr:`Build.build` stops it, whether it came while the build ran
+or while it waited its turn; a cancel of a build that is over does nothing.
+
+``carry_out`` runs on the simulation thread (a control's on the submitting thread) and uses what the
+Runner offers its commands (its section "for the commands"): the simulation, the changes waiting for a
+reset, the progress and cancel of builds, stepping, snapshots.
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
-from typing import Any, Callable, ClassVar, NamedTuple
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, NamedTuple
+
+from sandbox.app.world.snapshot import DESIGN_PROGRAM, LAMP_PROGRAM, PAPER_PROGRAM
+
+if TYPE_CHECKING:
+    from sandbox.app.world.runner import Runner
+
+#: The goal a build announces when it builds around the running goal (see ``Runner.on_build``).
+SAME_GOAL = "the running goal"
 
 
 class RunnerStopped(RuntimeError):
     """The runner was stopped before it could carry out a command."""
+
+
+class BuildCancelled(Exception):
+    """Building a new world was stopped by the user."""
 
 
 @dataclass
@@ -58,6 +78,10 @@ class Command:
     #: Whether it acts at once on the submitting thread (a :class:`Control`) rather than between steps.
     at_once: ClassVar[bool] = False
 
+    def carry_out(self, runner: "Runner") -> Any:
+        """Do it to ``runner``'s world; what it returns is the answer."""
+        raise NotImplementedError(f"{type(self).__name__} says nothing of what it does")
+
 
 @dataclass(frozen=True)
 class Control(Command):
@@ -76,6 +100,28 @@ class Setting(Control):
     def settle(self, controls: Controls) -> None:
         raise NotImplementedError
 
+    def carry_out(self, runner: "Runner") -> None:
+        self.settle(runner.controls)
+        if self.wakes:
+            runner.wake()
+
+
+_build_ids = itertools.count(1)
+
+
+def _next_build() -> int:
+    return next(_build_ids)
+
+
+@dataclass(frozen=True)
+class Build(Command):
+    """A command that may take long, reports its progress and may be cancelled: a :class:`CancelBuild`
+    that names :attr:`build` stops it. Made in the app's process, so the ids of one runner's builds
+    differ."""
+
+    #: Which build this is (the :class:`CancelBuild` that stops it names it).
+    build: int = field(default_factory=_next_build, kw_only=True)
+
 
 # ------------------------------------------------------------------ commands
 @dataclass(frozen=True)
@@ -85,12 +131,28 @@ class Apply(Command):
 
     function: Callable[[Any], Any]
 
+    def carry_out(self, runner: "Runner") -> Any:
+        return self.function(runner.sim)
+
 
 @dataclass(frozen=True)
-class Reset(Command):
-    """Build the world again with the changes waiting for a reset; ``seed`` None keeps the seed."""
+class Reset(Build):
+    """Build the world again with the changes waiting for a reset; ``seed`` None keeps the seed. Answers
+    the new world's key (its frames' ``world_key``: a frame of an older world may still come after the
+    answer, from a reset asked for earlier). Cancelled, it raises :class:`BuildCancelled` and the old
+    world goes on."""
 
     seed: int | None = None
+
+    def carry_out(self, runner: "Runner") -> int:
+        settings = runner.settings
+        seed = settings.seed if self.seed is None else int(self.seed)
+        with runner.under_way(self.build) as progress:
+            runner.stop_if_cancelled(self.build)  # a cancel that came while it waited its turn counts
+            with runner.announcing(settings, SAME_GOAL, seed):
+                runner.sim.reset(self.seed, config=settings, progress=progress)
+        runner.pending = {}
+        return runner.new_world()
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,6 +162,14 @@ class SetShape(Command):
     vertices: Any
     name: str
 
+    def carry_out(self, runner: "Runner") -> list[str]:
+        sim = runner.sim
+        with runner.announcing(sim.config, self.vertices, sim.seed):
+            notes = sim.set_shape(self.vertices, name=self.name)
+        runner.shape_name = self.name
+        runner.new_goal()
+        return notes
+
 
 @dataclass(frozen=True)
 class SetOutline(Command):
@@ -107,35 +177,83 @@ class SetOutline(Command):
 
     outline: str
 
+    def carry_out(self, runner: "Runner") -> list[str]:
+        sim = runner.sim
+        with runner.announcing(sim.config.replace(outline=self.outline), SAME_GOAL, sim.seed):
+            notes = sim.set_outline(self.outline)
+        runner.new_goal()  # an offset goal may have moved
+        return notes
+
 
 @dataclass(frozen=True)
 class UpdateConfig(Command):
-    """Change parameters: the live ones at once, the others at the next reset. Answers (names waiting
-    for a reset, the settings with them)."""
+    """Change parameters (the strategies too): the live ones at once, the others at the next reset.
+    Answers (names waiting for a reset, the settings with them)."""
 
     changes: dict = field(default_factory=dict)
+
+    def carry_out(self, runner: "Runner") -> tuple[list[str], Any]:
+        changes = self.changes
+        deferred = runner.sim.update_config(**changes)
+        # Checked together with what is already waiting (a profile change resets the values it bundles).
+        settings = runner.sim.config.replace(**{**runner.pending, **{k: changes[k] for k in deferred}})
+        runner.pending = {k: getattr(settings, k) for k in {*runner.pending, *deferred}}
+        return sorted(runner.pending), settings
 
 
 @dataclass(frozen=True)
 class SetProgram(Command):
-    """Light the floor with a program ``path.py:Class`` (None: the paper's controller); answers its name."""
+    """Light the floor with a program ``path.py:Class`` (None: the paper's controller), keeping the world;
+    answers its name. One that cannot be loaded or started is refused and the running one stays."""
 
     spec: str | None
+
+    def carry_out(self, runner: "Runner") -> str:
+        from sandbox.model.programs import load_program
+
+        spec = self.spec
+        runner.sim.use_program(load_program(spec, time_limit=runner.program_time_limit) if spec else None)
+        runner.program_name = spec or PAPER_PROGRAM
+        return runner.program_name
 
 
 @dataclass(frozen=True)
 class SetLamp(Command):
-    """Be the light: move the lamp to ``centre``, or paint or erase there (``mode``); None hands the
-    lights back. Answers the name of what lights the floor."""
+    """Be the light: move the lamp to ``centre`` (the lights within ``radius`` metres on, the others
+    off), or paint or erase there (``mode``: see :mod:`sandbox.model.lamp`), keeping the world; None
+    hands the lights back to the paper's controller. Answers the name of what lights the floor."""
 
     centre: tuple[float, float] | None
     radius: float | None = None
     mode: str = "lamp"
 
+    def carry_out(self, runner: "Runner") -> str:
+        from sandbox.model.lamp import Lamp
+
+        sim = runner.sim
+        lamp = sim.user_program if isinstance(sim.user_program, Lamp) else None
+        if self.centre is None:
+            if lamp is not None:
+                sim.use_program(None)
+                runner.program_name = PAPER_PROGRAM
+            return runner.program_name
+        if lamp is None:
+            lamp = Lamp()
+            sim.use_program(lamp)
+            runner.program_name = LAMP_PROGRAM
+        lamp.aim(*self.centre, self.radius, self.mode)
+        return runner.program_name
+
 
 @dataclass(frozen=True)
 class WorldSpec(Command):
-    """Answers (config, seed, goal vertices as given or None): what builds the running world again."""
+    """Answers (config, seed, goal vertices as given or None): what builds the running world again
+    elsewhere (a challenge's reference run)."""
+
+    def carry_out(self, runner: "Runner") -> tuple:
+        sim = runner.sim
+        shape = None if sim.shape_vertices is None else sim.shape_vertices.copy()
+        return sim.config, sim.seed, shape
 
 
 @dataclass(frozen=True)
@@ -144,21 +262,57 @@ class StepOnce(Command):
 
     n: int = 1
 
+    def carry_out(self, runner: "Runner") -> None:
+        runner.step(int(self.n))
+
 
 @dataclass(frozen=True)
 class RunTo(Command):
-    """Step until the world is at ``step`` (nothing if it is there or past)."""
+    """Step until the world is at ``step`` (nothing if it is there or past): two paused worlds in compare
+    mode end on the same step."""
 
     step: int
 
+    def carry_out(self, runner: "Runner") -> None:
+        if runner.sim.steps_done < self.step:
+            runner.step(self.step - runner.sim.steps_done)
+
+
+#: Steps between two progress reports of a skip ahead: 0.2-0.5 s of stepping; each report costs a message.
+SKIP_CHUNK = 2000
+
 
 @dataclass(frozen=True)
-class SkipAhead(Command):
+class SkipAhead(Build):
     """Run to ``step`` without frames, as fast as the world steps headless (*Run to the end*), telling
     the progress listeners how far it got; a :class:`CancelBuild` stops it where it is. Answers an
     :class:`Arrival`."""
 
     step: int
+
+    def carry_out(self, runner: "Runner") -> "Arrival":
+        """Step in chunks of :data:`SKIP_CHUNK` with no snapshot between them (the chart's samples are
+        kept), telling the progress listeners after each; stop early when cancelled (a cancel that came
+        while it waited its turn counts: the page's Cancel shows from the moment it is asked)."""
+        sim = runner.sim
+        start, target = sim.steps_done, int(self.step)
+        cancelled = False
+        # The state it starts from, shown while it runs: after a reset taken in the same turn (Use and run to
+        # the end), the pages would otherwise show the old world until the end.
+        runner.snapshot()
+        with runner.under_way(self.build):
+            while sim.steps_done < target:
+                if runner.cancelled(self.build):
+                    cancelled = True
+                    break
+                chunk_end = min(sim.steps_done + SKIP_CHUNK, target)
+                while sim.steps_done < chunk_end:  # the chart's samples as a live run takes them
+                    runner.step(min(runner.chart_every, chunk_end - sim.steps_done))
+                    runner.record_series()
+                runner.report_progress((sim.steps_done - start) / max(target - start, 1))
+        runner.record_series(force=True)
+        runner.ran_ahead()
+        return Arrival(sim.steps_done, cancelled, runner.world_key)
 
 
 class Arrival(NamedTuple):
@@ -176,12 +330,30 @@ class DesignOf(Command):
     """Answers the running world's design (sandbox.model.design): its goal, settings, seed and the
     light program it has run so far, every pattern with the step it started."""
 
+    def carry_out(self, runner: "Runner") -> Any:
+        return runner.recorder.design(runner.sim, controller=runner.program_name)
+
 
 @dataclass(frozen=True)
 class PlayDesign(Command):
-    """A new world from the design's settings, goal and seed, lit by its recorded light program."""
+    """A new world from the design's settings, goal and seed, lit by its recorded light program
+    (``serve --design``); answers the name of what lights the floor."""
 
     design: Any
+
+    def carry_out(self, runner: "Runner") -> str:
+        from sandbox.model.design import Replay
+
+        design, sim = self.design, runner.sim
+        with runner.announcing(design.config, design.shape, design.seed):
+            sim.set_shape(design.shape, name=design.config.shape)
+            sim.use_program(Replay(design))
+            runner.pending = {}
+            sim.reset(design.seed, config=design.config)
+        runner.shape_name = design.config.shape
+        runner.program_name = DESIGN_PROGRAM
+        runner.new_world()
+        return runner.program_name
 
 
 # ------------------------------------------------------------------ controls
@@ -189,11 +361,19 @@ class PlayDesign(Command):
 class Start(Control):
     """Start the simulation loop (a process runner's child waits for it)."""
 
+    def carry_out(self, runner: "Runner") -> None:
+        runner.start()
+
 
 @dataclass(frozen=True)
 class CancelBuild(Control):
-    """Stop a world being built by a reset (the old world goes on), or a skip ahead (the world stays
-    where it got to)."""
+    """Stop the :class:`Build` ``build``: a world being built by a reset (the old world goes on), or a
+    skip ahead (the world stays where it got to). Nothing if that build is over."""
+
+    build: int
+
+    def carry_out(self, runner: "Runner") -> None:
+        runner.cancel(self.build)
 
 
 @dataclass(frozen=True)
@@ -202,6 +382,10 @@ class SetPlaying(Setting):
 
     def settle(self, controls: Controls) -> None:
         controls.playing = bool(self.playing)
+
+    def carry_out(self, runner: "Runner") -> None:
+        runner.lift_halt()  # whoever owns play has heard of a frame that failed, and decided
+        Setting.carry_out(self, runner)
 
 
 @dataclass(frozen=True)

@@ -23,19 +23,12 @@ from typing import TYPE_CHECKING, Any, Callable, Iterator
 
 import numpy as np
 
-from sandbox.app.world.orders import (Apply, Arrival, CancelBuild, Command, Controls, Reset, RunnerStopped, RunTo,
-                                  SetLamp, SetOutline, SetProgram, SetShape, Setting, SkipAhead, Start, StepOnce,
-                                  UpdateConfig, WorldSpec, DesignOf, PlayDesign)
-from sandbox.app.world.contract import Deliver, SimulationRunner, answer
-from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM, RobotView, Snapshot
-from sandbox.model.design import MAX_PATTERNS, PatternRecorder
-
-#: What lights the floor while a design's recorded light program plays (serve --design).
-DESIGN_PROGRAM = "the design's recorded light program"
-#: The goal :meth:`Runner.on_build` names for a world built around the running goal.
-SAME_GOAL = "the running goal"
+from sandbox.app.world.contract import Deliver, SimulationRunner, wait_for
+from sandbox.app.world.orders import Build, BuildCancelled, Command, Controls, RunnerStopped
+from sandbox.app.world.snapshot import PAPER_PROGRAM, RobotView, Snapshot
 from sandbox.model import watchdog
 from sandbox.model.config import Config
+from sandbox.model.design import MAX_PATTERNS, PatternRecorder
 from sandbox.model.metrics import Sample
 
 if TYPE_CHECKING:  # imported where a Runner is built: the web server itself never steps a world
@@ -76,36 +69,9 @@ def next_frame_due(due: float, now: float, interval: float, most_behind: float) 
     return max(due + interval, now - most_behind)
 
 
-def wait_for(post: Callable, command: Any, timeout: float) -> Any:
-    """``post(command)`` (a runner method, which returns the command's future), and its answer within
-    ``timeout`` seconds (raises its exception). The future itself, not a callback: a callback may be
-    delivered on the very thread that waits here."""
-    return answer(post(command), timeout)
-
-
-#: Which Runner method carries out each kind of command (filled by :func:`handles`).
-HANDLERS: dict[type, Callable[["Runner", Any], Any]] = {}
-
-
-def handles(kind: type) -> Callable:
-    """Register the decorated Runner method as what carries out commands of ``kind``."""
-
-    def register(method: Callable) -> Callable:
-        HANDLERS[kind] = method
-        return method
-
-    return register
-
-
 #: Patterns a live world's design keeps: as many as a design file holds (10,000 on the default grid,
 #: ten default runs of the paper's controller; fewer on a larger grid), 5 MB kept as bits.
 MOST_PATTERNS = MAX_PATTERNS
-#: Steps between two progress reports of a skip ahead: 0.2-0.5 s of stepping; each report costs a message.
-SKIP_CHUNK = 2000
-
-
-class BuildCancelled(Exception):
-    """Building a new world was stopped by the user."""
 
 
 class Runner(SimulationRunner):
@@ -114,6 +80,10 @@ class Runner(SimulationRunner):
     ``fps`` is the frame rate the loop paces itself to; ``steps_per_frame`` the
     speed. Listeners receive snapshots on the publisher thread; ``deliver``: see
     :class:`~sandbox.app.world.contract.FramePublisher`.
+
+    Who writes what: the controls only the settings, on the thread that submits them; the world, the
+    snapshots and everything under "for the commands" only the simulation thread (the commands' own
+    thread in a runner that was not started); the builds' cancels (:meth:`cancel`) any thread.
     """
 
     def __init__(self, config: Config, *, shape: Any = "from-config", seed: int | None = None,
@@ -130,7 +100,7 @@ class Runner(SimulationRunner):
         # A live run has no last step.
         self.sim = Simulation(config, seed=seed, shape=shape, open_ended=True, program_time_limit=program_time_limit)
         #: The light program the world runs, kept for *Download design* (every change, up to a cap).
-        self._recorder = PatternRecorder(most=MOST_PATTERNS).attach(self.sim)
+        self.recorder = PatternRecorder(most=MOST_PATTERNS).attach(self.sim)
         SimulationRunner.__init__(self, Controls(playing=bool(playing), steps_per_frame=max(1, int(steps_per_frame))),
                                   deliver)
         self.fps = float(fps)
@@ -158,11 +128,18 @@ class Runner(SimulationRunner):
         self._series_lock = threading.Lock()
         self._series: list[Sample] = []
         self._threads: list[threading.Thread] = []
-        self._cancel = threading.Event()
+        # The builds submitted and not over, each with whether a cancel named it. Shared: a cancel comes on
+        # the thread that submits it, the build runs on the simulation thread.
+        self._builds_lock = threading.Lock()
+        self._builds: dict[int, bool] = {}
+        #: Set by the loop when a frame failed: it steps no more, and its frames say paused, until the
+        #: next SetPlaying (the owner of play heard of it: :meth:`on_halt`). The loop writes no control.
+        self._halted = threading.Event()
+        self._halt_listeners: list[Callable[[str], None]] = []
         self._progress_listeners: list[Callable[[float | None], None]] = []
         self._build_listeners: list[Callable[[tuple | None], None]] = []
-        self._record_series(force=True)
-        self._snapshot()
+        self.record_series(force=True)
+        self.snapshot()
 
     # ------------------------------------------------------------ control
     def start(self) -> "Runner":
@@ -188,11 +165,14 @@ class Runner(SimulationRunner):
 
     def submit(self, command: Command) -> Future:
         """Carry out ``command``: a control now, on this thread; any other in the simulation thread
-        before the next step (or at the next :meth:`advance` of a runner that was not started)."""
+        before the next step (or at the next :meth:`advance` or :meth:`call` of a runner that was not
+        started)."""
         future: Future = Future()
         if command.at_once:
             self._carry_out(command, future)
             return future
+        if isinstance(command, Build):
+            self._expect(command.build)  # from now on a cancel of it counts, even before it starts
         with self._closing:
             refused = self._closed
             if not refused:
@@ -211,26 +191,28 @@ class Runner(SimulationRunner):
             try:
                 _, future = self._commands.get_nowait()
             except queue.Empty:
-                return
+                break
             if future.set_running_or_notify_cancel():
                 future.set_exception(why)
+        with self._builds_lock:
+            self._builds.clear()
 
     def call(self, command: Command, timeout: float = 10.0) -> Any:
-        """Post a command and wait for its result (raises its exception)."""
-        if not self._threads:
-            # Not started (tests, headless use): run inline.
-            result = command(self.sim)
-            self._snapshot()
-            return result
-        return answer(self.submit(Apply(command)), timeout)
+        """Submit ``command`` and wait for its answer (raises what it raised). A runner that was not
+        started (tests, headless use) carries out what waits, this command too, here and now."""
+        future = self.submit(command)
+        if not self._threads and not self._closed:
+            self._run_commands()
+            self.snapshot()
+        return wait_for(future, timeout)
 
     def advance(self, n: int) -> Snapshot:
         """Headless use (no threads): step ``n`` steps and take a snapshot."""
         assert not self._threads, "advance() is for a runner that was not started"
         self._run_commands()
-        self._step(n)
-        self._record_series()
-        self._snapshot()
+        self.step(n)
+        self.record_series()
+        self.snapshot()
         return self.latest
 
     @property
@@ -249,25 +231,8 @@ class Runner(SimulationRunner):
         those that ran."""
         self._build_listeners.append(listener)
 
-    @contextlib.contextmanager
-    def _announcing(self, config: Config, goal: Any, seed: int | None) -> Iterator[None]:
-        """Within: a world or goal is being built from these settings (see :meth:`on_build`)."""
-        for listener in list(self._build_listeners):
-            self._deliver(listener, (config, goal, seed))
-        try:
-            yield
-        finally:
-            for listener in list(self._build_listeners):
-                self._deliver(listener, None)
-
-    def _building(self, fraction: float) -> None:
-        if self._cancel.is_set():
-            raise BuildCancelled("building the world was cancelled; the previous world goes on")
-        self._report_progress(fraction)
-
-    def _report_progress(self, fraction: float | None) -> None:
-        for listener in list(self._progress_listeners):
-            self._deliver(listener, fraction)  # a broken listener must not stop the build
+    def on_halt(self, listener: Callable[[str], None]) -> None:
+        self._halt_listeners.append(listener)
 
     @property
     def latest(self) -> Snapshot:
@@ -325,171 +290,93 @@ class Runner(SimulationRunner):
                 future.set_exception(RunnerStopped("the simulation stopped while carrying this out"))
 
     def handle(self, command: Command) -> Any:
-        """Carry out one command (the one place each command's meaning lives; :meth:`submit` decides
-        on which thread and when): the handler of its type, or of the nearest base that has one."""
-        kind = type(command)
-        handler = HANDLERS.get(kind) or next((HANDLERS[k] for k in kind.__mro__ if k in HANDLERS), None)
-        if handler is None:
-            raise TypeError(f"the simulation does not know the command {command!r}")
-        return handler(self, command)
+        """Carry out one command now, on this thread (:meth:`submit` decides on which thread and when;
+        what it does, the command says: :meth:`Command.carry_out <sandbox.app.world.orders.Command.carry_out>`)."""
+        return command.carry_out(self)
 
-    @handles(Setting)
-    def _setting(self, command: Setting) -> None:
-        command.settle(self.controls)
-        if command.wakes:
-            self._wake.set()
-
-    @handles(Start)
-    def _start(self, command: Start) -> None:
-        self.start()
-
-    @handles(CancelBuild)
-    def _cancel_build(self, command: CancelBuild) -> None:
-        self._cancel.set()
-
-    @handles(Apply)
-    def _apply(self, command: Apply) -> Any:
-        return command.function(self.sim)
-
-    @handles(StepOnce)
-    def _step_once(self, command: StepOnce) -> None:
-        self._step(command.n)
-
-    @handles(RunTo)
-    def _run_to(self, command: RunTo) -> None:
-        if self.sim.steps_done < command.step:
-            self._step(command.step - self.sim.steps_done)
-
-    @handles(SkipAhead)
-    def _skip_ahead(self, command: SkipAhead) -> Arrival:
-        """Step in chunks of :data:`SKIP_CHUNK` with no snapshot between them (the chart's samples are kept),
-        telling the progress listeners after each; stop early when cancelled (a cancel that came while
-        it waited its turn counts: the page's Cancel shows from the moment it is asked)."""
-        start, target = self.sim.steps_done, int(command.step)
-        cancelled = False
-        # The state it starts from, shown while it runs: after a reset taken in the same turn (Use and run to
-        # the end), the pages would otherwise show the old world until the end.
-        self._snapshot()
+    # ------------------------------------------------------------ for the commands
+    @contextlib.contextmanager
+    def announcing(self, config: Config, goal: Any, seed: int | None) -> Iterator[None]:
+        """Within: a world or goal is being built from these settings (see :meth:`on_build`)."""
+        for listener in list(self._build_listeners):
+            self._deliver(listener, (config, goal, seed))
         try:
-            while self.sim.steps_done < target:
-                if self._cancel.is_set():
-                    cancelled = True
-                    break
-                chunk_end = min(self.sim.steps_done + SKIP_CHUNK, target)
-                while self.sim.steps_done < chunk_end:  # the chart's samples as a live run takes them
-                    self._step(min(self.chart_every, chunk_end - self.sim.steps_done))
-                    self._record_series()
-                self._report_progress((self.sim.steps_done - start) / max(target - start, 1))
+            yield
         finally:
-            self._cancel.clear()
-            self._report_progress(None)
-        self._record_series(force=True)
-        self._restart_schedule = True  # it ran ahead: its time is not owed
-        return Arrival(self.sim.steps_done, cancelled, self._world_key)
+            for listener in list(self._build_listeners):
+                self._deliver(listener, None)
 
-    @handles(UpdateConfig)
-    def _update_config(self, command: UpdateConfig) -> tuple[list[str], Config]:
-        changes = command.changes
-        deferred = self.sim.update_config(**changes)
-        # Checked together with what is already waiting (a profile change resets the values it bundles).
-        settings = self.sim.config.replace(**{**self.pending, **{k: changes[k] for k in deferred}})
-        self.pending = {k: getattr(settings, k) for k in {*self.pending, *deferred}}
-        return sorted(self.pending), settings
+    @contextlib.contextmanager
+    def under_way(self, build: int) -> Iterator[Callable[[float], None]]:
+        """Within: the build ``build`` is carried out. Yields its progress report, ``progress(fraction)``,
+        which raises :class:`BuildCancelled` once a cancel named it. On the way out the progress
+        listeners hear that it is over, and a cancel of it does nothing any more."""
 
-    @handles(Reset)
-    def _reset(self, command: Reset) -> int:
-        self._cancel.clear()
-        settings = self.settings
-        seed = settings.seed if command.seed is None else int(command.seed)
+        def progress(fraction: float) -> None:
+            self.stop_if_cancelled(build)
+            self.report_progress(fraction)
+
+        self._expect(build)  # carried out without being submitted (a test driving handle())
         try:
-            with self._announcing(settings, SAME_GOAL, seed):
-                self.sim.reset(command.seed, config=settings, progress=self._building)
+            yield progress
         finally:
-            self._report_progress(None)
-        self.pending = {}
-        self._new_world()
-        return self._world_key
+            with self._builds_lock:
+                self._builds.pop(build, None)
+            self.report_progress(None)
 
-    def _new_world(self) -> None:
-        """The simulation was rebuilt: a new goal, new speeds, a new world and its new series."""
+    def _expect(self, build: int) -> None:
+        with self._builds_lock:
+            self._builds.setdefault(build, False)
+
+    def cancel(self, build: int) -> None:
+        """Cancel the build ``build`` if it waits or runs (any thread); one that is over stays over."""
+        with self._builds_lock:
+            if build in self._builds:
+                self._builds[build] = True
+
+    def cancelled(self, build: int) -> bool:
+        with self._builds_lock:
+            return self._builds.get(build, False)
+
+    def stop_if_cancelled(self, build: int) -> None:
+        if self.cancelled(build):
+            raise BuildCancelled("building the world was cancelled; the previous world goes on")
+
+    def report_progress(self, fraction: float | None) -> None:
+        for listener in list(self._progress_listeners):
+            self._deliver(listener, fraction)  # a broken listener must not stop the build
+
+    def new_world(self) -> int:
+        """The simulation was rebuilt: a new goal, new speeds, a new world and its new series. Returns
+        the new world's key."""
         self._goal_key += 1
         self._restart_schedule = True  # the new world starts on the clock: the build's time is not owed
         self._step_times.clear()  # speeds are measured within one world
         with self._series_lock:  # a new world and its new series, together (see series_of_world)
             self._world_key += 1
             self._series = []
-        self._record_series(force=True)
+        self.record_series(force=True)
+        return self._world_key
 
-    @handles(SetShape)
-    def _set_shape(self, command: SetShape) -> list[str]:
-        with self._announcing(self.sim.config, command.vertices, self.sim.seed):
-            notes = self.sim.set_shape(command.vertices, name=command.name)
-        self.shape_name = command.name
+    def new_goal(self) -> None:
+        """The goal changed (its outline is drawn again)."""
         self._goal_key += 1
-        return notes
 
-    @handles(SetOutline)
-    def _set_outline(self, command: SetOutline) -> list[str]:
-        with self._announcing(self.sim.config.replace(outline=command.outline), SAME_GOAL, self.sim.seed):
-            notes = self.sim.set_outline(command.outline)
-        self._goal_key += 1  # an offset goal may have moved
-        return notes
+    def ran_ahead(self) -> None:
+        """The world ran ahead of its schedule (a skip): the time that took is not owed."""
+        self._restart_schedule = True
 
-    @handles(SetProgram)
-    def _set_program(self, command: SetProgram) -> str:
-        from sandbox.model.programs import load_program
+    @property
+    def world_key(self) -> int:
+        return self._world_key
 
-        spec = command.spec
-        self.sim.use_program(load_program(spec, time_limit=self.program_time_limit) if spec else None)
-        self.program_name = spec or PAPER_PROGRAM
-        return self.program_name
-
-    @handles(SetLamp)
-    def _set_lamp(self, command: SetLamp) -> str:
-        from sandbox.model.lamp import Lamp
-
-        sim = self.sim
-        lamp = sim.user_program if isinstance(sim.user_program, Lamp) else None
-        if command.centre is None:
-            if lamp is not None:
-                sim.use_program(None)
-                self.program_name = PAPER_PROGRAM
-            return self.program_name
-        if lamp is None:
-            lamp = Lamp()
-            sim.use_program(lamp)
-            self.program_name = LAMP_PROGRAM
-        lamp.aim(*command.centre, command.radius, command.mode)
-        return self.program_name
-
-    @handles(DesignOf)
-    def _design_of(self, command: DesignOf) -> Any:
-        return self._recorder.design(self.sim, controller=self.program_name)
-
-    @handles(PlayDesign)
-    def _play_design(self, command: PlayDesign) -> str:
-        from sandbox.model.design import Replay
-
-        design = command.design
-        with self._announcing(design.config, design.shape, design.seed):
-            self.sim.set_shape(design.shape, name=design.config.shape)
-            self.sim.use_program(Replay(design))
-            self.pending = {}
-            self.sim.reset(design.seed, config=design.config)
-        self.shape_name = design.config.shape
-        self.program_name = DESIGN_PROGRAM
-        self._new_world()
-        return self.program_name
-
-    @handles(WorldSpec)
-    def _world_spec(self, command: WorldSpec) -> tuple:
-        sim = self.sim
-        shape = None if sim.shape_vertices is None else sim.shape_vertices.copy()
-        return sim.config, sim.seed, shape
+    def lift_halt(self) -> None:
+        """Step again after a failed frame (a SetPlaying came: whoever owns play has decided)."""
+        self._halted.clear()
 
     # -------------------------------------------------------------- loops
-    def _step(self, n: int | None = None, deadline: float | None = None) -> None:
-        """Step; a light program that fails while running hands the lights back to the paper's controller."""
+    def step(self, n: int | None = None, deadline: float | None = None) -> None:
+        """Step ``n`` steps (or, with ``deadline``, as many as fit before it); a light program that fails while running hands the lights back to the paper's controller."""
         from sandbox.model.programs import ProgramError
 
         try:
@@ -529,7 +416,7 @@ class Runner(SimulationRunner):
         a new world or ran ahead."""
         self._restart_schedule = False
         if self._run_commands():
-            self._snapshot()
+            self.snapshot()
         return max(due, time.perf_counter()) if self._restart_schedule else due
 
     def _frame_on_schedule(self, due: float, interval: float) -> float:
@@ -539,12 +426,25 @@ class Runner(SimulationRunner):
         self._restart_schedule = False
         try:
             playing = self._frame_of_steps(due + interval, frames)
-        except Exception as exc:  # noqa: BLE001 - a bug: pause and say so rather than freeze the page
-            self.errors.append(exc)
-            log.exception("the simulation loop failed; paused")
-            self.controls.playing = playing = False
+        except Exception as exc:  # noqa: BLE001 - a bug: stop and say so rather than freeze the page
+            self._halt(exc)
+            playing = False
         return next_frame_due(due + (frames - 1) * interval, time.perf_counter(), interval,
                               most_behind=self._may_fall_behind(fastest, playing, interval))
+
+    def _halt(self, exc: Exception) -> None:
+        """A frame failed (a bug): step no more, and say paused, until the next SetPlaying; tell the
+        :meth:`on_halt` listeners, which own play (the app pauses, as a page's Pause does)."""
+        self.errors.append(exc)
+        log.exception("the simulation loop failed; halted until play is set again")
+        self._halted.set()
+        why = f"the simulation failed ({type(exc).__name__}: {exc}) and stopped stepping"
+        for listener in list(self._halt_listeners):
+            self._deliver(listener, why)
+
+    def _playing(self) -> bool:
+        """Whether the world steps: playing, and not halted by a failed frame."""
+        return self.controls.playing and not self._halted.is_set()
 
     def _may_fall_behind(self, fastest: bool, playing: bool, interval: float) -> float:
         """How far behind its schedule the next frame may be due (s). Nothing is owed for time the world
@@ -561,18 +461,19 @@ class Runner(SimulationRunner):
         snapshot. ``deadline``: when the fastest setting stops stepping. True if the world was playing."""
         self._run_commands()
         controls = self.controls
+        playing = self._playing()
         allowed = self._steps_allowed(controls.steps_per_frame * frames)
-        if controls.playing and allowed > 0:
+        if playing and allowed > 0:
             if controls.steps_per_frame >= FASTEST:
-                self._step(deadline=deadline)  # as many steps as fit in one frame
+                self.step(deadline=deadline)  # as many steps as fit in one frame
             else:
-                self._step(allowed)
-            self._record_series()
+                self.step(allowed)
+            self.record_series()
         self._step_times.append((time.perf_counter(), self.sim.steps_done))
         self._frames_run += 1
         if self._frames_run % controls.show_every == 0:  # (a command that wakes the loop shows at once)
-            self._snapshot()
-        return controls.playing
+            self.snapshot()
+        return playing
 
     def _step_for(self, deadline: float) -> None:
         """Step in small chunks until ``deadline`` (at least one chunk) or the held step."""
@@ -598,7 +499,7 @@ class Runner(SimulationRunner):
             self._publish(snap)
 
     # ---------------------------------------------------------- snapshots
-    def _record_series(self, force: bool = False) -> None:
+    def record_series(self, force: bool = False) -> None:
         sim = self.sim
         with self._series_lock:
             last = self._series[-1].step if self._series else None
@@ -607,7 +508,7 @@ class Runner(SimulationRunner):
             with self._series_lock:
                 self._series.append(sample)
 
-    def _snapshot(self) -> None:
+    def snapshot(self) -> None:
         sim = self.sim
         self._frame += 1
         followed = tuple(RobotView(
@@ -662,7 +563,7 @@ class Runner(SimulationRunner):
             goal_vertices=goal_vertices,
             sample=self._series[-1] if self._series else sim.measure(),
             strategies=dict(sim.controller.strategies),
-            playing=self.controls.playing,
+            playing=self._playing(),
             steps_per_frame=self.controls.steps_per_frame,
             steps_per_second=self._measured_speed(),
             followed=followed,

@@ -14,9 +14,10 @@ from sandbox.model.metrics import Sample
 
 
 #: What lights the floor, as snapshots name it: the paper's controller, a person's lamp (the Be the light
-#: folder), or else a light program's path:Class.
+#: folder), a design's recorded light program (serve --design), or else a light program's path:Class.
 PAPER_PROGRAM = "the paper's controller"
 LAMP_PROGRAM = "a lamp you move (Be the light)"
+DESIGN_PROGRAM = "the design's recorded light program"
 
 
 @dataclasses.dataclass(frozen=True)
