@@ -49,6 +49,12 @@ def test_every_command_says_what_it_does(kind):
         assert kind.settle is not Setting.settle, f"{kind.__name__} sets no control"
 
 
+def test_the_runner_offers_its_commands_all_that_they_may_use():
+    runner = Runner(SMALL, shape=None)
+    wanted = {name for name in (*commands.World.__annotations__, *vars(commands.World)) if not name.startswith("_")}
+    assert wanted and not [name for name in sorted(wanted) if not hasattr(runner, name)]
+
+
 def test_a_stopped_runner_fails_every_command_it_had_not_carried_out():
     runner = Runner(SMALL, shape=None)  # not started: the commands wait for the loop
     heard: list[BaseException] = []

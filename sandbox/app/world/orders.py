@@ -21,21 +21,18 @@ A :class:`Build` (a new world, a run to the end) may take long: it reports its p
 :class:`CancelBuild` that names its :attr:`Build.build` stops it, whether it came while the build ran
 or while it waited its turn; a cancel of a build that is over does nothing.
 
-``carry_out`` runs on the simulation thread (a control's on the submitting thread) and uses what the
-Runner offers its commands (its section "for the commands"): the simulation, the changes waiting for a
-reset, the progress and cancel of builds, stepping, snapshots.
+``carry_out`` runs on the simulation thread (a control's on the submitting thread) and uses only what
+:class:`World` lists: what the Runner offers its commands (its section "for the commands").
 """
 
 from __future__ import annotations
 
 import itertools
+from contextlib import AbstractContextManager
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable, ClassVar, NamedTuple
+from typing import Any, Callable, ClassVar, NamedTuple, Protocol
 
 from sandbox.app.world.snapshot import DESIGN_PROGRAM, LAMP_PROGRAM, PAPER_PROGRAM
-
-if TYPE_CHECKING:
-    from sandbox.app.world.runner import Runner
 
 #: The goal a build announces when it builds around the running goal (see ``Runner.on_build``).
 SAME_GOAL = "the running goal"
@@ -47,6 +44,40 @@ class RunnerStopped(RuntimeError):
 
 class BuildCancelled(Exception):
     """Building a new world was stopped by the user."""
+
+
+class World(Protocol):
+    """What a command may use of the runner that carries it out (:class:`~sandbox.app.world.runner.Runner`,
+    its section "for the commands"), on the simulation thread."""
+
+    sim: Any  #: the Simulation
+    controls: "Controls"
+    pending: dict  #: changes waiting for a reset
+    program_name: str
+    shape_name: str
+    program_time_limit: float
+    chart_every: int
+    recorder: Any  #: the running world's PatternRecorder
+
+    @property
+    def settings(self) -> Any: ...  # the running Config with the changes waiting for a reset
+    @property
+    def world_key(self) -> int: ...
+    def announcing(self, config: Any, goal: Any, seed: int | None) -> AbstractContextManager[None]: ...
+    def under_way(self, build: int) -> AbstractContextManager[Callable[[float], None]]: ...
+    def cancelled(self, build: int) -> bool: ...
+    def stop_if_cancelled(self, build: int) -> None: ...
+    def cancel(self, build: int) -> None: ...
+    def report_progress(self, fraction: float | None) -> None: ...
+    def new_world(self) -> int: ...
+    def new_goal(self) -> None: ...
+    def ran_ahead(self) -> None: ...
+    def step(self, n: int | None = None) -> None: ...
+    def record_series(self, force: bool = False) -> None: ...
+    def snapshot(self) -> None: ...
+    def wake(self) -> None: ...
+    def start(self) -> Any: ...
+    def lift_halt(self) -> None: ...
 
 
 @dataclass
@@ -78,7 +109,7 @@ class Command:
     #: Whether it acts at once on the submitting thread (a :class:`Control`) rather than between steps.
     at_once: ClassVar[bool] = False
 
-    def carry_out(self, runner: "Runner") -> Any:
+    def carry_out(self, runner: World) -> Any:
         """Do it to ``runner``'s world; what it returns is the answer."""
         raise NotImplementedError(f"{type(self).__name__} says nothing of what it does")
 
@@ -100,7 +131,7 @@ class Setting(Control):
     def settle(self, controls: Controls) -> None:
         raise NotImplementedError
 
-    def carry_out(self, runner: "Runner") -> None:
+    def carry_out(self, runner: World) -> None:
         self.settle(runner.controls)
         if self.wakes:
             runner.wake()
@@ -131,7 +162,7 @@ class Apply(Command):
 
     function: Callable[[Any], Any]
 
-    def carry_out(self, runner: "Runner") -> Any:
+    def carry_out(self, runner: World) -> Any:
         return self.function(runner.sim)
 
 
@@ -144,7 +175,7 @@ class Reset(Build):
 
     seed: int | None = None
 
-    def carry_out(self, runner: "Runner") -> int:
+    def carry_out(self, runner: World) -> int:
         settings = runner.settings
         seed = settings.seed if self.seed is None else int(self.seed)
         with runner.under_way(self.build) as progress:
@@ -162,7 +193,7 @@ class SetShape(Command):
     vertices: Any
     name: str
 
-    def carry_out(self, runner: "Runner") -> list[str]:
+    def carry_out(self, runner: World) -> list[str]:
         sim = runner.sim
         with runner.announcing(sim.config, self.vertices, sim.seed):
             notes = sim.set_shape(self.vertices, name=self.name)
@@ -177,7 +208,7 @@ class SetOutline(Command):
 
     outline: str
 
-    def carry_out(self, runner: "Runner") -> list[str]:
+    def carry_out(self, runner: World) -> list[str]:
         sim = runner.sim
         with runner.announcing(sim.config.replace(outline=self.outline), SAME_GOAL, sim.seed):
             notes = sim.set_outline(self.outline)
@@ -192,7 +223,7 @@ class UpdateConfig(Command):
 
     changes: dict = field(default_factory=dict)
 
-    def carry_out(self, runner: "Runner") -> tuple[list[str], Any]:
+    def carry_out(self, runner: World) -> tuple[list[str], Any]:
         changes = self.changes
         deferred = runner.sim.update_config(**changes)
         # Checked together with what is already waiting (a profile change resets the values it bundles).
@@ -208,7 +239,7 @@ class SetProgram(Command):
 
     spec: str | None
 
-    def carry_out(self, runner: "Runner") -> str:
+    def carry_out(self, runner: World) -> str:
         from sandbox.model.programs import load_program
 
         spec = self.spec
@@ -227,7 +258,7 @@ class SetLamp(Command):
     radius: float | None = None
     mode: str = "lamp"
 
-    def carry_out(self, runner: "Runner") -> str:
+    def carry_out(self, runner: World) -> str:
         from sandbox.model.lamp import Lamp
 
         sim = runner.sim
@@ -250,7 +281,7 @@ class WorldSpec(Command):
     """Answers (config, seed, goal vertices as given or None): what builds the running world again
     elsewhere (a challenge's reference run)."""
 
-    def carry_out(self, runner: "Runner") -> tuple:
+    def carry_out(self, runner: World) -> tuple:
         sim = runner.sim
         shape = None if sim.shape_vertices is None else sim.shape_vertices.copy()
         return sim.config, sim.seed, shape
@@ -262,7 +293,7 @@ class StepOnce(Command):
 
     n: int = 1
 
-    def carry_out(self, runner: "Runner") -> None:
+    def carry_out(self, runner: World) -> None:
         runner.step(int(self.n))
 
 
@@ -273,7 +304,7 @@ class RunTo(Command):
 
     step: int
 
-    def carry_out(self, runner: "Runner") -> None:
+    def carry_out(self, runner: World) -> None:
         if runner.sim.steps_done < self.step:
             runner.step(self.step - runner.sim.steps_done)
 
@@ -290,7 +321,7 @@ class SkipAhead(Build):
 
     step: int
 
-    def carry_out(self, runner: "Runner") -> "Arrival":
+    def carry_out(self, runner: World) -> "Arrival":
         """Step in chunks of :data:`SKIP_CHUNK` with no snapshot between them (the chart's samples are
         kept), telling the progress listeners after each; stop early when cancelled (a cancel that came
         while it waited its turn counts: the page's Cancel shows from the moment it is asked)."""
@@ -330,7 +361,7 @@ class DesignOf(Command):
     """Answers the running world's design (sandbox.model.design): its goal, settings, seed and the
     light program it has run so far, every pattern with the step it started."""
 
-    def carry_out(self, runner: "Runner") -> Any:
+    def carry_out(self, runner: World) -> Any:
         return runner.recorder.design(runner.sim, controller=runner.program_name)
 
 
@@ -341,7 +372,7 @@ class PlayDesign(Command):
 
     design: Any
 
-    def carry_out(self, runner: "Runner") -> str:
+    def carry_out(self, runner: World) -> str:
         from sandbox.model.design import Replay
 
         design, sim = self.design, runner.sim
@@ -361,7 +392,7 @@ class PlayDesign(Command):
 class Start(Control):
     """Start the simulation loop (a process runner's child waits for it)."""
 
-    def carry_out(self, runner: "Runner") -> None:
+    def carry_out(self, runner: World) -> None:
         runner.start()
 
 
@@ -372,7 +403,7 @@ class CancelBuild(Control):
 
     build: int
 
-    def carry_out(self, runner: "Runner") -> None:
+    def carry_out(self, runner: World) -> None:
         runner.cancel(self.build)
 
 
@@ -383,7 +414,7 @@ class SetPlaying(Setting):
     def settle(self, controls: Controls) -> None:
         controls.playing = bool(self.playing)
 
-    def carry_out(self, runner: "Runner") -> None:
+    def carry_out(self, runner: World) -> None:
         runner.lift_halt()  # whoever owns play has heard of a frame that failed, and decided
         Setting.carry_out(self, runner)
 
