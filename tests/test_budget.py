@@ -360,13 +360,20 @@ def test_the_page_is_refused_by_the_server_and_the_world_goes_on(app):
     """The attack: field samples 64, then light pitch 0.05, then Reset. Before: the simulation process passed
     2.9 GB, was killed and restarted into the same settings. Now the server refuses the pitch with a
     notification, the control goes back, the samples stand, and Reset builds the world that fits."""
+    from sandbox.app.world.orders import UpdateConfig
     from tests.test_security import connected, notification, own_page, uuid_of
     from tests.viser_wire import RawClient
 
     controls, runner = app.panel.parameters.controls, app.panel.parameters.runner
     asked = []  # what the panel asked of the simulation
-    ask = runner.update_config
-    runner.update_config = lambda changes, **kwargs: (asked.append(dict(changes)), ask(changes, **kwargs))[1]
+    ask = runner.ask
+
+    def asking(command, *args, **kwargs):
+        if isinstance(command, UpdateConfig):
+            asked.append(dict(command.changes))
+        return ask(command, *args, **kwargs)
+
+    runner.ask = asking
     client = RawClient(app.port, own_page(app))
     connected(app, client)
     client.set_value(uuid_of(controls["field_samples"]), 64)
