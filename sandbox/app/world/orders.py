@@ -415,8 +415,8 @@ class SetPlaying(Setting):
         controls.playing = bool(self.playing)
 
     def carry_out(self, runner: World) -> None:
-        runner.lift_halt()  # whoever owns play has heard of a frame that failed, and decided
         Setting.carry_out(self, runner)
+        runner.lift_halt()  # after: whoever owns play has heard of a frame that failed, and decided
 
 
 @dataclass(frozen=True)
