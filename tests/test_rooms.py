@@ -4,6 +4,7 @@ between rooms run downhill, and no two modules share a name that means different
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 SANDBOX = Path(__file__).resolve().parent.parent / "sandbox"
@@ -78,3 +79,16 @@ def test_the_guard_sees_a_room_importing_uphill(tmp_path):
     wrong.write_text("def f():\n    from sandbox.app.panel.common import notify\n", encoding="utf-8")
     assert room_of("sandbox.app.panel.common") == "panel"
     assert "sandbox.app.panel.common" in imported_modules(wrong)
+
+
+#: words that say which thread runs a module's code
+THREAD_WORDS = re.compile(r"thread|event loop|in the page|child process", re.IGNORECASE)
+
+
+def test_every_module_of_the_app_opens_with_what_it_owns_and_which_thread_runs_it():
+    silent = []
+    for path in sorted(APP.rglob("*.py")):
+        doc = ast.get_docstring(ast.parse(path.read_text(encoding="utf-8"))) or ""
+        if not THREAD_WORDS.search(doc.split("\n\n")[0]):
+            silent.append(str(path.relative_to(SANDBOX)))
+    assert not silent, f"say in the opening paragraph which thread runs it: {silent}"

@@ -1,6 +1,7 @@
 """The browser sandbox (``phototaxis serve``, :mod:`sandbox.commands.serve`): a viser app on top of the
 engine, in four rooms. Imports run downhill: ``world`` and ``web`` know nothing of the rest, ``view``
 draws what ``world`` snapshots, ``panel`` uses all three, and the ``serve`` command puts them together.
+Each room's modules say which thread runs them; docs/code.md's Threads table has them all.
 
 - :mod:`.world`  the simulation behind the app: what the app may ask of it, the runner (a thread, or a
   process of its own), snapshots, and the lockstep of two worlds in compare mode. No viser.

@@ -1,6 +1,7 @@
 """The server's transport and who may talk to it. A page's message passes the gate (Host, Origin,
 token), is decoded and checked (:mod:`.well_formed`), budgeted (:mod:`.rates`) and read by the inbox
 before viser acts on it; every viser callback then runs on the app's one event queue (:mod:`.events`).
+viser's event loop runs the checks; the app's event thread runs everything else.
 
 - :mod:`.gate`        the viser server with the gate: :func:`~.gate.start_server`
 - :mod:`.access`      who may connect, from each request alone (Host, Origin, token)

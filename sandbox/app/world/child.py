@@ -1,4 +1,5 @@
 """The simulation in its own process, behind the same interface as :class:`~sandbox.app.world.runner.Runner`.
+Its proxy is called from the app's event thread; one receiving thread per child reads the child's messages and settles the futures; the child runs the loop.
 
 In one process the web server (viser's event loop, scene and panel updates)
 and the simulation share the GIL, and the live app stepped at less than half

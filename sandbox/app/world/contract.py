@@ -1,4 +1,5 @@
 """What the app asks of a simulation runner, written once for both runners.
+Callers submit from any thread; futures are settled on the runner's thread.
 
 The app (server, scene, panel, recorder) drives a simulation only through
 :class:`SimulationRunner`. Two classes are one:

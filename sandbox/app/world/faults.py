@@ -1,6 +1,7 @@
 """Faults the tests put into a simulation process: a world that is slow to build, or one whose building
 kills its process (as running out of memory does), so that what the app does then can be tested
 without exhausting the machine's memory or waiting on a real slow build.
+Read in the child process as a world is built.
 
 Each is an environment variable of the app's process, read by :class:`~sandbox.app.world.child.ProcessRunner`
 each time it starts a simulation process and handed to it with its settings; the simulation process

@@ -1,4 +1,5 @@
 """Compare mode (issue 25, item 1): a second world beside the running one.
+Runs on the app's event thread; a frame, on its runner's thread, only posts to it.
 
 The two worlds start from the same seed, so the same robots and boxes, and
 differ only in what the user picked (strategies, goal, outline, profile or

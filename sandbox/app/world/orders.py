@@ -1,4 +1,5 @@
 """What the app can ask of a simulation runner: one frozen dataclass per command, with what it does.
+Made on any thread; carried out on the runner's thread (the simulation thread, or the child's loop).
 
 A command is written once, here: its fields, and :meth:`Command.carry_out`, what it does to the
 world when the runner that owns the world (:class:`~sandbox.app.world.runner.Runner`) carries it out.

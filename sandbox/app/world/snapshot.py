@@ -1,7 +1,7 @@
 """A snapshot: everything a picture of the simulation needs, copied between
 steps so that the page (or a recording) can keep it while the simulation
 goes on. Runners make them; the scene, the panel and the GIF / MP4 frames
-read them."""
+read them. Made on the simulation thread, immutable, read on any thread."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
 """Which settings a crashed simulation process is started again from, and how to say so (issue 54).
+Written on the receiving thread of a child runner, read anywhere.
 
 A world that kills its process (out of memory, say) while it is built or run from new settings kills
 every process started again from them: the app used to restart "from the last settings" every 15-20 s
