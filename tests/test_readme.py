@@ -33,7 +33,7 @@ SHELL_BLOCKS = {"bash", "sh", "shell"}
 SHORT = {
     "run": {"--steps": "300", "--no-progress": None},
     "record": {"--steps": "300", "--no-progress": None},
-    # Without figures: 3.5 s of matplotlib, drawn and checked in tests/test_experiment.py.
+    # Without figures: 3.5 s of matplotlib, drawn and checked in tests/experiments/test_experiment.py.
     "sweep": {"--trials": "1", "--steps": "300", "--workers": "1", "--no-progress": None, "--no-figures": None},
     "bench": {"--steps": "300", "--no-progress": None},
     "report": {},

@@ -34,7 +34,7 @@ Measured against the estimate (MB; the first four calibrate, the others check): 
 184 and 210; pitch 0.125 in a 256 m arena with range 0.5 and 1 sample (4.2 million lights), 748 and
 774; 40,000 robots, 172 and 181; 40,000 boxes, 236 and 281; pitch 0.25, 68 and 84; pitch 0.5 with
 32 samples, 220 and 250; 20,000 robots with 20,000 boxes, 181 and 231; pitch 0.1 with range 3.2,
-179 and 185; the 300-vertex C of 0.84 m teeth of tests/test_budget.py on the offset outline, 57 and
+179 and 185; the 300-vertex C of 0.84 m teeth of tests/model/test_budget.py on the offset outline, 57 and
 53 (docs/security.md, "What a world may cost").
 
 The budget (:func:`memory_budget`) is the ``PHOTOTAXIS_MEMORY_BUDGET`` environment variable when
@@ -78,7 +78,7 @@ PER_BOX = 6_000
 PER_SAMPLE = 240
 #: The most vertices a goal keeps (sandbox.model.goal simplifies past it, or refuses): growing a goal
 #: by a distance, which the offset outline and chase do at every update, costs as the square of its
-#: vertices when its edges overlap once grown. Measured on the spiky C of tests/test_budget.py at
+#: vertices when its edges overlap once grown. Measured on the spiky C of tests/model/test_budget.py at
 #: its worst distance: 300 vertices 0.22 s and 40 MB, 500 vertices 0.66 s and 140 MB, 1,000
 #: vertices 5.0 s and 470 MB, 2,000 vertices 24 s and 2.2 GB.
 MAX_GOAL_VERTICES = 300

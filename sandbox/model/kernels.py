@@ -15,7 +15,7 @@ one we control.
 The formulas are those of :mod:`sandbox.robots` and the light sampling,
 with the same floating-point operations in the same order, so a run gives
 bit-for-bit the positions the numpy version gives (tested in
-``tests/test_kernels.py`` against a numpy reference step).
+``tests/model/test_kernels.py`` against a numpy reference step).
 """
 
 from __future__ import annotations

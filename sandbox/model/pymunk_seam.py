@@ -8,7 +8,7 @@ is not available (:mod:`sandbox.model.world`). They reach Chipmunk's C library t
 cffi module, and a body's ``cpBody`` through its private ``_body``. Each such use is a row of
 :data:`USES`: what we use, where in pymunk it is, why we need it, and how :func:`check` finds it.
 :func:`check` runs before the first world is built and refuses, in one line naming the installed pymunk
-and what it lacks, when any row is missing. ``tests/test_pymunk_seam.py`` fails when any other module of
+and what it lacks, when any row is missing. ``tests/model/test_pymunk_seam.py`` fails when any other module of
 ``sandbox`` names pymunk's private code, and when this module uses a piece no row lists.
 
 Where the fields of a ``cpBody`` lie in memory is no name, and stays in :mod:`sandbox.model.body_memory`:

@@ -20,7 +20,7 @@ from sandbox.model.simulation import Simulation
 DIGESTS = Path(__file__).with_name("digests.json")
 SEED = 3
 
-#: The runs ``pytest`` checks (tests/test_golden.py): name -> steps. Open loop on three cases
+#: The runs ``pytest`` checks (tests/model/test_golden.py): name -> steps. Open loop on three cases
 #: (flare; switch and no corners, which act only after the first dilation starts near step 8,500),
 #: chase on two.
 QUICK = {"circle": 3000, "square-flare-switch": 3000, "star-switch-nocorners": 9000,

@@ -6,7 +6,7 @@ grid), so they always match what the simulation does. They are drawn once,
 stored as PNG files beside this module (``pictures/``) and read by the web
 server: drawing them took the server most of a second at every start, most
 of it loading numba for the controller, which nothing else in the server
-needs. ``tests/test_pictures.py`` draws them again and fails when the stored
+needs. ``tests/app/view/test_pictures.py`` draws them again and fails when the stored
 ones differ; ``python -m sandbox.app.panel.learn`` stores them anew.
 """
 

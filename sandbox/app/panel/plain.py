@@ -16,8 +16,8 @@ How viser 1.1.1's page shows what the server sends it (read from its client, ``v
 - **HTML** (``gui.add_html``, icons): never given anything from outside (the sandbox uses neither
   for text).
 
-``tests/test_plain_text.py`` checks that every markdown writer under ``sandbox/app`` puts text from
-outside through :func:`plain`; ``tests/test_browser_names.py``, that hostile names arrive as text in
+``tests/app/panel/test_plain_text.py`` checks that every markdown writer under ``sandbox/app`` puts text from
+outside through :func:`plain`; ``tests/browser/test_browser_names.py``, that hostile names arrive as text in
 a real browser.
 """
 

@@ -92,7 +92,7 @@ def shown_on_mesh(rgb: tuple | np.ndarray) -> np.ndarray:
 
 #: The colours to give the page's lit hexagon meshes so that they show BOX_IN and BOX_OUT (or the
 #: nearest the page can show): the bounded least-squares solutions of shown_on_mesh(x) = colour, solved
-#: once (tests/test_pictures.py solves them again) rather than at every start: scipy.optimize alone
+#: once (tests/app/view/test_pictures.py solves them again) rather than at every start: scipy.optimize alone
 #: takes 0.9 s to import.
 BOX_IN_MESH = (255, 17, 80)
 BOX_OUT_MESH = (255, 255, 255)
@@ -138,7 +138,7 @@ def lit_cells(intensities: np.ndarray, pitch: float, peak: float = 1.0) -> tuple
 
 
 #: matplotlib's "inferno" colour map at 256 levels, rounded to 8 bits (RGB after RGB), written out
-#: here because importing matplotlib for it took a sixth of the server's start (tests/test_pictures.py
+#: here because importing matplotlib for it took a sixth of the server's start (tests/app/view/test_pictures.py
 #: checks it against matplotlib's).
 INFERNO_HEX = (
     "00000401000501010601010802010a02020c02020e03021004031204031405041706041907051b08051d09061f0a0722"

@@ -9,7 +9,7 @@ in the module that sends it (``CLIENT`` in :mod:`.page_keys`, :mod:`.page_layout
 :mod:`.page_touch`, :mod:`.pacing`): one :class:`Relies` per thing it relies on, what the script writes,
 why, and what in viser's client bundle shows that it is still there. :func:`missing` reads the bundle
 (viser ships its client built: ``viser/client/build/index.html``, the scripts and styles compressed in
-it) and names each row it does not find; ``tests/test_client_seam.py`` fails on any, so a new viser fails
+it) and names each row it does not find; ``tests/app/web/test_client_seam.py`` fails on any, so a new viser fails
 a test, not a classroom. The check is the tests', not the start's: a row missing costs one thing on the
 page (a notice that stays, a drawer that starts open), not the server, and every start would pay for
 reading the bundle.

@@ -24,7 +24,7 @@ runs such a timer itself, before the page's own handlers hear the pointer:
   then handled one after the other within a millisecond or two, inside one
   20 ms window, and with only the due timers run, the middle one of three
   clicks was replaced by the last (29 of 30 clicks at a person's pace on a
-  loaded machine, tests/test_browser_editing.py);
+  loaded machine, tests/browser/test_browser_editing.py);
 - **on a move, once it is due**, instead of when the browser gets round to
   it: a drag's updates keep the throttle's pace.
 

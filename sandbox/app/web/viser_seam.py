@@ -7,7 +7,7 @@ handshake, each incoming message, the windows of the shared scene, a message to 
 the app reaches into viser's private code. Each such use is a row of :data:`USES`: what we use, where
 in viser it is, why we need it, and how :func:`check` finds it. :func:`check` runs before a server is
 built and refuses to start, in one line naming the installed viser and what it lacks, when any row is
-missing; nothing then fails half-way through a connection. ``tests/test_viser_seam.py`` fails when
+missing; nothing then fails half-way through a connection. ``tests/app/web/test_viser_seam.py`` fails when
 any other module of ``sandbox`` names a private viser module or name. Where viser has a public way
 that says the same (a control's ``value``, the handle classes), the app uses it; a handle's public
 properties do not always say what the page was sent (a button group's ``disabled`` is always False),
