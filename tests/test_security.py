@@ -149,7 +149,7 @@ def test_without_the_token_a_page_only_watches(shared_app):
     watcher = RawClient(app.port, own_page(app))
     wid = connected(app, watcher)
     assert app.gate.grant(wid) == Grant("watch", False, "127.0.0.1")
-    assert "GuiUpdateMessage" in watcher.received_types(1.0)  # it sees the page and the frames
+    assert "GuiUpdateMessage" in watcher.received_types(30.0, until=frozenset({"GuiUpdateMessage"}))  # it sees the page
     watcher.set_value(uuid_of(app.panel.shape.shape), "square")
     watcher.send("ScenePointerMessage", event_type="click", ray_origin=(0.0, 0.0, 10.0),
                  ray_direction=(0.0, 0.0, -1.0), screen_pos=((0.5, 0.5),), modifier=None)
@@ -247,9 +247,24 @@ def test_upload_acknowledgements_reach_only_the_uploader(app):
     assert "FileTransferPartAck" in received and "RemoveNotificationMessage" in received
     newcomer = RawClient(app.port, own_page(app))
     connected(app, newcomer)
-    assert "FileTransferPartAck" not in newcomer.received_types(1.5)  # nothing of it in the backlog
+    assert "FileTransferPartAck" not in types_before_the_next_broadcast(app, newcomer)  # nothing of it in the backlog
     uploader.close()
     newcomer.close()
+
+
+def types_before_the_next_broadcast(app, client: RawClient) -> list[str]:
+    """The types of what ``client`` got before a control added now for every page: its backlog, whole (the
+    server sends every page one ordered stream, the backlog first), without a window of a fixed time."""
+    marker = app.events.call(app.server.gui.add_markdown, "")
+    try:
+        types = []
+        for message in client._messages(30.0):
+            if message.get("type") == "GuiMarkdownMessage" and message.get("uuid") == uuid_of(marker):
+                return types
+            types.append(message.get("type", "?"))
+        raise AssertionError("the control added for every page never came")
+    finally:
+        app.events.call(marker.remove)
 
 
 def command_uuid(app, label: str) -> str:
@@ -556,7 +571,8 @@ def test_behind_a_proxy_a_page_is_this_machines_only_when_the_proxy_is_trusted()
     assert grant(trusted, {"X-Forwarded-For": "127.0.0.1"}, peer="192.0.2.7") == Grant("control", False, "192.0.2.7")
 
 
-def test_serve_trust_proxy_reaches_the_servers_rules_and_a_bad_token_is_one_line(monkeypatch, capsys):
+def test_serve_trust_proxy_reaches_the_servers_rules_and_a_bad_token_is_one_line(monkeypatch, capsys,
+                                                                              serve_keeps_the_fork_server):
     from sandbox.app import server
     from sandbox.commands import main
 
