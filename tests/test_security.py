@@ -11,7 +11,6 @@ from __future__ import annotations
 import http.client
 import ipaddress
 import socket
-import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -482,11 +481,11 @@ def program_file(tmp_path: Path, name: str) -> tuple[str, Path]:
 
 
 def notification(client: RawClient, title: str, seconds: float = 30.0) -> dict:
-    """The first notification titled ``title`` the server sends the client (waits for it)."""
-    deadline = time.monotonic() + seconds
-    while (left := deadline - time.monotonic()) > 0:
-        message = client.first("NotificationShowMessage", left)
-        if message is not None and message["props"]["title"] == title:
+    """The first notification titled ``title`` the server sends the client (waits for it). Every message is
+    read: one frame of the server's may hold several notifications (``first`` left the rest of its frame
+    unread, and on a loaded machine the one looked for was among them)."""
+    for message in client._messages(seconds):
+        if message.get("type") == "NotificationShowMessage" and message["props"]["title"] == title:
             return message["props"]
     raise AssertionError(f"no {title!r} notification within {seconds:.0f} s")
 
