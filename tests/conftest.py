@@ -15,12 +15,14 @@ def rng() -> np.random.Generator:
     return np.random.default_rng(1234)
 
 
-@pytest.fixture
+@pytest.fixture(autouse=True)
 def serve_keeps_the_fork_server(monkeypatch) -> None:
-    """For a test that runs ``serve`` in its own process with the App stood in for (what the flags
-    reach): serve starts the fork server and stops it on its way out, which cost the test 1-3 s and
-    the worker its warm fork server, so that its next simulation process waited for a new one.
-    ``tests/test_serve_stop.py`` checks serve's own start and stop, in processes of their own."""
+    """The worker's fork server belongs to its tests: ``serve`` run in a test's process (its flags, its
+    refusals, the App stood in for) neither starts nor stops it. serve stops it on its way out whatever
+    ended it, a refused flag included: each such test cost the worker its warm fork server, and its next
+    simulation process waited 1-3 s for a new one (five times in a run of the fast loop).
+    ``tests/test_serve_stop.py`` and ``tests/test_readme.py`` check serve's own start and stop, in
+    processes of their own."""
     from sandbox.app import server
 
     monkeypatch.setattr(server, "start_fork_server", lambda: None)

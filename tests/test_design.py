@@ -268,7 +268,7 @@ def test_save_design_refuses_a_place_it_could_not_write_before_running(tmp_path)
     assert out.returncode == 2 and "that is a directory" in out.stderr and out.stdout == ""
 
 
-def test_serve_opens_the_designs_goal_settings_and_seed(star_design, monkeypatch, serve_keeps_the_fork_server):
+def test_serve_opens_the_designs_goal_settings_and_seed(star_design, monkeypatch):
     from sandbox.app import server
 
     opened = {}
