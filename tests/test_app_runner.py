@@ -339,7 +339,7 @@ def test_using_a_goal_starts_it_afresh_with_the_same_seed(app):
     client = FakeClient()
     app.events.call(strategies.controls["switch"][0].__setattr__, "value", True)  # a strategy on, by hand
     wait_until(lambda: runner.latest.strategies["switch"] > 0, what="switch on")
-    wait_until(lambda: runner.latest.step > 100, what="a while of the circle")  # past the 50 a new world is under
+    wait_until(lambda: runner.latest.step > 100, what="a while of the circle")  # past a new world's 50
     seed, world = runner.latest.seed, runner.latest.world_key
     square = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]])
     app.events.call(shape.use, square, "square.txt", client)
@@ -376,7 +376,7 @@ def test_a_paper_case_starts_the_case_and_the_dropdown_shows_what_runs(app):
     runner, folder = app.runner, app.panel.strategies
     client = FakeClient()
     assert folder.case.value == "circle"
-    wait_until(lambda: runner.latest.step > 100, what="the circle to run a while")  # past the 50 a new world is under
+    wait_until(lambda: runner.latest.step > 100, what="the circle to run a while")  # past a new world's 50
     seed, world = runner.latest.seed, runner.latest.world_key
     folder.use_case("star-switch", client)
     snap = wait_until(lambda: runner.latest.world_key != world and runner.latest, what="a new world")
