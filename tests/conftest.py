@@ -15,6 +15,20 @@ def rng() -> np.random.Generator:
     return np.random.default_rng(1234)
 
 
+@pytest.fixture(autouse=True)
+def serve_keeps_the_fork_server(monkeypatch) -> None:
+    """The worker's fork server belongs to its tests: ``serve`` run in a test's process (its flags, its
+    refusals, the App stood in for) neither starts nor stops it. serve stops it on its way out whatever
+    ended it, a refused flag included: each such test cost the worker its warm fork server, and its next
+    simulation process waited 1-3 s for a new one (five times in a run of the fast loop).
+    ``tests/test_serve_stop.py`` and ``tests/test_readme.py`` check serve's own start and stop, in
+    processes of their own."""
+    from sandbox.app import server
+
+    monkeypatch.setattr(server, "start_fork_server", lambda: None)
+    monkeypatch.setattr(server, "stop_fork_server", lambda: None)
+
+
 def pytest_xdist_auto_num_workers(config) -> int:
     """``-n auto``: one worker per core, at most 4. More workers only add start-up (each imports
     the model and starts its own servers and browsers) and the tests are CPU-bound."""
@@ -48,11 +62,34 @@ def pytest_configure(config) -> None:
             compileall.compile_dir(root / folder, quiet=1)
 
 
+def names_slow(expression: str) -> bool:
+    """Whether a ``-m`` expression names the ``slow`` marker (as a word: ``slow``, ``not slow``)."""
+    import re
+
+    return re.search(r"\bslow\b", expression) is not None
+
+
+def leave_out_slow(config, items) -> None:
+    """The fast loop: a ``-m`` expression that does not name ``slow`` leaves the slow tests out, so
+    ``-m "not browser"`` runs what a change needs in a minute; with no ``-m`` (the full suite, CI)
+    or one that names them (``-m slow``, ``-m "slow or not browser"``) they run."""
+    expression = config.getoption("markexpr", "") or ""
+    if not expression or names_slow(expression):
+        return
+    slow = [item for item in items if item.get_closest_marker("slow") is not None]
+    if slow:
+        config.hook.pytest_deselected(items=slow)
+        items[:] = [item for item in items if item.get_closest_marker("slow") is None]
+
+
 def pytest_collection_modifyitems(config, items) -> None:
-    """Modules with slow tests (several seconds each) go first, so that the run does not end with one
-    worker busy on a long module while the others wait. Each module runs whole in one worker, in
-    order (--dist loadfile, pyproject.toml): a browser module's tests share one page and build on
-    what the earlier ones left, and any module's server is started once."""
+    """Slow tests leave a run whose ``-m`` does not name them (``leave_out_slow``). Modules with slow
+    tests (several seconds each) go first, so that the run does not end with one worker busy on a
+    long module while the others wait. Each module runs whole in one worker, in order (--dist
+    loadfile, pyproject.toml): a browser module's tests share one page and build on what the earlier
+    ones left, and any module's server is started once."""
+    leave_out_slow(config, items)
+
     def module(item) -> str:
         return item.nodeid.split("::", 1)[0]
 

@@ -118,6 +118,7 @@ def _stall(sim, seconds: float = 0.6) -> None:
     time.sleep(seconds)  # the loop held up inside a frame (a busy machine, a collection)
 
 
+@pytest.mark.slow  # on the clock; test_a_late_frame_... and test_a_frame_that_built_a_new_world_... decide it
 def test_the_world_makes_up_for_a_stall_and_keeps_its_speed():
     r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2).start()  # 60 steps/s
     try:
@@ -137,6 +138,7 @@ def _nothing(sim) -> None:
     return None
 
 
+@pytest.mark.slow  # a second of commands on the clock; test_a_command_between_frames_takes_no_steps decides it
 def test_commands_do_not_make_the_world_run_faster():
     # A page that sends commands faster than frames (a drag moving the lamp) woke the loop into a
     # frame of steps each time: 60 steps/s ran at several hundred while commands came.
@@ -155,6 +157,7 @@ def test_commands_do_not_make_the_world_run_faster():
         r.stop()
 
 
+@pytest.mark.slow  # on the clock; test_a_frame_that_built_a_new_world_owes_nothing_for_it decides it
 def test_a_new_world_starts_on_the_clock_and_owes_nothing_for_its_build():
     r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2).start()
     try:
@@ -169,6 +172,7 @@ def test_a_new_world_starts_on_the_clock_and_owes_nothing_for_its_build():
         r.stop()
 
 
+@pytest.mark.slow  # 48 frames on the clock; test_a_frame_is_shown_every_kth_and_takes_its_steps decides it
 def test_a_world_shown_every_third_frame_keeps_its_speed():
     # sandbox.app.web.pacing: when every page draws fewer frames than are sent, the world takes a snapshot
     # at every k-th frame only; it steps on the same schedule. Counted by the loop's own counters (a
@@ -194,6 +198,45 @@ def test_a_world_shown_every_third_frame_keeps_its_speed():
         assert shots1 - shots0 >= frames1 - frames0, "every frame shown again"
     finally:
         r.stop()
+
+
+# The loop's decisions, one frame at a time on a runner that was not started (the tests above, marked
+# slow, measure the same on the clock).
+def test_a_command_between_frames_takes_no_steps():
+    r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2)
+    steps, shots, due = r.sim.steps_done, r._frame, time.perf_counter() + 10.0
+    for _ in range(50):  # a drag's commands, faster than frames
+        r.post(_nothing)
+        assert r._commands_between_frames(due) == due  # the next frame stays when it was due
+    assert r.sim.steps_done == steps and r._frame == shots + 50  # no step, and each command's effect shown
+
+
+def test_a_frame_that_built_a_new_world_owes_nothing_for_it():
+    interval = 1 / 30
+    r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2)
+    late = time.perf_counter() - 0.6  # 0.6 s behind: a stall
+    assert r._frame_on_schedule(late, interval) < time.perf_counter() - 0.3  # the frames after it catch up
+    r.reset(3)  # taken by the next frame: as if its build took the 0.6 s
+    late = time.perf_counter() - 0.6
+    before = time.perf_counter()
+    assert r._frame_on_schedule(late, interval) >= before  # the new world starts on the clock: nothing owed
+    assert r.sim.seed == 3
+
+
+def test_a_frame_is_shown_every_kth_and_takes_its_steps():
+    r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2)
+    r.show_every(3).result(10)
+    steps, shots = r.sim.steps_done, r._frame
+    for _ in range(12):
+        r._frame_of_steps(deadline=0.0)
+    assert r._frame - shots == 4 and r.sim.steps_done - steps == 24  # every third shown, every one stepped
+    r._frame_of_steps(deadline=0.0, frames=3)  # a late frame: the steps of the two it missed too
+    assert r.sim.steps_done - steps == 30
+    r.show_every(1).result(10)
+    shots = r._frame
+    for _ in range(5):
+        r._frame_of_steps(deadline=0.0)
+    assert r._frame - shots == 5, "every frame shown again"
 
 
 def test_headless_advance_without_threads():
@@ -297,7 +340,7 @@ def test_using_a_goal_starts_it_afresh_with_the_same_seed(app):
     client = FakeClient()
     app.events.call(strategies.controls["switch"][0].__setattr__, "value", True)  # a strategy on, by hand
     wait_until(lambda: runner.latest.strategies["switch"] > 0, what="switch on")
-    wait_until(lambda: runner.latest.step > 200, what="a while of the circle")
+    wait_until(lambda: runner.latest.step > 100, what="a while of the circle")  # past a new world's 50
     seed, world = runner.latest.seed, runner.latest.world_key
     square = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]])
     app.events.call(shape.use, square, "square.txt", client)
@@ -334,7 +377,7 @@ def test_a_paper_case_starts_the_case_and_the_dropdown_shows_what_runs(app):
     runner, folder = app.runner, app.panel.strategies
     client = FakeClient()
     assert folder.case.value == "circle"
-    wait_until(lambda: runner.latest.step > 200, what="the circle to run a while")
+    wait_until(lambda: runner.latest.step > 100, what="the circle to run a while")  # past a new world's 50
     seed, world = runner.latest.seed, runner.latest.world_key
     folder.use_case("star-switch", client)
     snap = wait_until(lambda: runner.latest.world_key != world and runner.latest, what="a new world")
@@ -765,7 +808,8 @@ def test_run_to_the_end_skips_without_frames_then_explains(app):
     app.events.call(app.lockstep.cancel)  # the Cancel button: the run to the end it asked for
     wait_until(lambda: folder._skipping is None, what="the stop")
     assert start + 3000 < app.runner.latest.step < 10**7
-    assert any(note[0] == "Stopped" for note in client.notes)
+    # (the notice comes on the event thread just after the run is marked over: waited for, not read at once)
+    wait_until(lambda: any(note[0] == "Stopped" for note in client.notes), what="the notice that it stopped")
 
 
 def test_run_to_the_end_pauses_so_the_floor_stays_on_the_explained_state(app):

@@ -169,7 +169,8 @@ def test_dask_local_cluster(tmp_path):
 
 def test_scheduler_unreachable_is_a_user_error(tmp_path, capsys, monkeypatch):
     pytest.importorskip("distributed")
-    monkeypatch.setattr("sandbox.experiments.executors.DASK_CONNECT_TIMEOUT", "1s")
+    # (port 9 refuses at once; Dask tries again until the timeout)
+    monkeypatch.setattr("sandbox.experiments.executors.DASK_CONNECT_TIMEOUT", "0.2s")
     assert sweep(tmp_path / "x", "--scheduler", "tcp://127.0.0.1:9", trials=1) == 2
     last = capsys.readouterr().err.strip().splitlines()[-1]
     assert last.startswith("phototaxis sweep: error: cannot reach the Dask scheduler at tcp://127.0.0.1:9")

@@ -172,9 +172,9 @@ def test_a_world_is_checked_again_where_it_is_built():
 # ------------------------------------------------------------------ the command line
 def _refused_quickly(*args: str) -> str:
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    started = time.perf_counter()
+    started = time.thread_time()  # its CPU, not the clock (a loaded machine stretches the clock, not the work)
     out = phototaxis(*args)
-    took = time.perf_counter() - started
+    took = time.thread_time() - started
     grew_mb = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024
     assert out.returncode == 2 and out.stdout == "", out
     lines = out.stderr.strip().splitlines()
@@ -226,10 +226,10 @@ def test_a_needle_c_is_refused_at_once_from_the_command_line(tmp_path):
     """The attack's C: 9,990 vertices, teeth 0.84 m tall that no simplification within a quarter pitch drops.
     Before: 8.6 GB and still running at 300 s (2,000 vertices: 2.5 GB, killed at the 3 GB cap after 40 s)."""
     path = polygon_file(tmp_path, spiky_c(9_990, 0.12))
-    started = time.perf_counter()
+    started = time.thread_time()
     out = phototaxis("run", "--shape", str(path), "--outline", "offset", "--steps", "200", "--no-progress")
     assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1
-    assert time.perf_counter() - started < 2.0  # reading and validating 9,990 vertices takes most of it
+    assert time.thread_time() - started < 2.0  # reading and validating 9,990 vertices takes most of it
     assert ("the goal has 9,990 vertices, and simplified within 0.25 m (a quarter of the light pitch) still "
             "7,688: the outlines afford at most 300") in out.stderr
 
@@ -267,9 +267,9 @@ def test_a_design_files_needle_goal_is_refused_in_one_line(tmp_path):
 
 def test_serve_refuses_a_needle_goal_before_it_starts(tmp_path):
     path = polygon_file(tmp_path, spiky_c(9_990, 0.12))
-    started = time.perf_counter()
+    started = time.thread_time()
     out = phototaxis("serve", "--shape", str(path), "--port", "0")
-    assert time.perf_counter() - started < 2.0  # reading and validating 9,990 vertices takes most of it
+    assert time.thread_time() - started < 2.0  # reading and validating 9,990 vertices takes most of it
     assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1
     assert out.stderr.startswith(f"phototaxis serve: error: {path}: the goal has 9,990 vertices")
 
@@ -278,9 +278,9 @@ def test_serve_refuses_a_needle_goal_before_it_starts(tmp_path):
 def test_a_goal_of_ten_thousand_vertices_is_simplified_quickly_and_says_so():
     config = Config(outline="offset")
     spiky = spiky_c(10_000, 0.03)  # teeth 0.2 m tall once fitted
-    started = time.perf_counter()
+    started = time.thread_time()  # its CPU, not the clock: a loaded machine took 2.15 s of wall time
     goal = make_goal(config, spiky)
-    assert time.perf_counter() - started < 2.0
+    assert time.thread_time() - started < 2.0
     assert len(goal.vertices) <= budget.MAX_GOAL_VERTICES
     tolerance = float(goal.simplified.split("within ")[1].split(" m")[0])
     assert goal.simplified == f"simplified from 10,000 to {len(goal.vertices):,} vertices within {tolerance:.2g} m"
@@ -322,10 +322,10 @@ def test_a_needle_goal_is_refused_everywhere_it_can_come_from():
 
     for build in (lambda: make_goal(Config(), needles), lambda: preview_goal(Config(), needles, 0.0),
                   lambda: Simulation(Config(robots=10), shape=needles)):
-        started = time.perf_counter()
+        started = time.thread_time()
         with pytest.raises(ShapeError, match=said):
             build()
-        assert time.perf_counter() - started < 1.0
+        assert time.thread_time() - started < 1.0
     sim = Simulation(Config(robots=10))
     with pytest.raises(ShapeError, match=said):
         sim.set_shape(needles, "needles.txt")

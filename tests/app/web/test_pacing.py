@@ -43,6 +43,57 @@ def test_a_page_reports_drawn_frames_under_its_own_token_only(app):
     wait_until(lambda: report(app, token) == 404, what="its token to be forgotten")
 
 
+def test_a_paced_page_is_held_after_each_window_until_it_draws_or_the_wait_runs_out(monkeypatch):
+    """What the next test (slow) measures through a server, on the pacer alone: a page that reports drawn
+    frames gets its next window once it has drawn the last, or after MOST_WAIT; a full window's rest, a
+    page that never reported and a page that keeps up again wait for nothing. Told apart by turns of the
+    event loop, not by the clock: a window that waits for nothing comes within a few."""
+    import asyncio
+
+    from sandbox.app import pacing
+
+    pacer = Pacer()
+    token = pacer.script_for(1).split(PATH)[1].split('"')[0]
+
+    async def windows():
+        for k in range(100):
+            yield ["message"] * (4 if k == 5 else 1)  # viser cuts a window at 4 messages here: the sixth is full
+
+    async def run() -> None:
+        held = pacer.hold_windows(windows(), 1, full=4)
+
+        async def next_window(report=None) -> bool:
+            """Whether the next window came at once; ``report``, made if it did not, must then let it go."""
+            task = asyncio.ensure_future(held.__anext__())
+            for _ in range(5):
+                await asyncio.sleep(0)
+            at_once = task.done()
+            if not at_once and report is not None:
+                report()
+                for _ in range(5):
+                    await asyncio.sleep(0)
+                assert task.done(), "the report did not let the window go"
+            await asyncio.wait_for(task, 10)
+            return at_once
+
+        monkeypatch.setattr(pacing, "MOST_WAIT", 30.0)
+        assert all([await next_window() for _ in range(4)])  # not paced (no report yet): no wait
+        assert pacer.drawn(token) and 1 in pacer.paced
+        assert await next_window()  # the report came after the last window: the next goes at once
+        assert not await next_window(report=lambda: pacer.drawn(token))  # held until the page draws it
+        assert await next_window()  # that one was full: its rest follows at once
+        monkeypatch.setattr(pacing, "MOST_WAIT", 0.05)
+        assert not await next_window()  # no report: the next after MOST_WAIT
+        pacer.drawn(token + CALM)  # it keeps up again
+        monkeypatch.setattr(pacing, "MOST_WAIT", 30.0)
+        assert all([await next_window() for _ in range(3)])
+        assert pacer.windows[1] == 11
+        await held.aclose()
+
+    asyncio.run(run())
+
+
+@pytest.mark.slow  # 60 frames of a server on the clock; the test above decides it on the pacer alone
 def test_a_paced_page_gets_a_window_per_drawn_frame_and_while_silent_one_a_second(app):
     pacer = app.gate.pacer
     paced, cid, token = page_with_token(app)
