@@ -21,9 +21,9 @@ def serve_keeps_the_fork_server(monkeypatch) -> None:
     refusals, the App stood in for) neither starts nor stops it. serve stops it on its way out whatever
     ended it, a refused flag included: each such test cost the worker its warm fork server, and its next
     simulation process waited 1-3 s for a new one (five times in a run of the fast loop).
-    ``tests/test_serve_stop.py`` and ``tests/test_readme.py`` check serve's own start and stop, in
+    ``tests/commands/test_serve_stop.py`` and ``tests/test_readme.py`` check serve's own start and stop, in
     processes of their own."""
-    from sandbox.app import server
+    from sandbox.commands import serve as server
 
     monkeypatch.setattr(server, "start_fork_server", lambda: None)
     monkeypatch.setattr(server, "stop_fork_server", lambda: None)

@@ -206,7 +206,7 @@ def test_a_command_between_frames_takes_no_steps():
     r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2)
     steps, shots, due = r.sim.steps_done, r._frame, time.perf_counter() + 10.0
     for _ in range(50):  # a drag's commands, faster than frames
-        r.post(_nothing)
+        r.submit(Apply(_nothing))
         assert r._commands_between_frames(due) == due  # the next frame stays when it was due
     assert r.sim.steps_done == steps and r._frame == shots + 50  # no step, and each command's effect shown
 
@@ -216,7 +216,7 @@ def test_a_frame_that_built_a_new_world_owes_nothing_for_it():
     r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2)
     late = time.perf_counter() - 0.6  # 0.6 s behind: a stall
     assert r._frame_on_schedule(late, interval) < time.perf_counter() - 0.3  # the frames after it catch up
-    r.reset(3)  # taken by the next frame: as if its build took the 0.6 s
+    r.submit(Reset(seed=3))  # taken by the next frame: as if its build took the 0.6 s
     late = time.perf_counter() - 0.6
     before = time.perf_counter()
     assert r._frame_on_schedule(late, interval) >= before  # the new world starts on the clock: nothing owed
@@ -225,14 +225,14 @@ def test_a_frame_that_built_a_new_world_owes_nothing_for_it():
 
 def test_a_frame_is_shown_every_kth_and_takes_its_steps():
     r = Runner(SMALL, shape=None, fps=30, steps_per_frame=2)
-    r.show_every(3).result(10)
+    r.submit(ShowEvery(3)).result(10)
     steps, shots = r.sim.steps_done, r._frame
     for _ in range(12):
         r._frame_of_steps(deadline=0.0)
     assert r._frame - shots == 4 and r.sim.steps_done - steps == 24  # every third shown, every one stepped
     r._frame_of_steps(deadline=0.0, frames=3)  # a late frame: the steps of the two it missed too
     assert r.sim.steps_done - steps == 30
-    r.show_every(1).result(10)
+    r.submit(ShowEvery(1)).result(10)
     shots = r._frame
     for _ in range(5):
         r._frame_of_steps(deadline=0.0)

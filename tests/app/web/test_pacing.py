@@ -50,7 +50,7 @@ def test_a_paced_page_is_held_after_each_window_until_it_draws_or_the_wait_runs_
     event loop, not by the clock: a window that waits for nothing comes within a few."""
     import asyncio
 
-    from sandbox.app import pacing
+    from sandbox.app.web import pacing
 
     pacer = Pacer()
     token = pacer.script_for(1).split(PATH)[1].split('"')[0]

@@ -723,7 +723,7 @@ def test_a_connection_that_closes_before_its_request_logs_one_line_not_a_traceba
     one a second."""
     import logging
 
-    from sandbox.app.gate import QuietHandshakes
+    from sandbox.app.web.gate import QuietHandshakes
 
     # A filter of its own: the process's counts a second from the last line it let through, and a line an
     # earlier test of this worker caused held back all twenty here (the wait below then ran out its minute).
