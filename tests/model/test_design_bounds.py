@@ -432,10 +432,12 @@ def test_the_reported_files_are_refused_in_a_child_at_once_in_little_memory(tmp_
     big = design_file(tmp_path / "big-header.npz", head=header(controller="x" * 50_000_000))
     assert many.stat().st_size < 4_000_000 and big.stat().st_size < 1_000_000
     flags = ["--port", "0"] if command == "serve" else ["--no-progress"]
-    nothing, _, nothing_mb = capped(command, "--design", str(tmp_path / "missing.npz"), *flags)
+    nothing, nothing_seconds, nothing_mb = capped(command, "--design", str(tmp_path / "missing.npz"), *flags)
     assert nothing.returncode == 2 and "No such file" in nothing.stderr
     for path, said in ((many, "it holds 200,000 light patterns; a design holds at most 10,000"),
                        (big, "its header is 50,001,905 characters of JSON; at most 1,500,000")):
         out, seconds, peak_mb = capped(command, "--design", str(path), *flags)
         assert out.returncode == 2 and out.stderr.count("\n") == 1 and said in out.stderr, out.stderr[-2000:]
-        assert seconds < 5.0 and peak_mb < nothing_mb + 10, (path.name, seconds, peak_mb, nothing_mb)
+        # in about the time of a refusal that reads no file (on a loaded machine both take longer)
+        assert seconds < max(5.0, 2 * nothing_seconds) and peak_mb < nothing_mb + 10, \
+            (path.name, seconds, nothing_seconds, peak_mb, nothing_mb)
