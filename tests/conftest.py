@@ -83,18 +83,23 @@ def leave_out_slow(config, items) -> None:
 
 
 def pytest_collection_modifyitems(config, items) -> None:
-    """Slow tests leave a run whose ``-m`` does not name them (``leave_out_slow``). Modules with slow
-    tests (several seconds each) go first, so that the run does not end with one worker busy on a
-    long module while the others wait. Each module runs whole in one worker, in order (--dist
-    loadfile, pyproject.toml): a browser module's tests share one page and build on what the earlier
-    ones left, and any module's server is started once."""
+    """Slow tests leave a run whose ``-m`` does not name them (``leave_out_slow``). The longest modules
+    go first, the browser modules (tests/test_browser_app.py is a third of the full suite) and then
+    those with slow tests, so that the run does not end with one worker busy on a long module while the
+    others wait. Each module runs whole in one worker, in order (--dist loadfile, pyproject.toml): a
+    browser module's tests share one page and build on what the earlier ones left, and any module's
+    server is started once. xdist keeps this order of modules (--no-loadscope-reorder): by default it
+    hands them out by their number of tests, and the drawing module's 170 s started last."""
     leave_out_slow(config, items)
 
     def module(item) -> str:
         return item.nodeid.split("::", 1)[0]
 
-    with_slow = {module(item) for item in items if item.get_closest_marker("slow") is not None}
-    items.sort(key=lambda item: module(item) not in with_slow)  # stable: each module keeps its order
+    def having(marker: str) -> set[str]:
+        return {module(item) for item in items if item.get_closest_marker(marker) is not None}
+
+    browser, slow = having("browser"), having("slow")
+    items.sort(key=lambda item: (module(item) not in browser, module(item) not in slow))  # stable: in order
 
 
 @pytest.fixture(scope="module")
