@@ -84,7 +84,7 @@ def leave_out_slow(config, items) -> None:
 
 def pytest_collection_modifyitems(config, items) -> None:
     """Slow tests leave a run whose ``-m`` does not name them (``leave_out_slow``). The longest modules
-    go first, the browser modules (tests/test_browser_app.py is a third of the full suite) and then
+    go first, the browser modules (tests/browser/test_browser_app.py is a third of the full suite) and then
     those with slow tests, so that the run does not end with one worker busy on a long module while the
     others wait. Each module runs whole in one worker, in order (--dist loadfile, pyproject.toml): a
     browser module's tests share one page and build on what the earlier ones left, and any module's
