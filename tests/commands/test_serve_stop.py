@@ -281,6 +281,47 @@ def test_a_simulation_process_ends_when_its_app_is_killed(tmp_path):
             os.kill(simulation[0], signal.SIGKILL)
 
 
+@pytest.fixture
+def stop_requests():
+    """sandbox.app.stopping's state and this process's handlers, put back after the test: a stop asked for
+    leaves SIGTERM and SIGINT ignored (the program is ending), which this test worker is not."""
+    from sandbox.app import stopping
+
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("only the main thread may set signal handlers")
+    handlers = {number: signal.getsignal(number) for number in stopping.STOPPING}
+    state = dict(vars(stopping._Requests))
+    yield stopping
+    for number, handler in handlers.items():
+        signal.signal(number, handler)
+    for name in ("asked", "interruptible", "handling", "started"):
+        setattr(stopping._Requests, name, state.get(name, getattr(stopping._Requests, name)))
+
+
+def test_a_stop_is_raised_where_serve_waits_noted_elsewhere_and_asked_once(stop_requests):
+    """What the servers above show from outside (slow), in this process: once serve has started what a
+    stop must end, a SIGTERM raises KeyboardInterrupt at once where it waits, is noted elsewhere and raised
+    at the next wait, and a second signal is ignored; with no stop asked, the handlers found go back."""
+    stopping = stop_requests
+    found = signal.getsignal(signal.SIGTERM)
+    with stopping.term_stops():
+        assert signal.getsignal(signal.SIGTERM) is not found
+    assert signal.getsignal(signal.SIGTERM) is found  # no stop asked: put back
+    with stopping.term_stops():
+        stopping.starting()  # (before it, a stop exits the process at once: nothing to tidy)
+        with pytest.raises(KeyboardInterrupt), stopping.interruptible():
+            os.kill(os.getpid(), signal.SIGTERM)  # while it waits (for its first world, then serving)
+            wait_until(lambda: False, timeout=30, what="the stop to be raised")
+        assert signal.getsignal(signal.SIGTERM) == signal.getsignal(signal.SIGINT) == signal.SIG_IGN  # asked once
+    stopping._Requests.asked = False
+    with stopping.term_stops():
+        stopping.starting()
+        os.kill(os.getpid(), signal.SIGINT)  # while it builds the app's panel: noted
+        wait_until(lambda: stopping._Requests.asked, what="the stop to be noted")
+        with pytest.raises(KeyboardInterrupt), stopping.interruptible():  # and raised at the next wait
+            pass
+
+
 def test_a_runner_stopped_while_its_first_world_builds_kills_it_at_once(monkeypatch):
     """A simulation process still building its first world reads no queue: it was asked to end and
     waited for 5 s, then killed (a serve stopped then took more than 5 s)."""
