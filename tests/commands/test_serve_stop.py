@@ -283,9 +283,9 @@ def test_a_simulation_process_ends_when_its_app_is_killed(tmp_path):
 
 @pytest.fixture
 def stop_requests():
-    """sandbox.app.stopping's state and this process's handlers, put back after the test: a stop asked for
+    """sandbox.app.web.stopping's state and this process's handlers, put back after the test: a stop asked for
     leaves SIGTERM and SIGINT ignored (the program is ending), which this test worker is not."""
-    from sandbox.app import stopping
+    from sandbox.app.web import stopping
 
     if threading.current_thread() is not threading.main_thread():
         pytest.skip("only the main thread may set signal handlers")
