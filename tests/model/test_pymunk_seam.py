@@ -23,6 +23,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 from sandbox.model import pymunk_seam
 from sandbox.model.pymunk_seam import BODY, C_FUNCTION, C_TYPE, USES, PymunkMismatch, Use, missing
+from tests.private_names import is_private, is_private_module, is_self, private_names_defined_in
 
 ROOT = Path(__file__).resolve().parents[2]
 SANDBOX = ROOT / "sandbox"
@@ -31,43 +32,13 @@ SEAM = SANDBOX / "model" / "pymunk_seam.py"
 CHIPMUNK_NAME = re.compile(r"cp[A-Z]\w*")
 
 
-def _private(name: str) -> bool:
-    return name.startswith("_") and name != "_" and not (name.startswith("__") and name.endswith("__"))
-
-
 @functools.cache
 def pymunks_private_names() -> frozenset[str]:
     """Every private name pymunk's own code defines: its private modules, the module- and class-level names
     of its modules, and every ``self._x`` they assign."""
-    names: set[str] = set()
-    for path in Path(pymunk.__file__).resolve().parent.glob("*.py"):
-        names.add(path.stem)
-        tree = ast.parse(path.read_text(encoding="utf-8"))
-        for scope in [tree, *(node for node in ast.walk(tree) if isinstance(node, ast.ClassDef))]:
-            for statement in scope.body:
-                names.update(_defined_by(statement))
-        names.update(node.attr for node in ast.walk(tree)
-                     if isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store) and _is_self(node.value))
-    return frozenset(name for name in names if _private(name))
-
-
-def _defined_by(statement: ast.stmt) -> list[str]:
-    if isinstance(statement, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-        return [statement.name]
-    if isinstance(statement, (ast.Import, ast.ImportFrom)):
-        return [alias.asname or alias.name.split(".")[0] for alias in statement.names]
-    targets = (statement.targets if isinstance(statement, ast.Assign)
-               else [statement.target] if isinstance(statement, ast.AnnAssign) else [])
-    return [node.id for target in targets for node in ast.walk(target) if isinstance(node, ast.Name)]
-
-
-def _is_self(node: ast.expr) -> bool:
-    return isinstance(node, ast.Name) and node.id in ("self", "cls")
-
-
-def _private_pymunk_module(dotted: str) -> bool:
-    parts = dotted.split(".")
-    return parts[0] == "pymunk" and any(_private(part) for part in parts[1:])
+    paths = sorted(Path(pymunk.__file__).resolve().parent.glob("*.py"))
+    names = {path.stem for path in paths if is_private(path.stem)} | private_names_defined_in(paths)
+    return frozenset(names)
 
 
 def private_uses(source: str, private: frozenset[str]) -> list[tuple[int, str]]:
@@ -83,15 +54,15 @@ def private_uses(source: str, private: frozenset[str]) -> list[tuple[int, str]]:
         if isinstance(node, ast.Expr):
             docstrings.add(id(node.value))
         elif isinstance(node, ast.Import):
-            found += [(line, part) for alias in node.names if _private_pymunk_module(alias.name)
-                      for part in alias.name.split(".")[1:] if _private(part)]
+            found += [(line, part) for alias in node.names if is_private_module(alias.name, "pymunk")
+                      for part in alias.name.split(".")[1:] if is_private(part)]
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            if _private_pymunk_module(node.module):
-                found += [(line, part) for part in node.module.split(".")[1:] if _private(part)]
+            if is_private_module(node.module, "pymunk"):
+                found += [(line, part) for part in node.module.split(".")[1:] if is_private(part)]
                 found += [(line, alias.name) for alias in node.names]
             elif node.module.split(".")[0] == "pymunk":
-                found += [(line, alias.name) for alias in node.names if _private(alias.name)]
-        elif isinstance(node, ast.Attribute) and not _is_self(node.value) and (
+                found += [(line, alias.name) for alias in node.names if is_private(alias.name)]
+        elif isinstance(node, ast.Attribute) and not is_self(node.value) and (
                 node.attr in private or CHIPMUNK_NAME.fullmatch(node.attr)):
             found.append((line, node.attr))
         elif (isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docstrings
@@ -103,7 +74,7 @@ def private_uses(source: str, private: frozenset[str]) -> list[tuple[int, str]]:
 def declared(uses: tuple[Use, ...]) -> set[str]:
     """The names the rows of ``uses`` declare: their names, and the private parts of where they are."""
     return {name for use in uses for name in
-            [*use.names, *(part for part in re.split(r"[.:]", use.where) if _private(part))]}
+            [*use.names, *(part for part in re.split(r"[.:]", use.where) if is_private(part))]}
 
 
 def seam_code() -> str:

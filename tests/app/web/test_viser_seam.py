@@ -12,14 +12,12 @@ from pathlib import Path
 
 import viser
 
+from tests.private_names import is_private, is_private_module, is_self, private_names_defined_in
+
 SANDBOX = Path(__file__).resolve().parents[3] / "sandbox"
 SEAM = SANDBOX / "app" / "web" / "viser_seam.py"
 #: getattr and friends: a private name in a string is still a private name.
 ATTRIBUTE_BUILTINS = {"getattr", "setattr", "hasattr", "delattr"}
-
-
-def _private(name: str) -> bool:
-    return name.startswith("_") and name != "_" and not (name.startswith("__") and name.endswith("__"))
 
 
 @functools.cache
@@ -30,37 +28,11 @@ def visers_private_names() -> frozenset[str]:
     names: set[str] = set()
     root = Path(viser.__file__).resolve().parent
     names.update(part for path in root.rglob("*.py") for part in path.relative_to(root).with_suffix("").parts
-                 if _private(part))
+                 if is_private(part))
     loaded = [Path(module.__file__) for name, module in list(sys.modules.items())
               if (name == "viser" or name.startswith("viser.")) and getattr(module, "__file__", None)]
-    for path in loaded:
-        tree = ast.parse(path.read_text(encoding="utf-8"))
-        scopes = [tree, *(node for node in ast.walk(tree) if isinstance(node, ast.ClassDef))]
-        for scope in scopes:
-            for statement in scope.body:
-                names.update(_defined_by(statement))
-        names.update(node.attr for node in ast.walk(tree)
-                     if isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store) and _is_self(node.value))
-    return frozenset(name for name in names if _private(name))
-
-
-def _defined_by(statement: ast.stmt) -> list[str]:
-    if isinstance(statement, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-        return [statement.name]
-    if isinstance(statement, (ast.Import, ast.ImportFrom)):
-        return [alias.asname or alias.name.split(".")[0] for alias in statement.names]
-    targets = (statement.targets if isinstance(statement, ast.Assign)
-               else [statement.target] if isinstance(statement, (ast.AnnAssign, ast.AugAssign)) else [])
-    return [node.id for target in targets for node in ast.walk(target) if isinstance(node, ast.Name)]
-
-
-def _is_self(node: ast.expr) -> bool:
-    return isinstance(node, ast.Name) and node.id in ("self", "cls")
-
-
-def _private_viser_module(dotted: str) -> bool:
-    parts = dotted.split(".")
-    return parts[0] == "viser" and any(_private(part) for part in parts[1:])
+    names.update(private_names_defined_in(loaded))
+    return frozenset(names)
 
 
 def trespasses(source: str, private: frozenset[str]) -> list[str]:
@@ -74,16 +46,16 @@ def trespasses(source: str, private: frozenset[str]) -> list[str]:
         if isinstance(node, ast.Expr):
             exempt.add(id(node.value))
         elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in ATTRIBUTE_BUILTINS
-              and len(node.args) >= 2 and _is_self(node.args[0])):
+              and len(node.args) >= 2 and is_self(node.args[0])):
             exempt.add(id(node.args[1]))
         elif isinstance(node, ast.Import):
-            found += [f"{where}: import {a.name}" for a in node.names if _private_viser_module(a.name)]
+            found += [f"{where}: import {a.name}" for a in node.names if is_private_module(a.name, "viser")]
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            if _private_viser_module(node.module):
+            if is_private_module(node.module, "viser"):
                 found.append(f"{where}: from {node.module} import ...")
             elif node.module.split(".")[0] == "viser":
-                found += [f"{where}: from {node.module} import {a.name}" for a in node.names if _private(a.name)]
-        elif isinstance(node, ast.Attribute) and node.attr in private and not _is_self(node.value):
+                found += [f"{where}: from {node.module} import {a.name}" for a in node.names if is_private(a.name)]
+        elif isinstance(node, ast.Attribute) and node.attr in private and not is_self(node.value):
             found.append(f"{where}: .{node.attr}")
         elif (isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in private
               and id(node) not in exempt):
