@@ -234,9 +234,13 @@ class ProcessRunner(SimulationRunner):
         self._ids = itertools.count()
         self._series: list[Sample] = []
         self._series_world: int | None = None  # the world key of the samples in _series
+        # shared by the receiver thread (appends each sample) and the event thread (reads the series, and
+        # empties it with a new child)
         self._series_lock = threading.Lock()
         self._latest: Snapshot | None = None
         self._stop = threading.Event()
+        # shared by the threads that may wait for the first frame: the main thread at start-up, a worker
+        # starting a compared world, the event thread
         self._ready_lock = threading.Lock()
         self._thread: threading.Thread | None = None
         self._context = simulation_context()  # a fork of a warmed-up server, else a fresh interpreter
@@ -244,7 +248,8 @@ class ProcessRunner(SimulationRunner):
         #: since the program's largest outline depends on the size a shape was drawn at.
         self._shape = shape
         # One owner of the child: the lock guards it, the state, the futures it owes (with their
-        # commands), the changes waiting for it and _started.
+        # commands), the changes waiting for it and _started; shared by the event thread (submits), the
+        # receiver thread (settles, restarts a crashed child) and the main thread (stops).
         self._child_lock = threading.Lock()
         self._owed: dict[int, tuple[Future, Command]] = {}
         self._started = False
@@ -639,6 +644,7 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
     # one (before, each Ctrl-C printed this process's KeyboardInterrupt traceback under "stopped").
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     faults.install(settings.pop("faults", None))
+    # shared by the child's threads that send on its pipe: the simulation and publisher threads
     lock = threading.Lock()
     try:
         runner = Runner(**settings)

@@ -112,7 +112,9 @@ class Runner(SimulationRunner):
         #: configuration its world was built with).
         self.pending: dict[str, Any] = {}
         self._commands: queue.SimpleQueue = queue.SimpleQueue()  # (command, future), for the loop
-        self._closing = threading.Lock()  # a command is queued before the runner closes, or refused
+        # a command is queued before the runner closes, or refused: shared by the threads that submit
+        # (the event thread, workers, main) and the one that stops it
+        self._closing = threading.Lock()
         self._closed = False
         self._stop = threading.Event()
         self._wake = threading.Event()
@@ -125,11 +127,13 @@ class Runner(SimulationRunner):
         self._world_key = int(first_world_key)
         self._step_times: deque = deque(maxlen=120)  # (wall time, steps_done), of the simulation thread only
         self._restart_schedule = False  # set by a command whose time the world does not owe (the loop's)
+        # shared by the simulation thread (appends samples, starts a new series) and the threads that read
+        # the series (the event thread, the publisher in a child process)
         self._series_lock = threading.Lock()
         self._series: list[Sample] = []
         self._threads: list[threading.Thread] = []
-        # The builds submitted and not over, each with whether a cancel named it. Shared: a cancel comes on
-        # the thread that submits it, the build runs on the simulation thread.
+        # The builds submitted and not over, each with whether a cancel named it: shared by the threads
+        # that submit (a cancel comes on the event thread) and the simulation thread (runs the build).
         self._builds_lock = threading.Lock()
         self._builds: dict[int, bool] = {}
         #: Set by the loop when a frame failed: it steps no more, and its frames say paused, until the

@@ -159,7 +159,7 @@ def test_call_from_an_event_runs_inline_instead_of_waiting_for_itself(events):
 #: The rooms whose classes the event thread owns: a lock there is for state another thread shares.
 OWNED_BY_THE_EVENT_THREAD = ("panel", "view")
 #: The room where viser's event loop meets the app's threads: a lock there says which threads share it too.
-WHERE_THREADS_MEET = ("web",)
+WHERE_THREADS_MEET = ("web", "world")
 #: A lock's comment says it is shared, and by which thread: one of the Threads table's.
 LOCK = re.compile(r"(threading\.)?R?Lock")
 SHARED_BY = re.compile(r"\bshared\b.*\b(main thread|event thread|event loop|receiver|workers?|threads)\b",
