@@ -14,7 +14,7 @@ from sandbox.shapes.geometry import signed_area
 from sandbox.shapes.templates import template_vertices
 from tests.inline_events import OnEvents
 from tests.shown import shown
-from tests.app.web.test_security import connected, make_app, own_page, uuid_of, wait_until
+from tests.app.web.test_security import connected, make_app, own_page, refusals, uuid_of, wait_until
 from tests.viser_wire import RawClient
 
 SQUARE = [(10.0, 10.0), (14.0, 10.0), (14.0, 14.0), (10.0, 14.0)]
@@ -42,7 +42,7 @@ def draw(app):
 @pytest.fixture
 def page(app):
     client = RawClient(app.port, own_page(app))
-    connected(app, client)
+    client.id = connected(app, client)
     yield client
     client.close()
 
@@ -173,7 +173,7 @@ def test_the_gate_refuses_what_a_page_cannot_do(app, draw, page):
     page.set_value(uuid_of(draw.template), "no such template")
     page.set_value(uuid_of(draw.typed), "1 2\n" * 2000)  # 8000 characters: over the text limit
     page.set_value(uuid_of(draw.grid), 50.0)  # over the grid's maximum
-    page.received_types(0.5)
+    wait_until(lambda: refusals(app, page.id) >= 4, what="the four refused")
     assert app.runner.latest.goal_key == key and len(draw.points) == 4
     assert draw.template.value == PICK_TEMPLATE and len(draw.typed.value) < 4096 and draw.grid.value == 0.5
 
@@ -244,7 +244,7 @@ def test_a_click_on_a_handle_selects_its_point_and_delete_removes_it(app, draw, 
     key = uuid_of(draw.delete_keys[0])
     page.send("CommandTriggerMessage", uuid=key)
     page.click(uuid_of(draw.delete))
-    page.received_types(0.3)
+    wait_until(lambda: refusals(app, page.id) >= 2, what="the key and the button refused")
     assert len(draw.points) == 3
     draw.click(SQUARE[1])
     page.send("CommandTriggerMessage", uuid=uuid_of(draw.delete_keys[1]))  # Backspace
