@@ -6,7 +6,9 @@ import json
 
 import pytest
 
-from sandbox.experiments.advise import Candidate, Ranked, candidates, rank, table, time_left
+from sandbox.experiments.advise import (Candidate, Ranked, candidates, default_candidate, rank, table, trial_order,
+                                        verdict)
+from sandbox.experiments.pace import Pace, in_words
 from sandbox.model.config import Config
 from sandbox.shapes import shape_vertices
 from tests.waiting import wait_until
@@ -39,7 +41,7 @@ def test_the_ranking_puts_most_in_the_goal_first_then_the_closest_rest():
                                                                    ("offset", 0.8, 0.5)))
     assert rank([a, b, c]) == [c, b, a]
     text = table(rank([a, b, c]), 30_000)
-    assert text.splitlines()[2] == "| 1 | offset | 0.800 | 0.50 |" and "1 seed(s) x 30,000 steps" in text
+    assert text.splitlines()[2] == "| 1 | offset | 80.0 % | 0.50 |" and "1 seed(s) x 30,000 steps" in text
     assert text.splitlines()[0] == ("| rank | outline and strategies | boxes in the goal "
                                     "| stray boxes' mean distance to the goal (m) |")
 
@@ -52,7 +54,7 @@ def test_an_open_loop_within_the_standard_error_of_chase_ranks_first():
     assert closed.fraction_se == pytest.approx(0.002) and open_loop.fraction_se == pytest.approx(0.009)
     assert rank([closed, open_loop]) == [open_loop, closed]
     text = table(rank([closed, open_loop]), 30_000)
-    assert text.splitlines()[2].startswith("| 1 | offset | 0.737 ± 0.009 |")
+    assert text.splitlines()[2].startswith("| 1 | offset | 73.7 ± 0.9 % |")
     assert "offset ranks above offset + chase, within its standard error" in text
     # 0.023 apart, more than either standard error: chase stays first, and nothing is said.
     ahead = Ranked(chase, [0.758, 0.762], [0.5, 0.4])
@@ -66,11 +68,42 @@ def test_an_open_loop_within_the_standard_error_of_chase_ranks_first():
     assert rank([Ranked(chase, [0.74], [0.5]), Ranked(Candidate("offset"), [0.739], [0.5])])[0].candidate == chase
 
 
-def test_the_time_left_goes_by_the_pace_of_the_trials_done():
-    assert time_left(30.0, 3, 12) == "about 1 min 30 s left"
-    assert time_left(10.0, 1, 3) == "about 20 s left"
-    assert time_left(600.0, 1, 3) == "about 20 min left"
-    assert time_left(0.0, 0, 12) == "time left: known once the first trial is done"
+def test_the_verdict_is_one_line_in_percentages():
+    star = [Ranked(Candidate("offset", (("chase", 2.0),)), [0.812, 0.814], [0.4, 0.5]),
+            Ranked(Candidate("offset"), [0.79, 0.80], [0.6, 0.6]), Ranked(Candidate("scaled"), [0.738, 0.742], [1, 1])]
+    assert verdict(star, Candidate("scaled")) == "Use offset + chase: 81 % (scaled 74 %)"
+    assert verdict(star[1:], Candidate("offset")) == "Use offset: 80 % (the default)"
+    assert verdict(star, None) == "Use offset + chase: 81 %" and verdict([], None) == "No advice: no trial finished."
+    # the default is what auto takes, no strategy: scaled for the star, offset for the L
+    assert default_candidate(Config(), shape_vertices("star")) == Candidate("scaled")
+    assert default_candidate(Config(outline="scaled"), shape_vertices("l-shape")) == Candidate("offset")
+
+
+def test_the_time_left_follows_the_steps_left_at_the_pace_of_the_trials_done():
+    # Four trials (weights: open-loop steps) on two workers, started at t = 0; no pace before one is done.
+    pace = Pace([2, 2, 1, 1], workers=2, started=0.0)
+    assert pace.seconds_left(5.0) is None
+    pace.done(0, 10.0, now=10.0)  # 5 s a unit; trial 2 begins; trial 1 (due at 10) ends now at the latest
+    assert pace.seconds_left(10.0) == pytest.approx(5.0)  # trial 2 (5 s) beside trial 3 (5 s)
+    pace.done(1, 12.0, now=12.0)  # 22 s for 4 units: 5.5 a unit; trial 3 begins
+    assert pace.seconds_left(12.0) == pytest.approx(5.5)  # trial 2 has 3.5 s to go, trial 3 all of its 5.5
+    assert pace.seconds_left(13.0) == pytest.approx(4.5)  # counted down between finishes
+    # One worker, a short trial then a long one: the steps left, not the trials left (which would say 2 s).
+    pace = Pace([1, 3], workers=1, started=0.0)
+    pace.done(0, 2.0, now=2.0)
+    assert pace.seconds_left(2.0) == pytest.approx(6.0)
+
+
+def test_the_time_left_in_words():
+    assert in_words(90.0) == "about 1 min 30 s left" and in_words(20.2) == "about 20 s left"
+    assert in_words(1200.0) == "about 20 min left" and in_words(0.2) == "about 1 s left"
+    assert in_words(None) == "time left: known once the first trial is done"
+
+
+def test_the_costliest_trials_go_first():
+    chase, plain = Candidate("offset", (("chase", 2.0),)), Candidate("offset")
+    assert trial_order([(plain, 0), (chase, 0), (plain, 1), (chase, 1)], 1000) == [(chase, 0), (chase, 1),
+                                                                                   (plain, 0), (plain, 1)]
 
 
 def test_the_pages_advice_says_the_time_left_while_it_runs():
@@ -81,9 +114,12 @@ def test_the_pages_advice_says_the_time_left_while_it_runs():
     runner = _Handle(latest=_Handle(steps_per_second=100.0))
     folder = AdviceFolder(_Gui(), runner, use=lambda *args: None)
     folder.build(runner.latest)
-    folder._busy, folder._started = True, time.monotonic() - 30.0  # as begin() leaves it, 30 s ago
-    folder._heard(3, 12)
+    folder._busy = True  # as begin() leaves it
+    folder._heard(3, 12, 120.0, time.monotonic() - 30.0)  # 2 min left, said 30 s ago
     assert folder._text() == "Running: 3 of 12 trials done, about 1 min 30 s left."
+    folder._busy, folder.default = False, Candidate("scaled")
+    folder.results = [Ranked(Candidate("offset"), [0.8], [0.5]), Ranked(Candidate("scaled"), [0.7], [1.0])]
+    assert folder._text().splitlines()[0] == "**Use offset: 80 % (scaled 70 %)**"
 
 
 def test_advise_from_the_command_line_prints_a_ranked_table_and_json(capsys):
@@ -110,7 +146,8 @@ def test_the_pages_advice_runs_beside_the_simulation_and_its_best_is_used():
         folder.begin(client=None)
         wait_until(lambda: not folder.running, timeout=120, what="the advice's trials")
         assert not folder.running and len(folder.results) == len(candidates(TINY, shape_vertices("l-shape")))
-        assert folder.status.content.startswith("| rank |") and not folder.use_best.disabled
+        verdict_line, _, ranking = folder.status.content.partition("\n\n")
+        assert verdict_line.startswith("**Use ") and ranking.startswith("| rank |") and not folder.use_best.disabled
         folder.apply_best(client=None)
         best = folder.results[0].candidate
         assert used == [(best.outline, {"flare": 0.0, "switch": 0.0, "no_corners": 0.0, "chase": 0.0,

@@ -35,12 +35,13 @@ class AdviceFolder:
         self.run_to_the_end: Callable[[Any], None] = lambda client: None
         self.seeds, self.steps = seeds, steps
         self.results: list[advice.Ranked] = []
+        self.default: advice.Candidate | None = None  # what the goal gets without advice, for the verdict
         self._cancel = threading.Event()
         self._thread: threading.Thread | None = None
         self._busy = False
         self._speed_before = 0.0
         self._progress = (0, 0)
-        self._started = 0.0  # when the running trials began (time.monotonic), for the time left
+        self._left: tuple[float | None, float] = (None, 0.0)  # the seconds left, and when they were (monotonic)
         self._shown = ""
 
     def build(self, snap: Snapshot) -> None:
@@ -91,7 +92,7 @@ class AdviceFolder:
         config, vertices = snap.world_config.replace(shape=snap.shape_name), snap.goal_vertices
         self._cancel.clear()
         self._speed_before = snap.steps_per_second
-        self._progress, self._started = (0, 0), time.monotonic()
+        self._progress, self._left = (0, 0), (None, time.monotonic())
         self.results, self.use_best.disabled, self.best_to_the_end.disabled = [], True, True
         self.start.disabled, self.cancel.visible, self.bar.visible, self.bar.value = True, True, True, 0.0
         self._busy = True
@@ -102,19 +103,20 @@ class AdviceFolder:
     def _run(self, config: Any, vertices: Any, client: Any) -> None:
         """The trials, in a thread of their own; what they change, they change on the event thread."""
         try:
+            default = advice.default_candidate(config, vertices)
             results = advice.advise(config, vertices, seeds=self.seeds, steps=self.steps, workers=1,
-                                    progress=lambda done, total: self._post(self._heard, done, total),
-                                    cancel=self._cancel)
+                                    progress=self._progress_heard, cancel=self._cancel)
         except advice.Cancelled:
             self._post(self._ended, [], client, ("Advice cancelled", "The trials were stopped.", "blue"))
         except Exception as exc:  # noqa: BLE001 - a goal the advice refuses, a worker that died: say so
             self._post(self._ended, [], client, ("Advice failed", str(exc), "red"))
         else:
-            best = results[0].candidate.label if results else "nothing"
-            self._post(self._ended, results, client, ("Advice ready", f"Best for this goal: {best}.", "green"))
+            self._post(self._ended, results, client, ("Advice ready", advice.verdict(results, default), "green"),
+                       default)
 
-    def _ended(self, results: list, client: Any, notice: tuple[str, str, str]) -> None:
-        self.results = results
+    def _ended(self, results: list, client: Any, notice: tuple[str, str, str],
+               default: advice.Candidate | None = None) -> None:
+        self.results, self.default = results, default
         title, body, colour = notice
         if colour == "red":
             notify_error(client, title, body)
@@ -125,8 +127,12 @@ class AdviceFolder:
         self.use_best.disabled = self.best_to_the_end.disabled = not self.results
         self._show()
 
-    def _heard(self, done: int, total: int) -> None:
-        self._progress = (done, total)
+    def _progress_heard(self, done: int, total: int, seconds_left: float | None) -> None:
+        """In the trials' thread: to the event thread, with the moment the time left was reckoned."""
+        self._post(self._heard, done, total, seconds_left, time.monotonic())
+
+    def _heard(self, done: int, total: int, seconds_left: float | None = None, at: float | None = None) -> None:
+        self._progress, self._left = (done, total), (seconds_left, time.monotonic() if at is None else at)
         self.bar.value = 100.0 * done / max(total, 1)
 
     def apply_best(self, client: Any) -> bool:
@@ -150,7 +156,8 @@ class AdviceFolder:
     def _text(self, snap: Snapshot | None = None) -> str:
         if self.running:
             done, total = self._progress
-            left = advice.time_left(time.monotonic() - self._started, done, total)
+            seconds, at = self._left  # counted down from the last finished trial's estimate
+            left = advice.in_words(None if seconds is None else max(seconds - (time.monotonic() - at), 0.0))
             line = f"Running: {done} of {total or '...'} trials done, {left}."
             speed = (snap or self.runner.latest).steps_per_second
             if self._speed_before > 0 and speed < SLOWED * self._speed_before:
@@ -158,7 +165,7 @@ class AdviceFolder:
                          f"its speed** (Cancel to give it back).")
             return line
         if self.results:
-            return advice.table(self.results, self.steps)
+            return f"**{advice.verdict(self.results, self.default)}**\n\n{advice.table(self.results, self.steps)}"
         return ""
 
     def stop(self) -> None:

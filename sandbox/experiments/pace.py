@@ -1,0 +1,69 @@
+"""When a batch of trials will be done: :class:`Pace`, the time left of trials that a few worker
+processes take in order, from what the trials done so far cost, and :func:`in_words`.
+
+Each trial has a *weight*, its steps times what a step of its kind costs relative to the others
+(the advice's chase trials cost about twice an open loop's step for step: ``advise.CHASE_COST``).
+The seconds per unit of weight are measured on the trials done so far; the trials still to run are
+laid out on the workers as the pool takes them (in order, each to the first worker free), each
+running trial already counted for the time it has run. So the estimate follows the *steps* left,
+not the count of trials, and a batch whose last trials are long (or short) is not misjudged.
+"""
+
+from __future__ import annotations
+
+import heapq
+from typing import Sequence
+
+
+class Pace:
+    """The time left of ``weights`` (one per trial, in the order the pool takes them) on ``workers``
+    workers that started at ``started`` (any clock: seconds)."""
+
+    def __init__(self, weights: Sequence[float], workers: int, started: float):
+        self.weights = [float(w) for w in weights]
+        self.workers = max(1, int(workers))
+        #: When each trial began (None: not yet): the first ``workers`` at once, then one at each finish.
+        self.began: list[float | None] = [None] * len(self.weights)
+        self.finished: dict[int, float] = {}  # trial -> the seconds it took
+        for index in range(min(self.workers, len(self.weights))):
+            self.began[index] = started
+
+    def done(self, index: int, seconds: float, now: float) -> None:
+        """Trial ``index`` finished at ``now`` after ``seconds`` of running; its worker takes the next."""
+        self.finished[index] = float(seconds)
+        waiting = next((i for i, began in enumerate(self.began) if began is None), None)
+        if waiting is not None:
+            self.began[waiting] = now
+
+    @property
+    def seconds_per_weight(self) -> float | None:
+        """What a unit of weight took, over the trials done (None before the first)."""
+        weight = sum(self.weights[i] for i in self.finished)
+        return sum(self.finished.values()) / weight if weight > 0 else None
+
+    def seconds_left(self, now: float) -> float | None:
+        """Until the last trial is done (None before the first is done: no pace to go by)."""
+        pace = self.seconds_per_weight
+        if pace is None:
+            return None
+        free = []  # when each worker is free: running trials end when their weight says, at the least now
+        for index, began in enumerate(self.began):
+            if began is not None and index not in self.finished:
+                free.append(now + max(pace * self.weights[index] - (now - began), 0.0))
+        free += [now] * (self.workers - len(free))
+        heapq.heapify(free)
+        for index, began in enumerate(self.began):
+            if began is None:
+                heapq.heapreplace(free, free[0] + pace * self.weights[index])
+        return max(free) - now
+
+
+def in_words(seconds: float | None) -> str:
+    """'about 2 min 10 s left'; None: no pace yet."""
+    if seconds is None:
+        return "time left: known once the first trial is done"
+    seconds = round(seconds)
+    if seconds >= 60:
+        minutes, seconds = divmod(seconds, 60)
+        return f"about {minutes} min {seconds} s left" if minutes < 10 else f"about {minutes} min left"
+    return f"about {max(seconds, 1)} s left"
