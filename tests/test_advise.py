@@ -68,6 +68,25 @@ def test_an_open_loop_within_the_standard_error_of_chase_ranks_first():
     assert rank([Ranked(chase, [0.74], [0.5]), Ranked(Candidate("offset"), [0.739], [0.5])])[0].candidate == chase
 
 
+def test_the_offset_outline_within_the_standard_error_of_the_scaled_one_ranks_first():
+    chase = (("chase", 2.0),)
+    # The T at 10,000 steps: scaled + chase 0.777 ± 0.015, offset + chase 0.772 ± 0.002 (0.005 apart).
+    scaled, offset = Ranked(Candidate("scaled", chase), [0.792, 0.762], [1, 1]), Ranked(Candidate("offset", chase),
+                                                                                         [0.770, 0.774], [1, 1])
+    assert scaled.fraction_se == pytest.approx(0.015) and rank([scaled, offset]) == [offset, scaled]
+    assert "offset + chase ranks above scaled + chase, within its standard error: the offset outline" in table(
+        rank([scaled, offset]), 10_000)
+    # The square: scaled + chase 0.812 ± 0.002 against 0.790 ± 0.004, 0.022 apart: scaled stays first.
+    square = [Ranked(Candidate("scaled", chase), [0.814, 0.810], [1, 1]),
+              Ranked(Candidate("offset", chase), [0.786, 0.794], [1, 1])]
+    assert rank(square[::-1]) == square
+    # Only between the same strategies: the offset outline alone does not pass scaled + chase.
+    plain = Ranked(Candidate("offset"), [0.770, 0.774], [1, 1])
+    closed_plain = Ranked(Candidate("scaled"), [0.792, 0.762], [1, 1])
+    assert rank([scaled, plain])[0] is plain  # (an open loop within the error of chase: the rule before)
+    assert rank([closed_plain, Ranked(Candidate("offset", chase), [0.770, 0.774], [1, 1])])[0] is closed_plain
+
+
 def test_the_verdict_is_one_line_in_percentages():
     star = [Ranked(Candidate("offset", (("chase", 2.0),)), [0.812, 0.814], [0.4, 0.5]),
             Ranked(Candidate("offset"), [0.79, 0.80], [0.6, 0.6]), Ranked(Candidate("scaled"), [0.738, 0.742], [1, 1])]
@@ -92,6 +111,12 @@ def test_the_time_left_follows_the_steps_left_at_the_pace_of_the_trials_done():
     pace = Pace([1, 3], workers=1, started=0.0)
     pace.done(0, 2.0, now=2.0)
     assert pace.seconds_left(2.0) == pytest.approx(6.0)
+    # A trial takes what its group's (its candidate's other seeds) took: a cheap candidate's last two seeds
+    # 1 s each, not the 4 s a unit of the pace over both candidates.
+    pace = Pace([1, 1, 1, 1], workers=1, started=0.0, groups=["cheap", "dear", "cheap", "cheap"])
+    pace.done(0, 1.0, now=1.0)
+    pace.done(1, 7.0, now=8.0)
+    assert pace.seconds_per_weight == pytest.approx(4.0) and pace.seconds_left(8.0) == pytest.approx(2.0)
 
 
 def test_the_time_left_in_words():
@@ -102,8 +127,9 @@ def test_the_time_left_in_words():
 
 def test_the_costliest_trials_go_first():
     chase, plain = Candidate("offset", (("chase", 2.0),)), Candidate("offset")
-    assert trial_order([(plain, 0), (chase, 0), (plain, 1), (chase, 1)], 1000) == [(chase, 0), (chase, 1),
-                                                                                   (plain, 0), (plain, 1)]
+    # every candidate's first seed, then the second; in each round chase (the costlier) first
+    assert trial_order([(plain, 0), (plain, 1), (chase, 0), (chase, 1)], 1000) == [(chase, 0), (plain, 0),
+                                                                                   (chase, 1), (plain, 1)]
 
 
 def test_the_pages_advice_says_the_time_left_while_it_runs():
@@ -181,3 +207,45 @@ class _Gui:
 
     def add_progress_bar(self, value, **kwargs):
         return _Handle(value, **kwargs)
+
+
+# ---------------------------------------------------------------- is the advice right? (advise --check)
+def test_the_check_reads_each_trial_as_its_candidate_at_100k():
+    from sandbox.experiments.advice_check import label_of, measured
+
+    row = {"seed": "0", "final_step": "100000", "shape": "static/shapes/templates/shapes/letter-H.txt",
+           "outline_family": "offset", "chase": "2.0", "flare": "0.0", "switch": "0.0", "no_corners": "0.0",
+           "fraction_in_goal": "0.74"}
+    assert label_of(row) == "offset + chase"
+    # before the offset outline, an evaluation ran the paper's scaled outline and has no family column
+    assert label_of({"chase": "2.0", "switch": "0.25", "no_corners": "0.5"}) == "scaled + switch + no corners + chase"
+    later_seed, plain_band = row | {"seed": "4"}, row | {"notches": "plain"}
+    assert measured([row, row | {"seed": "1", "fraction_in_goal": "0.76"}, later_seed, plain_band]) == {
+        ("letter-H", "offset + chase"): [0.74, 0.76]}
+
+
+def test_the_first_choice_is_right_within_a_point_of_the_best_at_100k():
+    from sandbox.experiments.advice_check import judge
+
+    chase, plain = Candidate("offset", (("chase", 2.0),)), Candidate("offset")
+    ranking = [Ranked(chase, [0.71], [1.0]), Ranked(plain, [0.70], [1.0]), Ranked(Candidate("scaled"), [0.4], [2.0])]
+    truth = {("letter-H", "offset + chase"): [0.74, 0.76], ("letter-H", "offset"): [0.78, 0.78],
+             ("other", "offset"): [0.99]}
+    verdict_h = judge("static/shapes/templates/shapes/letter-H.txt", ranking, truth)
+    assert (verdict_h.first, verdict_h.at_100k, verdict_h.best, verdict_h.status) == ("offset + chase", 0.75,
+                                                                                       "offset", "wrong")
+    truth[("letter-H", "offset")] = [0.76, 0.76]  # one point above: still right
+    assert judge("letter-H", ranking, truth).status == "right"
+    assert judge("letter-H", ranking[1:], {("letter-H", "scaled"): [0.5]}).status == "not measured"
+
+
+@pytest.mark.slow
+def test_the_default_advice_on_the_arrow_is_right_and_says_its_time_left():
+    """The arrow, where only one candidate (offset + chase) is within a point of the best at 100,000 steps
+    (scaled + chase 1.5 points below, offset 3.5): the default advice as ``bench --advice`` times it."""
+    from sandbox.experiments.advice_check import judge, read_evaluations, timed_advice
+
+    run = timed_advice("shapes/arrow.txt", Config(), workers=2)
+    assert judge(run.shape, run.ranking, read_evaluations()).status == "right"
+    assert run.verdict.startswith("Use offset + chase: ") and run.verdict.endswith(" %)")  # auto takes offset
+    assert len(run.estimates) == 15 and all(left is not None for _, left, _ in run.estimates)

@@ -1,12 +1,14 @@
 """When a batch of trials will be done: :class:`Pace`, the time left of trials that a few worker
 processes take in order, from what the trials done so far cost, and :func:`in_words`.
 
-Each trial has a *weight*, its steps times what a step of its kind costs relative to the others
-(the advice's chase trials cost about twice an open loop's step for step: ``advise.CHASE_COST``).
-The seconds per unit of weight are measured on the trials done so far; the trials still to run are
-laid out on the workers as the pool takes them (in order, each to the first worker free), each
-running trial already counted for the time it has run. So the estimate follows the *steps* left,
-not the count of trials, and a batch whose last trials are long (or short) is not misjudged.
+Each trial belongs to a *group* (the advice: a candidate, whose seeds cost about the same) and has a
+*weight*, its steps times what a step of its kind costs relative to the others (the advice's chase
+trials cost about twice an open loop's step for step: ``advise.CHASE_COST``). A trial is expected to
+take what the trials of its group done so far took; one of a group not yet seen, its weight at the
+seconds per unit of weight of all the trials done so far. The trials still to run are laid out on the
+workers as the pool takes them (in order, each to the first worker free), each running trial counted
+for the time it has run. So the estimate follows the *steps* left, not the count of trials, and a
+batch whose last trials are long (or short) is not misjudged.
 """
 
 from __future__ import annotations
@@ -17,10 +19,12 @@ from typing import Sequence
 
 class Pace:
     """The time left of ``weights`` (one per trial, in the order the pool takes them) on ``workers``
-    workers that started at ``started`` (any clock: seconds)."""
+    workers that started at ``started`` (any clock: seconds); ``groups`` (one per trial): trials that
+    cost alike (default: each its own)."""
 
-    def __init__(self, weights: Sequence[float], workers: int, started: float):
+    def __init__(self, weights: Sequence[float], workers: int, started: float, groups: Sequence | None = None):
         self.weights = [float(w) for w in weights]
+        self.groups = list(range(len(self.weights))) if groups is None else list(groups)
         self.workers = max(1, int(workers))
         #: When each trial began (None: not yet): the first ``workers`` at once, then one at each finish.
         self.began: list[float | None] = [None] * len(self.weights)
@@ -41,20 +45,25 @@ class Pace:
         weight = sum(self.weights[i] for i in self.finished)
         return sum(self.finished.values()) / weight if weight > 0 else None
 
+    def expected(self, index: int, pace: float) -> float:
+        """The seconds trial ``index`` should take: as its group's done so far, else by its weight."""
+        seen = [seconds for i, seconds in self.finished.items() if self.groups[i] == self.groups[index]]
+        return sum(seen) / len(seen) if seen else pace * self.weights[index]
+
     def seconds_left(self, now: float) -> float | None:
         """Until the last trial is done (None before the first is done: no pace to go by)."""
         pace = self.seconds_per_weight
         if pace is None:
             return None
-        free = []  # when each worker is free: running trials end when their weight says, at the least now
+        free = []  # when each worker is free: running trials end when expected, at the least now
         for index, began in enumerate(self.began):
             if began is not None and index not in self.finished:
-                free.append(now + max(pace * self.weights[index] - (now - began), 0.0))
+                free.append(now + max(self.expected(index, pace) - (now - began), 0.0))
         free += [now] * (self.workers - len(free))
         heapq.heapify(free)
         for index, began in enumerate(self.began):
             if began is None:
-                heapq.heapreplace(free, free[0] + pace * self.weights[index])
+                heapq.heapreplace(free, free[0] + self.expected(index, pace))
         return max(free) - now
 
 

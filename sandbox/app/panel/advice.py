@@ -2,9 +2,9 @@
 outlines and strategies tried in short trials beside the live simulation
 (:mod:`sandbox.experiments.advise`), ranked, with one click to use the best.
 
-The trials run in one worker process at a lower priority, and while they run
-the folder compares the live simulation's speed with its speed before: when
-it falls below :data:`SLOWED` of it, the folder says so.
+The trials run in worker processes at a lower priority, one a core, and while
+they run the folder compares the live simulation's speed with its speed before:
+when it falls below :data:`SLOWED` of it, the folder says so.
 """
 
 from __future__ import annotations
@@ -104,7 +104,8 @@ class AdviceFolder:
         """The trials, in a thread of their own; what they change, they change on the event thread."""
         try:
             default = advice.default_candidate(config, vertices)
-            results = advice.advise(config, vertices, seeds=self.seeds, steps=self.steps, workers=1,
+            results = advice.advise(config, vertices, seeds=self.seeds, steps=self.steps,
+                                    workers=advice.default_workers(),
                                     progress=self._progress_heard, cancel=self._cancel)
         except advice.Cancelled:
             self._post(self._ended, [], client, ("Advice cancelled", "The trials were stopped.", "blue"))
