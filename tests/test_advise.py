@@ -117,12 +117,18 @@ def test_the_time_left_follows_the_steps_left_at_the_pace_of_the_trials_done():
     pace.done(0, 1.0, now=1.0)
     pace.done(1, 7.0, now=8.0)
     assert pace.seconds_per_weight == pytest.approx(4.0) and pace.seconds_left(8.0) == pytest.approx(2.0)
+    # No estimate until a trial of each kind is done (chase's cost is not an open loop's); then both.
+    pace = Pace([2, 1, 2, 1], workers=1, started=0.0, kinds=["chase", "open", "chase", "open"])
+    pace.done(0, 4.0, now=4.0)
+    assert pace.seconds_left(4.0) is None
+    pace.done(1, 2.0, now=6.0)  # 6 s for 3 units; the other chase and open loop unseen: 4 s and 2 s
+    assert pace.seconds_left(6.0) == pytest.approx(6.0)
 
 
 def test_the_time_left_in_words():
     assert in_words(90.0) == "about 1 min 30 s left" and in_words(20.2) == "about 20 s left"
     assert in_words(1200.0) == "about 20 min left" and in_words(0.2) == "about 1 s left"
-    assert in_words(None) == "time left: known once the first trial is done"
+    assert in_words(None) == "time left: known once the first trials are done"
 
 
 def test_the_costliest_trials_go_first():
