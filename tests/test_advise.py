@@ -46,26 +46,15 @@ def test_the_ranking_puts_most_in_the_goal_first_then_the_closest_rest():
                                     "| stray boxes' mean distance to the goal (m) |")
 
 
-def test_an_open_loop_within_the_standard_error_of_chase_ranks_first():
-    chase = Candidate("offset", (("chase", 2.0),))
-    # The letter H at 30,000 steps: offset + chase 0.740 ± 0.002, offset 0.737 ± 0.009 (0.003 apart).
-    closed = Ranked(chase, [0.738, 0.742], [0.5, 0.4])
-    open_loop = Ranked(Candidate("offset"), [0.728, 0.746], [0.4, 0.5])
-    assert closed.fraction_se == pytest.approx(0.002) and open_loop.fraction_se == pytest.approx(0.009)
-    assert rank([closed, open_loop]) == [open_loop, closed]
-    text = table(rank([closed, open_loop]), 30_000)
-    assert text.splitlines()[2].startswith("| 1 | offset | 73.7 ± 0.9 % |")
-    assert "offset ranks above offset + chase, within its standard error" in text
-    # 0.023 apart, more than either standard error: chase stays first, and nothing is said.
-    ahead = Ranked(chase, [0.758, 0.762], [0.5, 0.4])
-    assert rank([open_loop, ahead]) == [ahead, open_loop] and "ranks above" not in table(rank([open_loop, ahead]), 1)
-    # Never the other way, and never between two closed loops or two open loops.
-    scaled_chase = Ranked(Candidate("scaled", (("chase", 2.0),)), [0.736, 0.740], [1.0, 1.0])
-    assert rank([scaled_chase, closed]) == [closed, scaled_chase]
-    scaled = Ranked(Candidate("scaled"), [0.734, 0.738], [1.0, 1.0])
-    assert rank([scaled, open_loop]) == [open_loop, scaled]
-    # One trial each has no standard error: no tie.
-    assert rank([Ranked(chase, [0.74], [0.5]), Ranked(Candidate("offset"), [0.739], [0.5])])[0].candidate == chase
+def test_an_open_loop_within_the_standard_error_of_chase_no_longer_ranks_first():
+    # The letter F at 10,000 steps: offset + chase 69.2 ± 2.6 %, offset 67.4 ± 0.2 %; at 100,000 steps
+    # 79.9 % and 76.0 %: the open loop first (the rule before issue 56) was 3.9 points below the best.
+    closed = Ranked(Candidate("offset", (("chase", 2.0),)), [0.666, 0.718], [1.8, 1.1])
+    open_loop = Ranked(Candidate("offset"), [0.672, 0.676], [0.8, 1.2])
+    assert closed.fraction_se == pytest.approx(0.026) and rank([open_loop, closed]) == [closed, open_loop]
+    assert "ranks above" not in table(rank([open_loop, closed]), 10_000)
+    text = table(rank([open_loop, closed]), 10_000)
+    assert text.splitlines()[2].startswith("| 1 | offset + chase | 69.2 ± 2.6 % |")
 
 
 def test_the_offset_outline_within_the_standard_error_of_the_scaled_one_ranks_first():
@@ -83,7 +72,7 @@ def test_the_offset_outline_within_the_standard_error_of_the_scaled_one_ranks_fi
     # Only between the same strategies: the offset outline alone does not pass scaled + chase.
     plain = Ranked(Candidate("offset"), [0.770, 0.774], [1, 1])
     closed_plain = Ranked(Candidate("scaled"), [0.792, 0.762], [1, 1])
-    assert rank([scaled, plain])[0] is plain  # (an open loop within the error of chase: the rule before)
+    assert rank([scaled, plain])[0] is scaled
     assert rank([closed_plain, Ranked(Candidate("offset", chase), [0.770, 0.774], [1, 1])])[0] is closed_plain
 
 
@@ -249,9 +238,10 @@ def test_the_first_choice_is_right_within_a_point_of_the_best_at_100k():
 def test_the_default_advice_on_the_arrow_is_right_and_says_its_time_left():
     """The arrow, where only one candidate (offset + chase) is within a point of the best at 100,000 steps
     (scaled + chase 1.5 points below, offset 3.5): the default advice as ``bench --advice`` times it."""
+    from sandbox.commands.generated import ADVICE_EVALUATIONS
     from sandbox.experiments.advice_check import judge, read_evaluations, timed_advice
 
     run = timed_advice("shapes/arrow.txt", Config(), workers=2)
-    assert judge(run.shape, run.ranking, read_evaluations()).status == "right"
+    assert judge(run.shape, run.ranking, read_evaluations(ADVICE_EVALUATIONS)).status == "right"
     assert run.verdict.startswith("Use offset + chase: ") and run.verdict.endswith(" %)")  # auto takes offset
     assert len(run.estimates) == 15 and all(left is not None for _, left, _ in run.estimates)

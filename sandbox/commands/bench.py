@@ -247,13 +247,14 @@ def bench_command(args: argparse.Namespace) -> int:
 def advice_bench(args: argparse.Namespace) -> int:
     """``bench --advice``: the default advice on every shape checked, timed and checked
     (:mod:`sandbox.experiments.advice_check`)."""
+    from sandbox.commands.generated import ADVICE_EVALUATIONS, ADVICE_SHAPES
     from sandbox.experiments import advice_check
     from sandbox.experiments.advise import default_workers
 
     config, workers = config_from_args(args), default_workers()
-    truth = advice_check.read_evaluations()
+    truth = advice_check.read_evaluations(ADVICE_EVALUATIONS)
     runs = []
-    for shape in advice_check.shapes_checked():
+    for shape in advice_check.shapes_checked(ADVICE_SHAPES):
         if not args.no_progress:
             print(f"bench --advice: {shape}", file=sys.stderr, flush=True)
         runs.append(advice_check.timed_advice(shape, config, workers=workers))

@@ -1,7 +1,8 @@
 """Is the advice right, and how long does it take? The default advice on every shape in ``shapes/``, the
 circle and the drawing templates (``phototaxis bench --advice``, from the repository's root, where the
-tables are): its first choice against the best candidate of the committed 100,000-step evaluations, its
-time and CPU time, and its time-left estimate at each finished trial against the time in fact left.
+tables are; which shapes and tables: ``sandbox.commands.generated``): its first choice against the best
+candidate of the committed 100,000-step evaluations, its time and CPU time, and its time-left estimate
+at each finished trial against the time in fact left.
 
 The advice's first choice is *right* when, at 100,000 steps, it builds the shape within
 :data:`TOLERANCE` (one point of the boxes) of the best candidate measured there; *not measured* when the
@@ -27,14 +28,6 @@ from sandbox.model.config import STRATEGY_NAMES, Config
 
 #: How far below the best at 100,000 steps the first choice may build the shape (a fraction of the boxes).
 TOLERANCE = 0.01
-
-#: The committed evaluations at 100,000 steps that hold the candidates (from the repository's root).
-EVALUATIONS = ("static/shapes/final.csv", "static/shapes/chase/final.csv", "static/shapes/scaled-chase/final.csv",
-               "static/closed-loop/final.csv", "static/shapes/templates/final.csv",
-               "static/shapes/templates/candidates/final.csv")
-
-#: The shapes checked: every file in shapes/, the circle, and the drawing templates.
-SHAPES = ("circle", "shapes/*.txt", "static/shapes/templates/shapes/*.txt")
 
 SEEDS = 4
 STEPS = 100_000
@@ -62,7 +55,8 @@ def measured(rows: Iterable[dict]) -> dict[tuple[str, str], list[float]]:
     return out
 
 
-def read_evaluations(files: Iterable[str] = EVALUATIONS) -> dict[tuple[str, str], list[float]]:
+def read_evaluations(files: Iterable[str]) -> dict[tuple[str, str], list[float]]:
+    """The trials of the evaluations' final.csv ``files`` (those missing skipped), as :func:`measured`."""
     rows = []
     for file in files:
         if Path(file).exists():
@@ -139,7 +133,8 @@ def judge(shape: str, ranking: list[Ranked], truth: dict[tuple[str, str], list[f
     return Verdict(name, first, ranking[0].fraction, means.get(first, math.nan), best, means.get(best, math.nan))
 
 
-def shapes_checked(patterns: Iterable[str] = SHAPES) -> list[str]:
+def shapes_checked(patterns: Iterable[str]) -> list[str]:
+    """The shape files the glob ``patterns`` name, in order ('circle' and other names as they are)."""
     return [found for pattern in patterns for found in (sorted(glob.glob(pattern)) if "*" in pattern else [pattern])]
 
 
