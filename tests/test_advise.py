@@ -245,3 +245,12 @@ def test_the_default_advice_on_the_arrow_is_right_and_says_its_time_left():
     assert judge(run.shape, run.ranking, read_evaluations(ADVICE_EVALUATIONS)).status == "right"
     assert run.verdict.startswith("Use offset + chase: ") and run.verdict.endswith(" %)")  # auto takes offset
     assert len(run.estimates) == 15 and all(left is not None for _, left, _ in run.estimates)
+
+
+def test_the_estimate_is_judged_relative_to_what_is_left_until_the_last_seconds():
+    from sandbox.experiments.advice_check import Timed
+
+    run = Timed("l-shape", [], "", 20.0, 40.0, estimates=[(2.0, None, 18.0), (4.0, 12.0, 16.0), (10.0, 11.0, 10.0),
+                                                          (17.0, 1.0, 3.0), (19.0, 0.5, 1.0)])
+    assert run.worst_estimate == pytest.approx(0.25)  # 12 s said with 16 s left; none said before the first
+    assert run.worst_at_the_end == pytest.approx(2.0)  # in the last 5 s: seconds, not shares (1 s said, 3 s left)

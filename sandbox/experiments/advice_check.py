@@ -32,6 +32,10 @@ TOLERANCE = 0.01
 SEEDS = 4
 STEPS = 100_000
 
+#: The time-left estimate is judged relative to what is left until this many seconds before the end, in
+#: seconds after.
+NEAR_THE_END = 5.0
+
 
 def shape_name(shape: str) -> str:
     """'static/shapes/templates/shapes/letter-H.txt' -> 'letter-H'; 'circle' stays."""
@@ -79,10 +83,17 @@ class Timed:
 
     @property
     def worst_estimate(self) -> float:
-        """The estimate's largest relative error (0.3: 30 % off), over the trials finished but the last."""
+        """The estimate's largest relative error (0.3: 30 % off) while at least :data:`NEAR_THE_END` seconds
+        were left (nan: no such estimate); in the last seconds a second off is most of what is left."""
         errors = [abs(guess - actual) / actual for _, guess, actual in self.estimates
-                  if guess is not None and actual > 0]
+                  if guess is not None and actual >= NEAR_THE_END]
         return max(errors, default=math.nan)
+
+    @property
+    def worst_at_the_end(self) -> float:
+        """The estimate's largest error in seconds in the last :data:`NEAR_THE_END` seconds."""
+        return max((abs(guess - actual) for _, guess, actual in self.estimates
+                    if guess is not None and actual < NEAR_THE_END), default=math.nan)
 
 
 def timed_advice(shape: str, config: Config, *, workers: int,
@@ -142,9 +153,11 @@ def table(runs: list[Timed], truth: dict[tuple[str, str], list[float]], cores: i
     """A Markdown table: each shape's verdict and check, then what the advice took."""
     rows = [f"| shape | the advice's first ({advice.STEPS:,} steps) | the first at 100,000 steps | the best at "
             f"100,000 steps | within {100 * TOLERANCE:.0f} point? | seconds | CPU seconds (/ {cores} cores) | "
-            f"time left: worst error |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+            f"time left: worst error (the last {NEAR_THE_END:.0f} s) |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for run in runs:
         worst = "none" if math.isnan(run.worst_estimate) else f"{100 * run.worst_estimate:.0f} %"
+        if not math.isnan(run.worst_at_the_end):
+            worst += f" ({run.worst_at_the_end:.1f} s)"
         rows.append(f"{judge(run.shape, run.ranking, truth).row()} {run.seconds:.1f} | {run.cpu_seconds:.1f} "
                     f"({run.cpu_seconds / cores:.1f}) | {worst} |")
     return "\n".join(rows)
