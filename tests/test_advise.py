@@ -150,6 +150,8 @@ def test_advise_from_the_command_line_prints_a_ranked_table_and_json(capsys):
                  "--robots", "20", "--boxes", "40", "--json", "--no-progress"])
     out = json.loads(capsys.readouterr().out)
     assert code == 0 and out["steps"] == 400 and out["seeds"] == [0]
+    best = out["ranking"][0]
+    assert out["verdict"].startswith(f"Use {best['label']}: {100 * best['fraction_in_goal']:.0f} %")
     assert [r["label"] for r in out["ranking"]] in (["offset", "offset + chase"], ["offset + chase", "offset"])
     fractions = [r["fraction_in_goal"] for r in out["ranking"]]
     assert fractions == sorted(fractions, reverse=True)
