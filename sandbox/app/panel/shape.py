@@ -190,7 +190,7 @@ class ShapeFolder:
             self.shape.value = self._shown  # the dropdown goes back to what runs
 
         if quiet:
-            self.runner.ask(SetShape(vertices, name), on_error=refused)
+            self.runner.ask(SetShape(vertices, name), on_done=lambda notes: self.draw.give_way(), on_error=refused)
             return
         keep = bool(self.keep.value)
 
@@ -204,6 +204,7 @@ class ShapeFolder:
 
         def started(notes: list[str]) -> None:
             self._on_change(f"shape {name}", 0)  # the first step of the new world
+            self.draw.give_way()  # the drawing leaves the goal built to be seen
             # One notice for the action: what is used, how it started, then what to know about it.
             what = f"Using {name}" + ("" if vertices is None else f" ({len(vertices)} vertices)")
             if self._reset is not None:
