@@ -5,11 +5,12 @@ open one (the gate refuses its upload)."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from sandbox.app.panel.opening import REFUSED
 from sandbox.app.web.access import Access
-from sandbox.app.world.snapshot import DESIGN_PROGRAM
+from sandbox.app.world.snapshot import DESIGN_PROGRAM, PAPER_PROGRAM
 from sandbox.model.config import Config
 from tests.app.web.test_security import TOKEN, connected, make_app, refusals
 from tests.app.web.test_upload_files import notice
@@ -66,6 +67,10 @@ def test_a_design_uploaded_starts_its_world_lit_by_its_recorded_program(app, des
         assert snap.step < DESIGN_STEPS  # from step 0
         parameters = app.panel.parameters.controls
         assert parameters["robots"].value == 10 and parameters["boxes"].value == 16  # the panel shows its settings
+        # Its recorded lights were made for its goal: a new goal hands the floor back to the paper's controller.
+        app.events.call(lambda: app.panel.shape.use(np.array([(0, 0), (6, 0), (3, 5)], float), "triangle", None))
+        wait_until(lambda: app.runner.latest.shape_name == "triangle" and app.runner.latest.program == PAPER_PROGRAM,
+                   what="the triangle lit by the paper's controller")
     finally:
         page.close()
 
