@@ -382,7 +382,9 @@ def test_typed_points_are_drawn_where_the_goal_is_built(default_boxes_app):
         client.set_value(uuid_of(draw.typed), TYPED)
         wait_until(lambda: draw.typed.value == TYPED, what="the typed text")
         client.click(uuid_of(draw.apply))
-        wait_until(lambda: len(draw.points) == 8, what="the typed points")
+        # Close and use enabled too: the points are stored before the buttons follow, and the gate refuses a
+        # click on a disabled button.
+        wait_until(lambda: len(draw.points) == 8 and not draw.close.disabled, what="the typed points, ready")
         ys = np.array(draw.points)[:, 1]
         assert (round(ys.min(), 3), round(ys.max(), 3)) == pytest.approx(BUILT_Y, abs=2e-3)
         np.testing.assert_allclose(draw._preview.goal, draw.points, atol=2e-3)  # on the dashed preview
