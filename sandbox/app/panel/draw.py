@@ -45,7 +45,7 @@ from sandbox.shapes.drawing import (
     vertex_at,
     without_repeats,
 )
-from sandbox.shapes.geometry import fit_to_area, signed_area
+from sandbox.shapes.geometry import fit_to_area
 from sandbox.shapes.templates import placed, template_names, template_vertices
 
 SOURCE = "drawn shape"
@@ -357,10 +357,9 @@ class DrawFolder:
 
     def _where_built(self, points: list[Point]) -> list[Point]:
         """``points`` where the goal they make will be built: scaled to the goal's area (the boxes' total
-        area), centred in the arena, and moved as the model moves a goal to
-        lie inside the construction wall (issue 56, item 2: drawn 1.25 m off the goal built without it).
-        Only centred while they are not yet a polygon; not moved when the goal cannot be built (the
-        status line says why)."""
+        area), centred in the arena, and moved as the model moves a goal to lie inside the construction
+        wall (issue 56, item 2: they were drawn 1.25 m off the goal built). Only centred while they are
+        not yet a polygon; not moved when the goal cannot be built (the status line says why)."""
         if not points:
             return points
         try:
