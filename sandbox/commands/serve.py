@@ -124,8 +124,8 @@ class App:
             self.lesson = lesson
             #: The server as this world's panel sees it: in class mode, without the students' pages.
             self.pages = TeacherPages(self.server, lesson.seated) if lesson is not None else self.server
-            #: Whether the floor shows a student's world (the lesson's projector) instead of this one.
-            self.projecting = False
+            #: The student's frame the floor shows last (the lesson's projector), or None: this world's.
+            self.on_projector: Snapshot | None = None
             self.panel = Panel(self.pages, self.runner, self.view, self.comparison, events=self.events,
                                allow_programs=offered, may_load_programs=self.gate.may_load_programs,
                                default_view=WHOLE_ARENA if whole_arena else PRESENTER)
@@ -178,7 +178,7 @@ class App:
         # The scene and the panel's read-outs of one snapshot in one batch: the page applies a
         # batch at once, so what it shows comes from one step.
         with self.server.atomic():
-            if not self.projecting:
+            if self.on_projector is None:
                 self.view.update(snap)
             self.comparison.draw()  # compare mode's second world, in the same picture
             self.panel.update(snap)
@@ -188,7 +188,7 @@ class App:
 
     def project(self, snap: Snapshot | None) -> None:
         """The floor shows ``snap`` (a student's world, class mode's projector), or this world again (None)."""
-        self.projecting = snap is not None
+        self.on_projector = snap
         with self.server.atomic():
             self.view.update(snap if snap is not None else self.runner.latest)
 

@@ -190,6 +190,7 @@ class Classroom:
             desk = self.desks.pop(identity, None)
             if desk is not None:
                 desk.close()
+                desk.clear()
             threading.Thread(target=old.runner.stop, name="phototaxis-seat-stop", daemon=True).start()
         self._sit(identity)
         if scene is not None and old is not None and identity in self.page_of:

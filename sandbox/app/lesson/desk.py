@@ -81,6 +81,11 @@ class Desk:
         self.panel.farewell(self.client.client_id)
         return workers
 
+    def clear(self) -> None:
+        """Take the desk off its page, which stays (a new world is coming): every control and node of it."""
+        self.client.gui.reset()
+        self.client.scene.reset()
+
     def _fit(self) -> None:
         """While the page lays itself out, frame the arena for its window's shape."""
         if time.monotonic() > self._fit_until:

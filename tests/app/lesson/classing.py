@@ -14,7 +14,8 @@ SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 TOKEN = "classroom-secret-42"
 
 
-def class_app(*, seats=None, round_steps: int | None = None, trust_proxy: bool = False, **kwargs):
+def class_app(*, seats=None, round_steps: int | None = None, trust_proxy: bool = False, fps: float = 30,
+              steps_per_frame: int = 2, **kwargs):
     """A class server on loopback (the token needed for the teacher's page, as ``serve --class`` makes
     one), its worlds threads of the server process, small; started."""
     from sandbox.commands.serve import App, free_port
@@ -22,7 +23,7 @@ def class_app(*, seats=None, round_steps: int | None = None, trust_proxy: bool =
     lesson = Classroom(seats, round_steps=round_steps)
     access = Access.for_server("127.0.0.1", token=TOKEN, trust_proxy=trust_proxy)
     access.seats = lesson.seats
-    return App(SMALL, port=free_port(), fps=30, steps_per_frame=2, process=False, access=access, lesson=lesson,
+    return App(SMALL, port=free_port(), fps=fps, steps_per_frame=steps_per_frame, process=False, access=access, lesson=lesson,
                **kwargs).start()
 
 
