@@ -65,14 +65,16 @@ def test_a_lab_lesson_with_three_students_and_the_teacher(app, browser):
     teacher_context = browser.new_context(viewport={"width": 1600, "height": 1000})
     teacher = teacher_context.new_page()
     teacher.goto(app.url)
-    for number in (1, 2, 3):  # the wall: a tile each
-        teacher.get_by_text(f"Student {number}", exact=True).wait_for()
-    teacher.get_by_text("page open").first.wait_for()
+    teacher.get_by_text("3 students so far").wait_for()
     labels = [lesson.seats.get(identity).label for identity in identities]
     assert labels == ["Student 1", "Student 2", "Student 3"]
+    wait_until(lambda: lesson.wall.shown == labels, what="the three on the wall")
+    picture = teacher.locator("img").filter(has=None).all()
+    assert picture, "the wall's picture"
 
     # the second student's world on the projector: the teacher's floor shows it, live
-    teacher.get_by_role("button", name="Show on the projector").nth(1).click()
+    choose(teacher, "Student", "Student 2")
+    click_button(teacher, "Show on the projector")
     wait_until(lambda: lesson.projected == identities[1] and app.on_projector is not None, what="the projector")
     teacher.get_by_text("On the projector: Student 2").wait_for()
     projected = app.on_projector

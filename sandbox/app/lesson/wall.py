@@ -1,13 +1,13 @@
 """The teacher's wall: the Class folder of the teacher's panel, every student's world at once.
 Built on the main thread with the panel; refreshed on the app's event thread, once a second.
 
-Each student's tile is a small picture of their floor (drawn with Pillow on the server,
-:func:`sandbox.app.view.frames.render`, sent as a JPEG about once a second, only when their world moved),
-their label, step and share in the goal, and two buttons: *Show on the projector* (the teacher's floor
-shows that world, live) and *Send the scene* (to this student alone). Above the tiles: how they are
-sorted, the scene to send (the teacher's world or a paper case) to everyone, and the class challenge
-with its ranking. The folder is in the shared GUI, which a student's page is never sent
-(:mod:`sandbox.app.web.gate`).
+The wall is one picture: a small picture of each student's floor (their construction area, drawn with
+Pillow on the server, :func:`sandbox.app.view.frames.render`, again only when their world moved) under
+their label, step and share in the goal, three to a row, in the order the teacher chooses; sent as one
+JPEG about once a second. Under it, a student picked by name goes *on the projector* (the teacher's floor
+shows that world, live) or is sent the scene; the scene (the teacher's world or a paper case) goes to
+everyone; the class challenge starts the same round for everyone, ranked here. The folder is in the
+shared GUI, which a student's page is never sent (:mod:`sandbox.app.web.gate`).
 """
 
 from __future__ import annotations
@@ -16,39 +16,22 @@ from typing import Any
 
 import numpy as np
 import viser
+from PIL import Image, ImageDraw, ImageFont
 
 from sandbox.app.panel.plain import plain
+from sandbox.app.view import palette as pal
 from sandbox.app.view.frames import render
 from sandbox.app.view.scene import CONSTRUCTION_VIEW
 
-#: Side of a tile's picture (pixels) and its JPEG quality: about 3-5 KB a picture.
-THUMBNAIL = 160
+#: Side of a student's picture (pixels), the band of text under it, the pictures to a row, and the JPEG
+#: quality: the wall of 30 students is 400 x 1,720 pixels, about 60 KB a second to the teacher's page.
+THUMBNAIL = 128
+CAPTION = 34
+COLUMNS = 3
+GAP = 8
 JPEG_QUALITY = 70
 SORTS = ("arrival", "name", "share in the goal", "step")
-
-
-class Tile:
-    """One student's tile on the wall."""
-
-    def __init__(self, gui: Any, label: str, snap: Any, on_project: Any, on_send: Any):
-        with gui.add_folder(label) as self.folder:
-            self.picture = gui.add_image(_picture(snap), format="jpeg", jpeg_quality=JPEG_QUALITY)
-            self.line = gui.add_markdown("")
-            self.project = gui.add_button("Show on the projector", icon=viser.Icon.PRESENTATION)
-            self.send = gui.add_button("Send the scene", icon=viser.Icon.SEND)
-        self.project.on_click(lambda event: on_project())
-        self.send.on_click(lambda event: on_send())
-        self.drawn: tuple | None = None  # (world, step) of the picture shown
-
-    def show(self, snap: Any, state: str) -> None:
-        key = (snap.world_key, snap.step)
-        if key != self.drawn:
-            self.drawn = key
-            self.picture.image = _picture(snap)
-        share = 100.0 * float(snap.sample.fraction_in_goal)
-        text = f"step {snap.step:,} · **{share:.0f} %** in the goal · {plain(state)}"
-        if self.line.content != text:
-            self.line.content = text
+NOBODY = "(no student yet)"
 
 
 class Wall:
@@ -57,10 +40,22 @@ class Wall:
 
     def __init__(self, gui: Any, classroom: Any, scenes: tuple[str, ...]):
         self.gui, self.classroom = gui, classroom
-        self.tiles: dict[str, Tile] = {}
+        #: Each seat's picture, with the (world, step) it shows: drawn again only when its world moved.
+        self._pictures: dict[str, tuple[tuple, Image.Image]] = {}
+        #: The labels on the wall, in the order shown (what the teacher sees).
+        self.shown: list[str] = []
+        self._drawn_key: tuple | None = None
         with gui.add_folder("Class", order=-1.0) as self.folder:
             self.link = gui.add_markdown(self._link_text(0))
             self.sort = gui.add_dropdown("Sort by", SORTS, initial_value=SORTS[0])
+            self.picture = gui.add_image(np.zeros((THUMBNAIL // 2, _width(), 3), np.uint8), format="jpeg",
+                                         jpeg_quality=JPEG_QUALITY)
+            self.student = gui.add_dropdown("Student", (NOBODY,), initial_value=NOBODY)
+            self.project = gui.add_button("Show on the projector", icon=viser.Icon.PRESENTATION, disabled=True,
+                                          hint="Your floor shows this student's world, live")
+            self.send_one = gui.add_button("Send the scene to this student", icon=viser.Icon.SEND, disabled=True)
+            self.projector = gui.add_markdown("On the projector: **your world**")
+            self.back = gui.add_button("Back to my world", icon=viser.Icon.ARROW_BACK, visible=False)
             self.scene = gui.add_dropdown("Scene to send", scenes, initial_value=scenes[0],
                                           hint="A paper case over your settings, or your world as it is now")
             self.send_all = gui.add_button("Send to everyone", icon=viser.Icon.USERS)
@@ -68,35 +63,31 @@ class Wall:
                                             hint="The same round for every student: the paper's seed, the "
                                                  "same steps; their scores ranked here")
             self.ranking = gui.add_markdown("")
-            self.projector = gui.add_markdown("On the projector: **your world**")
-            self.back = gui.add_button("Back to my world", icon=viser.Icon.ARROW_BACK, visible=False)
-            self.students = gui.add_folder("Students")  # the tiles, sorted within
         self.sort.on_update(lambda event: self.refresh())
+        self.project.on_click(lambda event: classroom.project(self._picked()))
+        self.send_one.on_click(lambda event: self._send([self._picked()], event.client))
         self.send_all.on_click(lambda event: self._send(None, event.client))
         self.challenge.on_click(lambda event: self._challenge(event.client))
         self.back.on_click(lambda event: classroom.project(None))
 
     # ------------------------------------------------------------ refresh
     def refresh(self) -> None:
-        """Every tile afresh (its picture only when its world moved), in the order chosen."""
+        """The wall afresh (each student's picture only when their world moved), in the order chosen."""
         classroom = self.classroom
         seats = [seat for seat in classroom.seats.all() if seat.identity in classroom.worlds]
-        with self.students:
-            for seat in seats:
-                if seat.identity not in self.tiles:
-                    identity = seat.identity
-                    self.tiles[identity] = Tile(
-                        self.gui, seat.label, classroom.worlds[identity].runner.latest,
-                        on_project=lambda identity=identity: classroom.project(identity),
-                        on_send=lambda identity=identity: self._send([identity], None))
         snaps = {seat.identity: classroom.worlds[seat.identity].runner.latest for seat in seats}
-        for seat in seats:
-            page = "page open" if seat.identity in classroom.page_of else "page closed"
-            self.tiles[seat.identity].show(snaps[seat.identity], page)
-        for rank, seat in enumerate(sort_seats(seats, snaps, self.sort.value)):
-            tile = self.tiles[seat.identity]
-            if tile.folder.order != float(rank):
-                tile.folder.order = float(rank)
+        ordered = sort_seats(seats, snaps, self.sort.value)
+        labels = [seat.label for seat in ordered]
+        key = tuple((seat.identity, snaps[seat.identity].world_key, snaps[seat.identity].step,
+                     seat.identity in classroom.page_of) for seat in ordered)
+        if key != self._drawn_key and ordered:
+            self._drawn_key = key
+            self.picture.image = np.asarray(self._wall(ordered, snaps))
+        self.shown = labels
+        options = tuple(seat.label for seat in seats) or (NOBODY,)
+        if tuple(self.student.options) != options:
+            self.student.options = options
+        self.project.disabled = self.send_one.disabled = not seats
         self.link.content = self._link_text(len(seats))
         projected = classroom.seats.get(classroom.projected) if classroom.projected else None
         self.projector.content = f"On the projector: **{plain(projected.label) if projected else 'your world'}**"
@@ -104,16 +95,44 @@ class Wall:
         if classroom.entrants:
             self.ranking.content = ranking_text(classroom.challenge_results())
 
+    def _wall(self, ordered: list, snaps: dict) -> Image.Image:
+        rows = (len(ordered) + COLUMNS - 1) // COLUMNS
+        cell = THUMBNAIL + CAPTION
+        wall = Image.new("RGB", (_width(), rows * (cell + GAP) - GAP), pal.BACKGROUND)
+        draw = ImageDraw.Draw(wall)
+        font = ImageFont.load_default(size=12)
+        for index, seat in enumerate(ordered):
+            snap = snaps[seat.identity]
+            x, y = (index % COLUMNS) * (THUMBNAIL + GAP), (index // COLUMNS) * (cell + GAP)
+            wall.paste(self._picture_of(seat.identity, snap), (x, y))
+            share = 100.0 * float(snap.sample.fraction_in_goal)
+            away = "" if seat.identity in self.classroom.page_of else " (away)"
+            draw.text((x + 2, y + THUMBNAIL + 3), f"{seat.label}{away}"[:22], fill=(235, 235, 240), font=font)
+            draw.text((x + 2, y + THUMBNAIL + 18), f"{share:.0f} % in goal, step {snap.step:,}"[:24],
+                      fill=(170, 175, 185), font=font)
+        return wall
+
+    def _picture_of(self, identity: str, snap: Any) -> Image.Image:
+        moved = (snap.world_key, snap.step)
+        kept = self._pictures.get(identity)
+        if kept is None or kept[0] != moved:
+            kept = self._pictures[identity] = (moved, floor_picture(snap))
+        return kept[1]
+
     def _link_text(self, count: int) -> str:
         link = self.classroom.students_link(self.classroom.app.url)
         noun = "student" if count == 1 else "students"
         return f"Students open **{plain(link)}**: each gets a world of their own. {count:,} {noun} so far."
 
     # ------------------------------------------------------------ actions
-    def _send(self, identities: list[str] | None, client: Any) -> None:
+    def _picked(self) -> str | None:
+        label = self.student.value
+        return next((seat.identity for seat in self.classroom.seats.all() if seat.label == label), None)
+
+    def _send(self, identities: list | None, client: Any) -> None:
         name = str(self.scene.value)
         scene = self.classroom.scene_named(name)
-        sent = self.classroom.send(scene, identities)
+        sent = self.classroom.send(scene, None if identities is None else [i for i in identities if i])
         if client is not None:
             client.add_notification("Scene sent", f"{name} to {len(sent)} student"
                                     f"{'' if len(sent) == 1 else 's'}.", color="blue", auto_close_seconds=5.0)
@@ -148,13 +167,17 @@ def ranking_text(rows: list) -> str:
     return "\n".join(lines)
 
 
-def _picture(snap: Any) -> np.ndarray:
-    """The construction area (where the boxes are built) and a margin, :data:`THUMBNAIL` pixels a side."""
+def floor_picture(snap: Any, size: int = THUMBNAIL) -> Image.Image:
+    """The construction area (where the boxes are built) and a margin, ``size`` pixels a side."""
     cfg = snap.world_config
     side = min(cfg.arena_size, cfg.construction_size * CONSTRUCTION_VIEW)
-    whole = int(round(THUMBNAIL * cfg.arena_size / side))
+    whole = int(round(size * cfg.arena_size / side))
     k = whole / cfg.arena_size
     left = int(round((cfg.centre - side / 2) * k))
     top = int(round(whole - (cfg.centre + side / 2) * k))
-    left, top = max(0, min(left, whole - THUMBNAIL)), max(0, min(top, whole - THUMBNAIL))
-    return np.asarray(render(snap, whole).crop((left, top, left + THUMBNAIL, top + THUMBNAIL)))
+    left, top = max(0, min(left, whole - size)), max(0, min(top, whole - size))
+    return render(snap, whole).crop((left, top, left + size, top + size))
+
+
+def _width() -> int:
+    return COLUMNS * THUMBNAIL + (COLUMNS - 1) * GAP
