@@ -112,10 +112,10 @@ def test_a_lab_lesson_with_three_students_and_the_teacher(app, browser):
     assert scores == sorted(scores, reverse=True)
     if shots:
         teacher.screenshot(path=str(Path(shots) / "class-wall-ranked-1600x1000.png"))
-        _, phone, _ = students[0]
-        phone.set_viewport_size({"width": 390, "height": 844})
-        phone.wait_for_timeout(1500)  # (a picture only: the page lays itself out for the phone)
+        phone_context, phone, _ = open_seat(app, browser, {"width": 390, "height": 844})
+        phone.wait_for_timeout(8000)  # (a picture only: the page frames its floor as it reports its shape)
         phone.screenshot(path=str(Path(shots) / "class-student-390x844.png"))
+        phone_context.close()
     for context, _, _ in students:
         context.close()
     teacher_context.close()

@@ -193,3 +193,32 @@ def test_a_student_uploads_a_goal_to_their_own_world_and_not_to_the_teachers(app
     wait_until(lambda: refusals(app, client_id) >= 2, what="the upload to the teacher's button refused")
     assert app.runner.latest.shape_name != "tri2.txt"
     page.close()
+
+
+def steps_a_second(runner, seconds: float) -> float:
+    start, began = runner.latest.step, time.monotonic()
+    time.sleep(seconds)  # (a measuring window, not a wait for a condition)
+    return (runner.latest.step - start) / (time.monotonic() - began)
+
+
+@pytest.mark.slow
+def test_a_student_who_floods_for_seconds_slows_only_their_own_world(app):
+    """A student's page sends values to its own speed slider as fast as its socket takes them, for 5 s,
+    from a process of its own: another student's world and the teacher's step on at about their pace."""
+    from tests.flooding import flood_result, start_flood
+
+    flooder, flooder_page, _ = new_student(app)
+    other, other_page, _ = new_student(app)
+    worlds = (app.lesson.worlds[other].runner, app.runner)
+    before = [steps_a_second(runner, 2.0) for runner in worlds]
+    speed = uuid_of(app.lesson.desks[flooder].panel.run.speed)
+    flooder_page.close()  # the flood's own connection takes the seat's page, as a reload would
+    wait_until(lambda: flooder not in app.lesson.desks, what="the page to leave")
+    flood = start_flood(app.port, "values", 1, 5.0, own_page(app), uuid=speed, path=f"/seat/{flooder}")
+    wait_until(lambda: flooder in app.lesson.desks, what="the flooding page's desk")
+    during = [steps_a_second(runner, 3.0) for runner in worlds]
+    sent, closed = flood_result(flood)
+    assert sent > 1000
+    for was, now in zip(before, during):
+        assert now >= 0.6 * was, f"{now:.0f} steps/s during the flood, {was:.0f} before"
+    other_page.close()
