@@ -33,23 +33,26 @@ def app():
     a.stop()
 
 
-def open_seat(app, browser, viewport: dict) -> tuple:
-    """A student's browser opens the students' link: their context, page and seat."""
-    context = browser.new_context(viewport=viewport)
-    page = context.new_page()
-    page.goto(f"http://127.0.0.1:{app.port}/join")
-    assert re.search(r"/seat/[A-Za-z0-9_-]{32}$", page.url), page.url
-    identity = page.url.rsplit("/", 1)[1]
-    page.get_by_text("Goal shape", exact=True).wait_for()
-    wait_until(lambda: identity in app.lesson.desks, what="the student's desk")
-    return context, page, identity
+def open_seats(app, browser, viewport: dict, count: int = 1) -> list[tuple]:
+    """Students' browsers open the students' link, all at once: each one's context, page and seat."""
+    opened = []
+    for _ in range(count):
+        context = browser.new_context(viewport=viewport)
+        page = context.new_page()
+        page.goto(f"http://127.0.0.1:{app.port}/join")
+        assert re.search(r"/seat/[A-Za-z0-9_-]{32}$", page.url), page.url
+        opened.append((context, page, page.url.rsplit("/", 1)[1]))
+    for _, page, identity in opened:
+        page.get_by_text("Goal shape", exact=True).wait_for()
+        wait_until(lambda: identity in app.lesson.desks, what="the student's desk")
+    return opened
 
 
 def test_a_lab_lesson_with_three_students_and_the_teacher(app, browser):
     shots = os.environ.get("PHOTOTAXIS_SCREENSHOTS")
     started = time.monotonic()
     lesson = app.lesson
-    students = [open_seat(app, browser, {"width": 1100, "height": 760}) for _ in range(3)]
+    students = open_seats(app, browser, {"width": 1100, "height": 760}, 3)
     identities = [identity for _, _, identity in students]
     assert len(set(identities)) == 3 and set(lesson.worlds) == set(identities)
     options = [o for o in lesson.desks[identities[0]].panel.shape.shape.options if o != app.runner.latest.shape_name]
@@ -112,7 +115,7 @@ def test_a_lab_lesson_with_three_students_and_the_teacher(app, browser):
     assert scores == sorted(scores, reverse=True)
     if shots:
         teacher.screenshot(path=str(Path(shots) / "class-wall-ranked-1600x1000.png"))
-        phone_context, phone, _ = open_seat(app, browser, {"width": 390, "height": 844})
+        [(phone_context, phone, _)] = open_seats(app, browser, {"width": 390, "height": 844})
         phone.wait_for_timeout(8000)  # (a picture only: the page frames its floor as it reports its shape)
         phone.screenshot(path=str(Path(shots) / "class-student-390x844.png"))
         phone_context.close()
