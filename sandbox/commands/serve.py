@@ -320,8 +320,9 @@ class App:
     def stop(self) -> None:
         stop_workers(self.events, self.panel)
         self.events.stop()  # no event runs from here on: what follows owns the app's state alone
-        if self.lesson is not None:
-            self.lesson.stop()
+        lesson = getattr(self, "lesson", None)  # (an app stopped while it was built may have none yet)
+        if lesson is not None:
+            lesson.stop()
         self.comparison.end()
         self.runner.stop()
         _stop_quietly(self.server)

@@ -157,10 +157,11 @@ class Classroom:
         event thread."""
         def build() -> None:
             try:
+                # Built here (it blocks), started once its desk is on the page: the page meets it at step 0,
+                # playing, with nothing to offer ("Joining mid-run" is for a page that comes back).
                 runner = self.make_runner(scene.config, shape=scene.shape, fps=self.fps,
                                           steps_per_frame=self.steps_per_frame, playing=True,
                                           deliver=self.events.post)
-                runner.start()
             except Exception as exc:  # noqa: BLE001 - said on the student's page, the class goes on
                 log.warning("a student's world could not be built: %s", exc)
                 self.events.post(self._not_built, identity, str(exc))
@@ -192,7 +193,10 @@ class Classroom:
                 desk.close()
                 desk.clear()
             threading.Thread(target=old.runner.stop, name="phototaxis-seat-stop", daemon=True).start()
-        self._sit(identity)
+        try:
+            self._sit(identity)
+        finally:
+            runner.start()
         if scene is not None and old is not None and identity in self.page_of:
             self.page_of[identity].add_notification("A new scene from your teacher", f"Your world starts "
                                                     f"again: {scene.name}.", color="blue",
