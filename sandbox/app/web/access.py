@@ -35,7 +35,9 @@ The rules follow Jupyter's server:
   websocket (which viser opens at the page's path) present it; it is taken only
   when the server issued it for the same address (``Seats.check``); the grant
   is a seat's: its page acts on its own world only (the gate lets one page hold a
-  seat at a time, the inbox looks up its controls in its own GUI alone).
+  seat at a time, the inbox looks up its controls in its own GUI alone). In a
+  lesson no page watches the teacher's: a page without the token that asks
+  ``/`` is sent to the students' link, and its websocket is refused.
 - **Light programs** run Python files on the server: only a controlling page
   on this machine may load them (:meth:`Access.local_page`), unless the server
   was started with ``--allow-programs``. It is decided from the connection's
@@ -244,6 +246,11 @@ class Access:
         if self.seats is not None and _seat_path(path) is not None:
             return self._seat(_seat_path(path), address, websocket)
         authorised = self.token is None or any(_same_secret(token, self.token) for token in presented)
+        if not authorised and self.seats is not None:  # a lesson: a page without the token is a student's
+            if websocket:
+                return Decision(status=403, reason="open the students' link: each student gets a world of their own")
+            if urlsplit(path).path == "/":
+                return Decision(grant=Grant(WATCH, address=address), location=JOIN_PATH)
         if not authorised and self.viewers == "none":
             return Decision(status=403, reason="this sandbox needs the link with its token (?token=...)")
         role = CONTROL if authorised else WATCH

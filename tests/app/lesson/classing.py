@@ -27,10 +27,10 @@ def class_app(*, seats=None, round_steps: int | None = None, trust_proxy: bool =
                **kwargs).start()
 
 
-def join(port: int, headers: dict | None = None) -> tuple[int, str]:
+def join(port: int, headers: dict | None = None, path: str = "/join") -> tuple[int, str]:
     """Ask the students' link: the status, and the seat's address it sends the page on to."""
     connection = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
-    connection.request("GET", "/join", headers=headers or {})
+    connection.request("GET", path, headers=headers or {})
     response = connection.getresponse()
     response.read()
     return response.status, response.getheader("Location") or ""
