@@ -106,6 +106,7 @@ class Classroom:
     def arrive(self, client: Any, grant: Any) -> None:
         """A seat's page connected: its world (built from the teacher's scene the first time), its desk."""
         identity = grant.seat
+        self.seats.claim(identity)
         self.page_of[identity] = client
         world = self.worlds.get(identity)
         if world is None:

@@ -12,7 +12,8 @@ from __future__ import annotations
 import itertools
 import secrets
 import threading
-from dataclasses import dataclass, field
+import time
+from dataclasses import dataclass
 
 from sandbox.app.web.access import address_group
 
@@ -20,6 +21,9 @@ from sandbox.app.web.access import address_group
 #: under one address): past these, the students' link answers that the class is full.
 MOST_SEATS = 40
 MOST_SEATS_PER_ADDRESS = 40
+#: A seat whose page never connected is given back after this long (s): a student who opens the
+#: students' link again and again takes one seat, not the class's.
+UNCLAIMED_SECONDS = 120.0
 
 
 @dataclass
@@ -30,8 +34,8 @@ class Seat:
     group: str
     number: int
     label: str = ""
-    #: What the app keeps of this seat (its world, its page): the classroom's, on the event thread.
-    state: dict = field(default_factory=dict)
+    issued: float = 0.0  # time.monotonic() when issued
+    claimed: bool = False  # a page connected to it (its world is made): it is kept
 
 
 class Seats:
@@ -45,17 +49,28 @@ class Seats:
         # thread (finding a page's seat, listing the class for the wall).
         self._lock = threading.Lock()
 
-    def issue(self, address: str) -> str | None:
+    def issue(self, address: str, now: float | None = None) -> str | None:
         group = address_group(address)
+        now = time.monotonic() if now is None else now
         with self._lock:
+            for identity in [i for i, seat in self._seats.items()
+                             if not seat.claimed and now - seat.issued > UNCLAIMED_SECONDS]:
+                del self._seats[identity]  # never used: its place goes back to the class
             if len(self._seats) >= self.most:
                 return None
             if sum(seat.group == group for seat in self._seats.values()) >= self.most_per_address:
                 return None
             identity = secrets.token_urlsafe(24)
             number = next(self._numbers)
-            self._seats[identity] = Seat(identity, group, number, f"Student {number}")
+            self._seats[identity] = Seat(identity, group, number, f"Student {number}", issued=now)
             return identity
+
+    def claim(self, identity: str) -> None:
+        """A page connected to the seat (on the event thread): it is kept from now on."""
+        with self._lock:
+            seat = self._seats.get(identity)
+            if seat is not None:
+                seat.claimed = True
 
     def check(self, identity: str, address: str) -> str:
         with self._lock:

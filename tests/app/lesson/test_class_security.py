@@ -12,7 +12,7 @@ from concurrent.futures import ThreadPoolExecutor
 import pytest
 import websockets.exceptions
 
-from sandbox.app.lesson.seats import MOST_SEATS, Seats
+from sandbox.app.lesson.seats import MOST_SEATS, UNCLAIMED_SECONDS, Seats
 from sandbox.app.web.access import SEAT_PATTERN
 from sandbox.app.web.rates import CONTROLS
 from tests.app.lesson.classing import (TOKEN, class_app, join, new_student, own_page, refusals, seat_of, student,
@@ -224,3 +224,12 @@ def test_a_student_who_floods_for_seconds_slows_only_their_own_world(app):
     for was, now in zip(before, during):
         assert now >= 0.6 * was, f"{now:.0f} steps/s during the flood, {was:.0f} before"
     other_page.close()
+
+
+def test_a_seat_never_used_goes_back_to_the_class_and_a_used_one_stays():
+    seats = Seats(most=2)
+    used, unused = seats.issue("10.0.0.1", now=0.0), seats.issue("10.0.0.1", now=0.0)
+    seats.claim(used)
+    assert seats.issue("10.0.0.1", now=UNCLAIMED_SECONDS - 1) is None  # the class is full
+    newcomer = seats.issue("10.0.0.1", now=UNCLAIMED_SECONDS + 1)  # the unused seat was given back
+    assert newcomer and seats.get(unused) is None and seats.get(used) is not None
