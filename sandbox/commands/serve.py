@@ -201,15 +201,15 @@ class App:
 
     def _on_connect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
+        grant = self.gate.grant(client.client_id)
+        if self.lesson is not None and grant is not None and grant.seat:
+            self.lesson.arrive(client, grant)  # a student's page: a world of its own
+            return
         failed = getattr(self.runner, "failed", None)
         if failed:
             client.add_notification("The simulation cannot start", failed[0].upper() + failed[1:] + ".",
                                     color="red", auto_close_seconds=None)
         # Its title card at step 0, or (if it may control the simulation) Start over mid-run.
-        grant = self.gate.grant(client.client_id)
-        if self.lesson is not None and grant is not None and grant.seat:
-            self.lesson.arrive(client, grant)  # a student's page: a world of its own
-            return
         self.panel.welcome(client, controls=grant is not None and grant.controls)
         if self.auto_paused:  # after the page's own parts exist: the frames it then gets are for it
             self.auto_paused = False
