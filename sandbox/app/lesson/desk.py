@@ -59,6 +59,9 @@ class Desk:
         self.comparison = Comparison(page, world.lockstep, world.make_runner, on_layout=self._reframe, events=events)
         self.panel = Panel(page, world.runner, self.view, self.comparison, events=events, allow_programs=False,
                            may_load_programs=lambda client: False, default_view=WHOLE_ARENA)
+        # A recording is the shared scene's (viser serializes the server's scene only): the teacher's.
+        self.panel.record.button.disabled = True
+        self.panel.record.status.content = "Recording is on your teacher's page."
         self.panel.welcome(client, controls=True)
         self._fit_until, self._fitted = time.monotonic() + FIT_SECONDS, None
         client.camera.on_update(lambda camera: self._fit())
