@@ -62,11 +62,11 @@ def client_frames(messages: list[dict]) -> bytes:
 
 
 def flood(port: int, kind: str, connections: int, seconds: float, headers: dict[str, str],
-          uuid: str = "") -> tuple[int, int]:
+          uuid: str = "", path: str = "/") -> tuple[int, int]:
     """Flood from this process: the messages written to the sockets in all (the server reads what its
     budgets allow; the rest waits in the sockets), and how many connections the server closed while
     the flood went on."""
-    clients = [RawClient(port, headers) for _ in range(connections)]
+    clients = [RawClient(port, headers, path=path) for _ in range(connections)]
     for client in clients:
         client.say_hello()
     messages = flood_messages(kind, uuid)
@@ -104,12 +104,15 @@ def flood(port: int, kind: str, connections: int, seconds: float, headers: dict[
 
 
 def start_flood(port: int, kind: str, connections: int, seconds: float, headers: dict[str, str],
-                uuid: str = "") -> subprocess.Popen:
-    """:func:`flood` in a process of its own; ``.communicate()`` gives its line."""
+                uuid: str = "", path: str = "/") -> subprocess.Popen:
+    """:func:`flood` in a process of its own (``path``: the page's address, a student's seat);
+    ``.communicate()`` gives its line."""
     args = [sys.executable, "-m", "tests.flooding", str(port), kind, str(connections), str(seconds)]
     args += [f"{name}={value}" for name, value in headers.items()]
     if uuid:
         args.append(f"uuid={uuid}")
+    if path != "/":
+        args.append(f"path={path}")
     return subprocess.Popen(args, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -184,5 +187,6 @@ if __name__ == "__main__":
     port_, kind_, connections_, seconds_, *pairs = sys.argv[1:]
     options = dict(pair.split("=", 1) for pair in pairs)
     uuid_ = options.pop("uuid", "")
-    total, shut = flood(int(port_), kind_, int(connections_), float(seconds_), options, uuid_)
+    path_ = options.pop("path", "/")
+    total, shut = flood(int(port_), kind_, int(connections_), float(seconds_), options, uuid_, path_)
     print(f"sent {total} closed {shut}")

@@ -4,7 +4,10 @@
 process of its own: :class:`~sandbox.app.world.child.ProcessRunner`), a
 :class:`~sandbox.app.view.scene.SceneView` (what is drawn) and a
 :class:`~sandbox.app.panel.Panel` (the controls), on one viser server.
-Every connected browser sees the same simulation and the same panel.
+Every connected browser sees the same simulation and the same panel; with a
+``lesson`` (``serve --class``: :class:`~sandbox.app.lesson.classroom.Classroom`),
+a page that holds a seat gets a world of its own instead, and the teacher's
+panel a wall of them.
 """
 
 from __future__ import annotations
@@ -20,7 +23,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from sandbox.app.web.access import WATCH, Access, is_loopback_host, is_shared, well_formed_token
+from sandbox.app.lesson.classroom import Classroom
+from sandbox.app.lesson.pages import TeacherPages
+from sandbox.app.web.access import WATCH, Access, is_loopback_host, is_shared, new_token, well_formed_token
 from sandbox.app.view.partner import Comparison
 from sandbox.app.world.lockstep import Lockstep, side_config
 from sandbox.app.web.events import EventQueue, QueueStopped
@@ -68,8 +73,9 @@ class App:
                  process: bool = True, keep_running: bool = False, idle_pause_seconds: float = IDLE_PAUSE_SECONDS,
                  controller: str | None = None, allow_programs: bool = False, access: Access | None = None,
                  program_time_limit: float = DEFAULT_LIMIT, whole_arena: bool = True,
-                 compare: tuple[Config, str] | None = None, design: Any = None):
-        """``compare``: start in compare mode against a world of this configuration (its goal from the
+                 compare: tuple[Config, str] | None = None, design: Any = None, lesson: Any = None):
+        """``lesson``: class mode (a :class:`~sandbox.app.lesson.classroom.Classroom`, whose seats the access
+        knows): the pages that hold a seat are the lesson's, the others this world's; ``compare``: start in compare mode against a world of this configuration (its goal from the
         configuration), named so in the Compare folder (``serve --compare``); ``design``: start on a design
         (sandbox.model.design.Design), lit by its recorded light program (``serve --design``)."""
         if isinstance(shape, str) and shape == "from-config":
@@ -115,9 +121,16 @@ class App:
             # Loading a program runs a Python file on this machine: every page may where the server is for
             # this machine alone or --allow-programs, else only a page on this machine; the gate decides per page.
             offered = self.access.allow_programs or not is_shared(host)
-            self.panel = Panel(self.server, self.runner, self.view, self.comparison, events=self.events,
+            self.lesson = lesson
+            #: The server as this world's panel sees it: in class mode, without the students' pages.
+            self.pages = TeacherPages(self.server, lesson.seated) if lesson is not None else self.server
+            #: The student's frame the floor shows last (the lesson's projector), or None: this world's.
+            self.on_projector: Snapshot | None = None
+            self.panel = Panel(self.pages, self.runner, self.view, self.comparison, events=self.events,
                                allow_programs=offered, may_load_programs=self.gate.may_load_programs,
                                default_view=WHOLE_ARENA if whole_arena else PRESENTER)
+            if lesson is not None:
+                lesson.attach(self)  # its wall goes in the panel
         except BaseException:
             self.events.stop()
             _stop_quietly(self.server)  # do not leave a half-built server listening
@@ -165,26 +178,38 @@ class App:
         # The scene and the panel's read-outs of one snapshot in one batch: the page applies a
         # batch at once, so what it shows comes from one step.
         with self.server.atomic():
-            self.view.update(snap)
+            if self.on_projector is None:
+                self.view.update(snap)
             self.comparison.draw()  # compare mode's second world, in the same picture
             self.panel.update(snap)
         self.panel.inspector.draw(snap)  # each viewer's own marks, in its own messages
         self.panel.on_frame_drawn()
         self.frames_drawn += 1
 
+    def project(self, snap: Snapshot | None) -> None:
+        """The floor shows ``snap`` (a student's world, class mode's projector), or this world again (None)."""
+        self.on_projector = snap
+        with self.server.atomic():
+            self.view.update(snap if snap is not None else self.runner.latest)
+
     def _on_disconnect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
+        if self.lesson is not None:
+            self.lesson.leave(client.client_id)
         self._fitting.pop(client.client_id, None)
         self.panel.farewell(client.client_id)
 
     def _on_connect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
+        grant = self.gate.grant(client.client_id)
+        if self.lesson is not None and grant is not None and grant.seat:
+            self.lesson.arrive(client, grant)  # a student's page: a world of its own
+            return
         failed = getattr(self.runner, "failed", None)
         if failed:
             client.add_notification("The simulation cannot start", failed[0].upper() + failed[1:] + ".",
                                     color="red", auto_close_seconds=None)
         # Its title card at step 0, or (if it may control the simulation) Start over mid-run.
-        grant = self.gate.grant(client.client_id)
         self.panel.welcome(client, controls=grant is not None and grant.controls)
         if self.auto_paused:  # after the page's own parts exist: the frames it then gets are for it
             self.auto_paused = False
@@ -233,13 +258,13 @@ class App:
         self.panel.framing.offset = offset
         with self.server.atomic():  # beside a second world, the caption goes over the construction wall
             self.view.set_compared(offset, self.runner.latest)
-        for client in list(self.server.get_clients().values()):
+        for client in list(self.pages.get_clients().values()):
             if client.client_id not in self.panel.inspector.followers:
                 self.panel.framing.apply(client)
 
     def _on_partner_crash(self, why: str) -> None:
         what = re.split("; (?:restarting|back to)", why)[0]  # what comes next is compare mode's end
-        for client in self.server.get_clients().values():
+        for client in self.pages.get_clients().values():
             client.add_notification("The compared world stopped", what[0].upper() + what[1:]
                                     + ". Compare mode has ended; the running world goes on alone.", color="red",
                                     auto_close_seconds=20.0)
@@ -247,7 +272,7 @@ class App:
     def _on_crash(self, why: str) -> None:
         given_up = self.runner.failed is not None
         title = "The simulation cannot start" if given_up else "The simulation stopped"
-        for client in self.server.get_clients().values():
+        for client in self.pages.get_clients().values():
             client.add_notification(title, why[0].upper() + why[1:] + ".", color="red",
                                     auto_close_seconds=None if given_up else 20.0)
 
@@ -288,11 +313,16 @@ class App:
                 raise UserError(f"the compared world cannot start: {exc}") from None
         self.events.every(1.0, self._check_viewers)
         self.events.every(PACE_SNAPSHOTS_EVERY, self._pace_snapshots)
+        if self.lesson is not None:
+            self.lesson.start()
         return self
 
     def stop(self) -> None:
         stop_workers(self.events, self.panel)
         self.events.stop()  # no event runs from here on: what follows owns the app's state alone
+        lesson = getattr(self, "lesson", None)  # (an app stopped while it was built may have none yet)
+        if lesson is not None:
+            lesson.stop()
         self.comparison.end()
         self.runner.stop()
         _stop_quietly(self.server)
@@ -343,6 +373,10 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                    help="for a class: wait at step 0 until someone presses Play, and frame each new page on the "
                         "construction area, where the boxes are built (the Run folder's View buttons switch to "
                         "the whole arena)")
+    p.add_argument("--class", dest="class_mode", action="store_true",
+                   help="a lab lesson: prints two links, the teacher's (with the token) and the students'; "
+                        "each student who opens theirs gets a world of their own, started from the teacher's "
+                        "scene, and the teacher's panel shows every world on its Class wall (docs/browser.md)")
     p.add_argument("--steps-per-frame", type=int, default=25, metavar="N",
                    help="speed: world steps between two frames (default 25: 750 steps/s, 25x real time; "
                         "100: as fast as the machine can)")
@@ -432,13 +466,20 @@ def _app_from_args(args: argparse.Namespace) -> App:
     if not 1 <= args.fps <= 240:
         raise UserError("--fps must be between 1 and 240")
     token = args.token if args.token is not None else os.environ.get("PHOTOTAXIS_TOKEN") or None
+    class_mode = getattr(args, "class_mode", False)
+    if class_mode and args.compare:
+        raise UserError("--class starts every student from the teacher's world; leave out --compare")
     if token is not None and (len(token) < 8 or not well_formed_token(token)):
         raise UserError("--token must be at least 8 characters of printable ASCII, without spaces, quotes, "
                         "commas, semicolons or backslashes")
+    if class_mode and token is None:
+        token = new_token()  # in a lesson the teacher's page needs the token, even on this machine alone
+    lesson = Classroom() if class_mode else None
     try:
         access = Access.for_server(args.host, token=token, viewers=args.viewers, allow_programs=args.allow_programs,
                                    allow_hosts=args.allow_host, allow_origins=args.allow_origin,
                                    trust_proxy=args.trust_proxy)
+        access.seats = lesson.seats if lesson is not None else None
     except ValueError as exc:
         raise UserError(str(exc)) from None
     controller = controller_from_args(args)[0]
@@ -450,7 +491,7 @@ def _app_from_args(args: argparse.Namespace) -> App:
                    playing=not (args.paused or args.classroom), whole_arena=not args.classroom,
                    keep_running=args.keep_running, controller=controller, access=access,
                    program_time_limit=program_time_limit(args), compare=compare,
-                   shape=design.shape if design else "from-config", design=design)
+                   shape=design.shape if design else "from-config", design=design, lesson=lesson)
     except OSError as exc:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}") from None
     except SimulationCrashed as exc:  # its first world could not be built (out of memory, say)
@@ -471,6 +512,9 @@ def _check_goal(config: Config, vertices: Any, name: str) -> None:
 
 def _print_address(app: App, host: str) -> None:
     print(f"Phototaxis sandbox running at {app.url}  (Ctrl+C to stop)", flush=True)
+    if app.lesson is not None:
+        print(f"  the students' link: {app.lesson.students_link(app.url)}  (a world each; the link above is "
+              f"the teacher's)", flush=True)
     if app.access.token and is_shared(host):
         watchers = "may watch" if app.access.viewers == WATCH else "are refused"
         print(f"  shared beyond this machine: pages without the token {watchers}; only pages with it control",

@@ -28,6 +28,16 @@ The rules follow Jupyter's server:
   non-ASCII or empty), among any number of good ones, is refused with 403.
   Without the token a page may still *watch* (``viewers="watch"``, the
   default), or is refused (``"none"``).
+- **Seats** (``serve --class``): a page that asks the students' link
+  (:data:`JOIN_PATH`) is sent on to an address of its own, ``/seat/<identity>``
+  (:data:`SEAT_PATH`), whose identity the server issues (``secrets.token_urlsafe``,
+  :class:`Seats`' ``issue``) for the page's address. The page and its
+  websocket (which viser opens at the page's path) present it; it is taken only
+  when the server issued it for the same address (``Seats.check``); the grant
+  is a seat's: its page acts on its own world only (the gate lets one page hold a
+  seat at a time, the inbox looks up its controls in its own GUI alone). In a
+  lesson no page watches the teacher's: a page without the token that asks
+  ``/`` is sent to the students' link, and its websocket is refused.
 - **Light programs** run Python files on the server: only a controlling page
   on this machine may load them (:meth:`Access.local_page`), unless the server
   was started with ``--allow-programs``. It is decided from the connection's
@@ -49,12 +59,17 @@ import re
 import secrets
 import socket
 from dataclasses import dataclass, field
-from typing import Iterable, Mapping
+from typing import Iterable, Mapping, Protocol
 from urllib.parse import parse_qs, urlsplit
 
 LOOPBACK_NAMES = frozenset({"localhost"})
 WILDCARD_HOSTS = frozenset({"0.0.0.0", "::", ""})
-CONTROL, WATCH = "control", "watch"
+CONTROL, WATCH, SEAT = "control", "watch", "seat"
+#: The students' link (``serve --class``), and where each student's page lives: ``/seat/<identity>``.
+JOIN_PATH = "/join"
+SEAT_PATH = "/seat/"
+#: A seat's identity as the server issues it (``secrets.token_urlsafe(24)``: 32 of these characters).
+SEAT_PATTERN = re.compile(r"[A-Za-z0-9_-]{32}")
 #: A token is a cookie's value: RFC 6265's cookie-octets (printable ASCII but for space, ", comma, ; and backslash).
 TOKEN_PATTERN = re.compile(r"[\x21\x23-\x2B\x2D-\x3A\x3C-\x5B\x5D-\x7E]{1,256}")
 #: Headers a reverse proxy adds: a request that carries one came through a proxy (or says so).
@@ -118,15 +133,34 @@ def address_group(address: str) -> str:
 
 @dataclass(frozen=True)
 class Grant:
-    """What one websocket connection may do: ``role`` is "control" or "watch"."""
+    """What one websocket connection may do: ``role`` is "control", "watch" or "seat" (a student's page,
+    which acts on the world of its ``seat`` alone)."""
 
     role: str
     programs: bool = False  # may load light programs (Python files on the server)
     address: str = ""  # the page's address: the peer's, or behind a trusted proxy the one it forwarded
+    seat: str = ""  # a seat's identity (role "seat")
 
     @property
     def controls(self) -> bool:
+        """Controls the shared world (the token's page)."""
         return self.role == CONTROL
+
+    @property
+    def acts(self) -> bool:
+        """May send controls at all: the token's page, or a seat's on its own world."""
+        return self.role in (CONTROL, SEAT)
+
+
+class Seats(Protocol):
+    """The class's seats as the gate asks them (``serve --class``; kept by sandbox.app.lesson.seats):
+    called on viser's event loop."""
+
+    def issue(self, address: str) -> str | None:
+        """A new seat's identity for a page at ``address``, or None when the class is full."""
+
+    def check(self, identity: str, address: str) -> str:
+        """Why a page at ``address`` may not take the seat ``identity`` ('' when it may)."""
 
 
 @dataclass(frozen=True)
@@ -138,6 +172,10 @@ class Decision:
     reason: str = ""
     #: The token the request brought in its query: answer with a cookie that keeps it.
     store_token: bool = False
+    #: Send the page on to this path of ours (a new seat's address).
+    location: str = ""
+    #: Serve the page that lives at ``/`` (a seat's address is the same page).
+    page: bool = False
 
     @property
     def refused(self) -> bool:
@@ -157,6 +195,8 @@ class Access:
     allowed_origins: frozenset = field(default_factory=frozenset)
     #: A reverse proxy on this machine sets X-Forwarded-For: believe its last address (--trust-proxy).
     trust_proxy: bool = False
+    #: The class's seats (``serve --class``), or None: no page takes a seat.
+    seats: Seats | None = None
 
     @classmethod
     def for_server(cls, listen_host: str, *, token: str | None = None, viewers: str = WATCH,
@@ -202,14 +242,36 @@ class Access:
         if not all(well_formed_token(token) for token in presented):
             return Decision(status=403, reason="the token in this request is malformed: use the link printed "
                                                "when the server started")
+        address = self.client_address(headers, peer, server_address)
+        if self.seats is not None and _seat_path(path) is not None:
+            return self._seat(_seat_path(path), address, websocket)
         authorised = self.token is None or any(_same_secret(token, self.token) for token in presented)
+        if not authorised and self.seats is not None:  # a lesson: a page without the token is a student's
+            if websocket:
+                return Decision(status=403, reason="open the students' link: each student gets a world of their own")
+            if urlsplit(path).path == "/":
+                return Decision(grant=Grant(WATCH, address=address), location=JOIN_PATH)
         if not authorised and self.viewers == "none":
             return Decision(status=403, reason="this sandbox needs the link with its token (?token=...)")
         role = CONTROL if authorised else WATCH
         programs = role == CONTROL and (self.allow_programs or self.local_page(headers, peer, server_address))
         store = authorised and self.token is not None and bool(_query_tokens(path))
-        address = self.client_address(headers, peer, server_address)
         return Decision(grant=Grant(role, programs, address), store_token=store)
+
+    def _seat(self, identity: str, address: str, websocket: bool) -> Decision:
+        """A request for the students' link (``identity`` empty) or for a seat's address."""
+        assert self.seats is not None
+        if not identity:
+            if websocket:
+                return Decision(status=403, reason="open the students' link in a browser")
+            issued = self.seats.issue(address)
+            if issued is None:
+                return Decision(status=503, reason="the class is full; ask your teacher")
+            return Decision(grant=Grant(SEAT, address=address, seat=issued), location=SEAT_PATH + issued)
+        why = self.seats.check(identity, address) if SEAT_PATTERN.fullmatch(identity) else "no such seat"
+        if why:
+            return Decision(status=403, reason=f"{why}: open the students' link again for a world of your own")
+        return Decision(grant=Grant(SEAT, address=address, seat=identity), page=not websocket)
 
     def client_address(self, headers: Mapping[str, str], peer: str, server_address: str = "") -> str:
         """The page's address: behind a trusted proxy the one it forwarded, else the peer's."""
@@ -361,6 +423,16 @@ def _origin_key(origin: str) -> str | None:
 
 def _bracketed(host: str) -> str:
     return f"[{host}]" if ":" in host and not host.startswith("[") else host
+
+
+def _seat_path(path: str) -> str | None:
+    """The seat a path names ('' for the students' link itself), or None for any other path."""
+    plain = urlsplit(path).path
+    if plain in (JOIN_PATH, JOIN_PATH + "/"):
+        return ""
+    if plain.startswith(SEAT_PATH):
+        return plain[len(SEAT_PATH):].rstrip("/") or "-"
+    return None
 
 
 def _query_tokens(path: str) -> list[str]:

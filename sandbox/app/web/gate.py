@@ -31,7 +31,9 @@ and :func:`start_server` refuses to start on a viser that lacks any):
 4. **The shared scene's windows.** Each connection's windows of the
    broadcast buffer pass through :class:`sandbox.app.web.pacing.Pacer`, which
    holds them for a page until it reports drawing the last (the report is
-   an address this gate answers, behind the same checks as the page).
+   an address this gate answers, behind the same checks as the page). A
+   seat's page (``serve --class``) is sent none of the shared scene and GUI,
+   only the marker that ends the replay: everything it shows is its own.
 
 The page is not a boundary: everything a control can trigger is checked here
 or in the callback, whatever the page shows.
@@ -44,6 +46,7 @@ every message's check); the app's event thread asks it a page's grant, and
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import http
 import io
 import logging
@@ -142,10 +145,17 @@ class Gate:
             return connection.respond(http.HTTPStatus.NO_CONTENT if known else http.HTTPStatus.NOT_FOUND, "")
         if upgrade:
             self._handshaken[connection] = decision.grant
-            rates.track(connection, decision.grant.controls)  # its budgets, from its first message
-            limit = CONTROL_MESSAGE_BYTES if decision.grant.controls else WATCH_MESSAGE_BYTES
+            rates.track(connection, decision.grant.acts)  # its budgets, from its first message
+            limit = CONTROL_MESSAGE_BYTES if decision.grant.acts else WATCH_MESSAGE_BYTES
             connection.protocol.max_message_size = limit
             return None
+        if decision.location:  # a new seat: the page goes on to its own address
+            response = connection.respond(http.HTTPStatus.FOUND, "")
+            response.headers["Location"] = decision.location  # ours: a path made here
+            response.headers["Cache-Control"] = "no-store"
+            return response
+        if decision.page:  # a seat's address is the page that lives at /
+            request = dataclasses.replace(request, path="/")
         if decision.store_token:  # keep the token in a cookie and take it out of the address bar
             response = connection.respond(http.HTTPStatus.FOUND, "")
             response.headers["Location"] = redirect_target(request.path)  # ours: never another site
@@ -166,7 +176,13 @@ class Gate:
             return "too many connections; try again later"
         if grant.controls:
             return ""
-        watching = [g for g in grants if not g.controls]
+        if grant.seat:  # one page at a time holds a seat; the seats themselves are counted as they are issued
+            if any(g.seat == grant.seat for g in grants):
+                return "this world is open in another page; close it there first"
+            if sum(1 for g in grants if not g.controls) >= MAX_CONNECTIONS - TOKEN_RESERVE:
+                return "too many pages are open; try again later"
+            return ""
+        watching = [g for g in grants if not g.controls and not g.seat]
         if len(watching) >= MAX_CONNECTIONS - TOKEN_RESERVE:
             return "too many pages are watching; try again later"
         group = address_group(grant.address)
@@ -183,8 +199,15 @@ class Gate:
         viser_seam.on_connections(server, self._on_connect, self._on_disconnect)
         viser_seam.guard_messages(server, lambda client_id, message:
                                   inbox.admit(client_id, self.grant(client_id), message))
-        viser_seam.pace_windows(server, self.pacer.hold_windows)
+        viser_seam.pace_windows(server, self._windows)
         self.ready = True
+
+    def _windows(self, windows: Any, client_id: int, full: int) -> Any:
+        """A connection's windows of the shared scene: paced, or for a seat's page, none of it."""
+        grant = self.grant(client_id)
+        if grant is not None and grant.seat:
+            return _replay_marker_only(windows)
+        return self.pacer.hold_windows(windows, client_id, full)
 
     def grant(self, client_id: int) -> Grant | None:
         with self._lock:
@@ -280,6 +303,14 @@ def start_server(access: Access, *, host: str, port: int, label: str, verbose: b
         server.stop()
         raise
     return server, gate
+
+
+async def _replay_marker_only(windows: Any) -> Any:
+    """Of the shared buffer's windows, only the marker that ends the replay (the page waits for it)."""
+    async for window in windows:
+        kept = [message for message in window if isinstance(message, viser_seam.messages.ReplayDoneMessage)]
+        if kept:
+            yield kept
 
 
 def _one_list(headers: Any, name: str) -> None:

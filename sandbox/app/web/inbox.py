@@ -107,8 +107,12 @@ class Inbox:
 
     # ---------------------------------------------------------------- entry
     def admit(self, client_id: int, grant: Grant | None, message: Any) -> bool:
-        """True when viser may act on ``message``; uploads are handled here (False)."""
+        """True when viser may act on ``message``; uploads are handled here (False). A seat's page
+        (``serve --class``) reaches none of the shared handlers (the teacher's GUI and floor): its
+        messages go to its own page's handlers only, checked there (:meth:`admit_local`)."""
         try:
+            if grant is not None and grant.seat and not isinstance(message, _UPLOADS):
+                return False
             if isinstance(message, _UPLOADS):
                 self._check_sender(client_id, grant, message)
                 self._upload(client_id, message)
@@ -131,10 +135,26 @@ class Inbox:
         has already counted it and told the page when it was refused."""
         if isinstance(message, _UPLOADS):
             return False
+        if grant is not None and grant.seat:  # the shared dispatch did not check it: here it counts
+            return self._admit_checked(client_id, grant, message)
         try:
             self._check(client_id, grant, message, quietly=True)
             return True
         except Refused:
+            return False
+
+    def _admit_checked(self, client_id: int, grant: Grant, message: Any) -> bool:
+        try:
+            self._check(client_id, grant, message)
+            return True
+        except BadValue as why:
+            text, handle = why.args
+            self._tell(client_id, "Value not used", text)
+            self._send(client_id, messages.GuiUpdateMessage(viser_seam.handle_uuid(handle), {"value": handle.value}))
+            self._refused(client_id, message, text)
+            return False
+        except Refused as why:
+            self._refused(client_id, message, str(why))
             return False
 
     def forget(self, client_id: int) -> None:
@@ -150,7 +170,7 @@ class Inbox:
             raise Refused("the connection has no grant")
         if isinstance(message, NEVER):
             raise Refused(f"{type(message).__name__} is never accepted")
-        if not grant.controls and not isinstance(message, WATCH_MESSAGES):
+        if not grant.acts and not isinstance(message, WATCH_MESSAGES):
             if not quietly:
                 self._tell_watching(client_id)
             raise Refused("a watching page may not control the sandbox")
@@ -190,8 +210,8 @@ class Inbox:
 
     def _handle(self, client_id: int, lookup: Callable[[Any, str], Any], uuid: str) -> Any:
         """The handle ``lookup(gui, uuid)`` finds in the shared GUI, else in the sending page's own GUI
-        (a page cannot reach another page's), or None."""
-        handle = lookup(self.server.gui, uuid)
+        (a page cannot reach another page's), or None. A seat's page finds only its own."""
+        handle = None if self._seated(client_id) else lookup(self.server.gui, uuid)
         if handle is None:
             client = self._client(client_id)
             handle = None if client is None else lookup(client.gui, uuid)
@@ -208,6 +228,10 @@ class Inbox:
                 if problem:
                     raise BadValue(f"{viser_seam.props(handle).label or 'value'}: {problem}", handle)
                 return
+
+    def _seated(self, client_id: int) -> bool:
+        grant = self.gate.grant(client_id) if self.gate is not None else None
+        return grant is not None and bool(grant.seat)
 
     # -------------------------------------------------------------- uploads
     def _upload(self, client_id: int, message: Any) -> None:
@@ -276,8 +300,9 @@ class Inbox:
         """Hand the whole file to the upload button's callbacks, in their event: the page that sent it
         is told of this file, whatever another page uploads meanwhile."""
         content = b"".join(transfer.parts[index] for index in range(transfer.part_count))
-        viser_seam.finish_upload(self.server.gui, self._client(transfer.client_id), transfer.component,
-                                 UploadedFile(name=transfer.filename, content=content))
+        client = self._client(transfer.client_id)
+        gui = client.gui if client is not None and self._seated(transfer.client_id) else self.server.gui
+        viser_seam.finish_upload(gui, client, transfer.component, UploadedFile(name=transfer.filename, content=content))
         close = messages.RemoveNotificationMessage(uuid=f"upload-{transfer_uuid}")
         for seconds in UPLOAD_NOTICE_CLOSED_AFTER:
             _later(seconds, self._send, transfer.client_id, close)

@@ -67,7 +67,8 @@ MESSAGE_NAMES = ("RunJavascriptMessage", "GuiUpdateMessage", "GuiButtonHoldMessa
                  "GuiFormDirtyMessage", "FileTransferStartUpload", "FileTransferPart", "FileTransferPartAck",
                  "RemoveNotificationMessage", "ScenePointerMessage", "SceneNodeClickMessage", "SceneNodeDragMessage",
                  "TransformControlsUpdateMessage", "TransformControlsDragStartMessage",
-                 "TransformControlsDragEndMessage", "GetRenderResponseMessage", "LocalStorageGetItemResponseMessage")
+                 "TransformControlsDragEndMessage", "GetRenderResponseMessage", "LocalStorageGetItemResponseMessage",
+                 "ReplayDoneMessage")
 
 INFRA = "viser.infra._infra"
 BUFFER = "viser.infra._async_message_buffer"

@@ -1,0 +1,282 @@
+"""The class: a world for every student who opens the students' link, the projector, a scene sent to
+everyone or to one student, and the class challenge (issue 58, items 1 and 2).
+Runs on the app's event thread; a world is built in a worker thread of its own, which posts it back.
+
+Each seat (:mod:`sandbox.app.lesson.seats`) gets a world of its own, started from the scene the teacher
+set (the teacher's running world's settings and goal), by ``make_runner`` (any runner of the contract,
+:mod:`sandbox.app.world.contract`: by default the thread :class:`~sandbox.app.world.runner.Runner`;
+the world host of issue 58's item 3 goes in here, in one line). The student's page gets a
+:class:`~sandbox.app.lesson.desk.Desk`: the panel and the floor, its own. A page that leaves pauses
+its world; the page that comes back to the seat (a reload) finds it again.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from sandbox.app.lesson.desk import Desk
+from sandbox.app.lesson.seats import Seats
+from sandbox.app.lesson.wall import Wall
+from sandbox.app.world.lockstep import Lockstep, partner_config
+from sandbox.app.world.runner import Runner
+from sandbox.app.world.snapshot import Snapshot
+
+log = logging.getLogger("sandbox.app.lesson")
+
+#: How often (s) the teacher's wall shows every student's world afresh.
+WALL_SECONDS = 1.0
+#: The scene the teacher's running world sets (the wall's first choice of a scene to send).
+TEACHERS_WORLD = "the teacher's world"
+
+
+@dataclass(frozen=True)
+class Scene:
+    """What a student's world starts from: settings, a goal (vertices, None for the circle, or
+    "from-config") and its name."""
+
+    config: Any
+    shape: Any
+    name: str
+
+
+class World:
+    """One student's world: its runner, the lockstep its panel plays through, and how compare mode
+    makes its second world."""
+
+    def __init__(self, identity: str, runner: Any, events: Any, make_partner: Callable[..., Any]):
+        self.identity, self.runner = identity, runner
+        self.lockstep = Lockstep(runner, events)
+        self.make_runner = make_partner
+        #: Paused because its page left (played again when a page comes back).
+        self.paused_by_leaving = False
+
+
+class Classroom:
+    """The seats' worlds and desks, and the teacher's wall. ``attach(app)`` it to the single world's app
+    (its server, gate, event queue and the teacher's runner), then ``start()``; ``stop()`` after the
+    event queue stopped."""
+
+    def __init__(self, seats: Seats | None = None, *, make_runner: Callable[..., Any] = Runner,
+                 round_steps: int | None = None):
+        self.seats = seats or Seats()
+        self.make_runner = make_runner
+        #: World steps of a class challenge's round (None: the Challenge folder's own).
+        self.round_steps = round_steps
+        self.worlds: dict[str, World] = {}
+        self.desks: dict[str, Desk] = {}
+        self.page_of: dict[str, Any] = {}  # seat -> its page (client), while one is open
+        self.projected: str | None = None
+        self.entrants: list[str] = []  # the seats in the class challenge
+        self._stopping = False
+
+    # ------------------------------------------------------------ set-up
+    def attach(self, app: Any) -> None:
+        """Join the app (on the main thread, before its event queue opens): the wall goes in its panel."""
+        self.app, self.events, self.gate, self.server = app, app.events, app.gate, app.server
+        self.teacher = app.runner
+        self.fps, self.steps_per_frame = app.runner.fps, app.runner.steps_per_frame
+        self.wall = Wall(self.server.gui, self, scenes=(TEACHERS_WORLD, *partner_cases()))
+
+    def start(self) -> None:
+        self.events.every(WALL_SECONDS, self.wall.refresh)
+
+    def stop(self) -> None:
+        """After the event queue stopped: the desks' workers and the worlds end."""
+        self._stopping = True
+        for desk in list(self.desks.values()):
+            desk.close()
+        for world in list(self.worlds.values()):
+            world.runner.stop()
+
+    def seated(self, client_id: int) -> bool:
+        """Whether the page ``client_id`` holds a seat (its world is its own, not the teacher's)."""
+        grant = self.gate.grant(client_id)
+        return grant is not None and bool(grant.seat)
+
+    def students_link(self, teachers_link: str) -> str:
+        """The students' link beside the teacher's (the same address, without the token)."""
+        from sandbox.app.web.access import JOIN_PATH
+
+        return teachers_link.split("?", 1)[0].rstrip("/") + JOIN_PATH
+
+    # ------------------------------------------------------------ pages
+    def arrive(self, client: Any, grant: Any) -> None:
+        """A seat's page connected: its world (built from the teacher's scene the first time), its desk."""
+        identity = grant.seat
+        self.seats.claim(identity)
+        self.page_of[identity] = client
+        world = self.worlds.get(identity)
+        if world is None:
+            self._build(identity, self.teachers_scene())
+            return
+        if world.paused_by_leaving:
+            world.paused_by_leaving = False
+            world.lockstep.set_playing(True)
+        self._sit(identity)
+
+    def leave(self, client_id: int) -> None:
+        """A seat's page left: its desk goes, its world pauses (and waits for the page to come back)."""
+        for identity, client in list(self.page_of.items()):
+            if client.client_id != client_id:
+                continue
+            del self.page_of[identity]
+            desk = self.desks.pop(identity, None)
+            if desk is not None:
+                desk.close()
+            world = self.worlds.get(identity)
+            if world is not None and world.runner.playing:
+                world.paused_by_leaving = True
+                world.lockstep.set_playing(False)
+
+    # ------------------------------------------------------------ worlds
+    def teachers_scene(self) -> Scene:
+        """The scene the teacher set: the teacher's world's settings and goal, as it runs now."""
+        snap = self.teacher.latest
+        return Scene(snap.config, snap.goal_vertices, snap.shape_name)
+
+    def case_scene(self, case: str) -> Scene:
+        """A paper case over the teacher's settings (its goal from the case)."""
+        return Scene(partner_config(self.teacher.latest.config, case), "from-config", case)
+
+    def scene_named(self, name: str) -> Scene:
+        return self.teachers_scene() if name == TEACHERS_WORLD else self.case_scene(name)
+
+    def send(self, scene: Scene, identities: list[str] | None = None) -> list[str]:
+        """Every seat (or those named) starts again from ``scene``: a new world each, built in a worker,
+        which replaces the old once built. Returns the seats it goes to."""
+        targets = [seat.identity for seat in self.seats.all() if seat.identity in self.worlds] \
+            if identities is None else [i for i in identities if i in self.worlds]
+        for identity in targets:
+            self._build(identity, scene)
+        return targets
+
+    def _build(self, identity: str, scene: Scene) -> None:
+        """Build a world for the seat in a worker thread (it blocks for a while); it is adopted on the
+        event thread."""
+        def build() -> None:
+            try:
+                # Built here (it blocks), started once its desk is on the page: the page meets it at step 0,
+                # playing, with nothing to offer ("Joining mid-run" is for a page that comes back).
+                runner = self.make_runner(scene.config, shape=scene.shape, fps=self.fps,
+                                          steps_per_frame=self.steps_per_frame, playing=True,
+                                          deliver=self.events.post)
+            except Exception as exc:  # noqa: BLE001 - said on the student's page, the class goes on
+                log.warning("a student's world could not be built: %s", exc)
+                self.events.post(self._not_built, identity, str(exc))
+                return
+            try:
+                self.events.post(self._adopt, identity, runner, scene)
+            except Exception:  # noqa: BLE001 - the app stopped meanwhile: the world goes with it
+                runner.stop()
+
+        threading.Thread(target=build, name="phototaxis-seat-world", daemon=True).start()
+
+    def _make_partner(self, config: Any, **kwargs: Any) -> Any:
+        """Compare mode's second world in a student's desk: a runner as the student's."""
+        return self.make_runner(config, fps=self.fps, steps_per_frame=self.steps_per_frame,
+                                deliver=self.events.post, **kwargs)
+
+    def _adopt(self, identity: str, runner: Any, scene: Scene) -> None:
+        if self._stopping:
+            runner.stop()
+            return
+        old = self.worlds.get(identity)
+        world = self.worlds[identity] = World(identity, runner, self.events, self._make_partner)
+        runner.subscribe(lambda snap, world=world: self.events.post_latest(
+            ("seat-frame", id(world)), self._on_frame, world, snap))
+        runner.on_halt(lambda why, world=world: world.lockstep.set_playing(False))
+        if old is not None:
+            desk = self.desks.pop(identity, None)
+            if desk is not None:
+                desk.close()
+                desk.clear()
+            threading.Thread(target=old.runner.stop, name="phototaxis-seat-stop", daemon=True).start()
+        try:
+            self._sit(identity)
+        finally:
+            runner.start()
+        if scene is not None and old is not None and identity in self.page_of:
+            self.page_of[identity].add_notification("A new scene from your teacher", f"Your world starts "
+                                                    f"again: {scene.name}.", color="blue",
+                                                    auto_close_seconds=8.0)
+
+    def _not_built(self, identity: str, why: str) -> None:
+        client = self.page_of.get(identity)
+        if client is not None:
+            client.add_notification("Your world cannot start", why[:1].upper() + why[1:] + ".", color="red",
+                                    auto_close_seconds=None)
+
+    def _sit(self, identity: str) -> None:
+        """The seat's page (if one is open) gets a desk for the seat's world."""
+        client, world, seat = self.page_of.get(identity), self.worlds.get(identity), self.seats.get(identity)
+        if client is None or world is None or seat is None or identity in self.desks:
+            return
+        if client.client_id not in self.server.get_clients():
+            self.page_of.pop(identity, None)  # it left while its world was built
+            return
+        try:
+            self.desks[identity] = Desk(client, world, seat.label, events=self.events)
+        except Exception:
+            log.exception("a student's page could not be built")
+            raise
+
+    def _on_frame(self, world: World, snap: Snapshot) -> None:
+        """A frame of a student's world: to their desk, and to the projector when it shows that world."""
+        if self.worlds.get(world.identity) is not world:
+            return  # a world replaced since
+        desk = self.desks.get(world.identity)
+        if desk is not None and desk.world is world and desk.client.client_id in self.server.get_clients():
+            desk.draw(snap)  # (a page that left is forgotten at its own event, which may come after this)
+        if self.projected == world.identity:
+            self.app.project(snap)
+
+    # ------------------------------------------------------------ the projector
+    def project(self, identity: str | None) -> None:
+        """The teacher's floor shows this student's world (None: the teacher's own again)."""
+        self.projected = identity if identity in self.worlds else None
+        world = self.worlds.get(self.projected) if self.projected else None
+        self.app.project(world.runner.latest if world is not None else None)
+        self.wall.refresh()
+
+    # ------------------------------------------------------------ the class challenge
+    def start_challenge(self) -> list[str]:
+        """The same round (the paper's seed, the same steps) starts on every student's desk; returns the
+        seats in it."""
+        self.entrants = []
+        for identity, desk in self.desks.items():
+            seat = self.seats.get(identity)
+            challenge = desk.panel.challenge
+            if self.round_steps is not None:
+                challenge.round_steps = int(self.round_steps)
+            challenge.start(seat.label if seat else "student", desk.client)
+            self.entrants.append(identity)
+        return self.entrants
+
+    def challenge_results(self) -> list[tuple[str, Any, str]]:
+        """(label, score or None, what it is doing) of each seat in the class challenge, best first (a
+        score is a :class:`~sandbox.model.challenge.Gain`: boxes brought in, their share)."""
+        rows = []
+        for identity in self.entrants:
+            seat, desk = self.seats.get(identity), self.desks.get(identity)
+            label = seat.label if seat else "?"
+            r = desk.panel.challenge.round if desk is not None else None
+            if r is None:
+                rows.append((label, None, "left the round"))
+            elif r.score is None:
+                world = self.worlds.get(identity)
+                step = world.runner.latest.step if world is not None else 0
+                rows.append((label, None, f"playing, step {step:,} of {r.steps:,}"))
+            else:
+                rows.append((label, r.score, "done"))
+        return sorted(rows, key=lambda row: (row[1] is None, -(row[1].brought if row[1] else 0),
+                                              -(row[1].share if row[1] else 0.0), row[0]))
+
+
+def partner_cases() -> tuple[str, ...]:
+    """The paper's cases a scene may be (those compare mode offers)."""
+    from sandbox.app.world.lockstep import COMPARE_CASES
+
+    return tuple(COMPARE_CASES)

@@ -1,0 +1,124 @@
+"""A lab lesson in the real page (issue 58, items 1 and 2): three students and the teacher, each in a
+headless Chromium context of their own, against one ``serve --class`` server with small worlds.
+
+Each student opens the students' link, gets a world of their own and picks a different goal, which
+their page alone shows; the teacher's wall shows the three; one goes on the projector (the teacher's
+floor shows that world); a paper case goes to everyone; a class challenge plays the same round on
+every desk and the wall ranks the results. ``PHOTOTAXIS_SCREENSHOTS=DIR`` keeps the teacher's wall
+(1600x1000) and a student's page (390x844) as pictures there."""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from pathlib import Path
+
+import pytest
+
+from tests.app.lesson.classing import class_app
+from tests.browser.test_browser_app import choose, click_button
+from tests.browsing import BROWSER_MARKS
+from tests.waiting import wait_until
+
+pytestmark = BROWSER_MARKS
+
+CASE = "square-flare"  # the paper case the teacher sends (a square goal)
+
+
+@pytest.fixture(scope="module")
+def app():
+    a = class_app(round_steps=120, fps=4, steps_per_frame=15)  # few frames: four pages draw in software
+    yield a
+    a.stop()
+
+
+def open_seats(app, browser, viewport: dict, count: int = 1) -> list[tuple]:
+    """Students' browsers open the students' link, all at once: each one's context, page and seat."""
+    opened = []
+    for _ in range(count):
+        context = browser.new_context(viewport=viewport)
+        page = context.new_page()
+        page.goto(f"http://127.0.0.1:{app.port}/join")
+        assert re.search(r"/seat/[A-Za-z0-9_-]{32}$", page.url), page.url
+        opened.append((context, page, page.url.rsplit("/", 1)[1]))
+    for _, page, identity in opened:
+        page.get_by_text("Goal shape", exact=True).wait_for()
+        wait_until(lambda: identity in app.lesson.desks, what="the student's desk")
+    return opened
+
+
+def test_a_lab_lesson_with_three_students_and_the_teacher(app, browser):
+    shots = os.environ.get("PHOTOTAXIS_SCREENSHOTS")
+    started = time.monotonic()
+    lesson = app.lesson
+    students = open_seats(app, browser, {"width": 900, "height": 700}, 3)
+    identities = [identity for _, _, identity in students]
+    assert len(set(identities)) == 3 and set(lesson.worlds) == set(identities)
+    options = [o for o in lesson.desks[identities[0]].panel.shape.shape.options if o != app.runner.latest.shape_name]
+    goals = options[:3]
+    for (_, page, identity), goal in zip(students, goals):
+        choose(page, "Shape", goal)
+    for (_, page, identity), goal in zip(students, goals):  # each world on its own goal, each page showing it
+        wait_until(lambda: lesson.worlds[identity].runner.latest.shape_name == goal, what=f"a world on the {goal}")
+        assert page.get_by_label("Shape", exact=True).input_value() == goal
+    assert app.runner.latest.shape_name not in goals  # the teacher's world is left alone
+
+    print(f"goals at {time.monotonic() - started:.1f} s")
+    teacher_context = browser.new_context(viewport={"width": 1600, "height": 1000})
+    teacher = teacher_context.new_page()
+    teacher.goto(app.url)
+    teacher.get_by_text("3 students so far").wait_for()
+    labels = [lesson.seats.get(identity).label for identity in identities]
+    assert labels == ["Student 1", "Student 2", "Student 3"]
+    wait_until(lambda: lesson.wall.shown == labels, what="the three on the wall")
+    picture = teacher.locator("img").filter(has=None).all()
+    assert picture, "the wall's picture"
+
+    # the second student's world on the projector: the teacher's floor shows it, live
+    choose(teacher, "Student", "Student 2")
+    click_button(teacher, "Show on the projector")
+    wait_until(lambda: lesson.projected == identities[1] and app.on_projector is not None, what="the projector")
+    teacher.get_by_text("On the projector: Student 2").wait_for()
+    projected = app.on_projector
+    assert projected.shape_name == goals[1]  # that student's world, on the teacher's floor
+    wait_until(lambda: app.on_projector.step > projected.step + 10, what="the projected world, live")
+    print(f"projector at {time.monotonic() - started:.1f} s")
+    if shots:
+        Path(shots).mkdir(parents=True, exist_ok=True)
+        teacher.screenshot(path=str(Path(shots) / "class-wall-1600x1000.png"))
+    click_button(teacher, "Back to my world")
+    wait_until(lambda: lesson.projected is None and app.on_projector is None, what="the teacher's world again")
+
+    # a paper case to everyone: three new worlds on its goal, each page showing it
+    before = {identity: lesson.worlds[identity] for identity in identities}
+    choose(teacher, "Scene to send", CASE)
+    click_button(teacher, "Send to everyone")
+    for _, page, identity in students:
+        wait_until(lambda: lesson.worlds[identity] is not before[identity]
+                   and lesson.worlds[identity].runner.latest.shape_name == "square", what="the case sent")
+        wait_until(lambda: page.get_by_label("Shape", exact=True).input_value() == "square",
+                   what="the student's page on the case")
+
+    print(f"sent at {time.monotonic() - started:.1f} s")
+    # the class challenge: the same round on every desk, ranked on the wall
+    click_button(teacher, "Start a class challenge")
+    wait_until(lambda: all(lesson.desks[i].panel.challenge.round is not None
+                           and lesson.desks[i].panel.challenge.round.score is not None for i in identities),
+               timeout=120, what="every round scored")
+    print(f"scored at {time.monotonic() - started:.1f} s")
+    ranked = teacher.get_by_text(re.compile(r"^Student \d: \d+ box"))
+    wait_until(lambda: ranked.count() == 3, what="the ranking on the wall")
+    rows = lesson.challenge_results()
+    assert [row[2] for row in rows] == ["done"] * 3
+    scores = [row[1].brought for row in rows]
+    assert scores == sorted(scores, reverse=True)
+    if shots:
+        teacher.screenshot(path=str(Path(shots) / "class-wall-ranked-1600x1000.png"))
+        [(phone_context, phone, _)] = open_seats(app, browser, {"width": 390, "height": 844})
+        phone.wait_for_timeout(8000)  # (a picture only: the page frames its floor as it reports its shape)
+        phone.screenshot(path=str(Path(shots) / "class-student-390x844.png"))
+        phone_context.close()
+    for context, _, _ in students:
+        context.close()
+    teacher_context.close()
