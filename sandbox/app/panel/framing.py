@@ -21,7 +21,10 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
+import numpy as np
+
 from sandbox.app.view.legend import legend_picture
+from sandbox.app.world.snapshot import LAMP_PROGRAM
 from sandbox.app.view.scene import (PHONE_ASPECT, add_floor_legend, aim_camera, compare_camera, compare_legend_box,
                                frame_arena, presenter_camera)
 
@@ -30,6 +33,17 @@ WHOLE_ARENA = "Whole arena"
 PRESENTER = "Presenter"
 #: The View buttons: each frames the clicking page's own camera.
 VIEWS = (CONSTRUCTION, WHOLE_ARENA, PRESENTER)
+
+
+def lit_by_hand(snap: Any) -> tuple[float, float, float, float] | None:
+    """The floor a person's lamp (or brush) lights, its lit cells' extent (left, right, bottom, top), or
+    None: a view framed while it is lit frames it too (a phone's drawer opened over the lamp reframes
+    the floor above it, issue 56 item 16)."""
+    if getattr(snap, "program", None) != LAMP_PROGRAM or snap.intensities is None or not snap.intensities.any():
+        return None
+    cells, pitch = np.argwhere(snap.intensities > 0), snap.world_config.light_pitch
+    (x0, y0), (x1, y1) = cells.min(axis=0) * pitch, (cells.max(axis=0) + 1) * pitch
+    return float(x0), float(x1), float(y0), float(y1)
 
 
 class Framing:
@@ -78,7 +92,8 @@ class Framing:
         a View button chosen while a page's camera is fitted is framed after the fit, never overwritten
         by a view read before it (seen on a loaded machine when the fitting ran in a thread of its own:
         the whole arena chosen, the presenter's camera left)."""
-        config = self.runner.latest.world_config
+        snap = self.runner.latest
+        config = snap.world_config
         aspect = float(getattr(client.camera, "aspect", 0.0) or 1.4)
         view = self.of(client.client_id)
         presenter = view == PRESENTER and (aspect >= PHONE_ASPECT or self.offset is not None)
@@ -88,9 +103,9 @@ class Framing:
                                                legend_height_per_width=self._legend_aspect if presenter
                                                else None))
         elif presenter:
-            aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect))
+            aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect, also=lit_by_hand(snap)))
         else:
-            frame_arena(client, config, whole=view == WHOLE_ARENA)
+            frame_arena(client, config, whole=view == WHOLE_ARENA, also=lit_by_hand(snap))
 
     def arrive(self, client: Any) -> None:
         """A page that connected: the default view's layout (its camera is framed as it reports its shape).

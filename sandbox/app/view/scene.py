@@ -51,6 +51,10 @@ Z_LEGEND = 0.10  # the presenter's legend: over the bodies and lines, under the 
 CONSTRUCTION_VIEW = 1.4
 
 
+#: A classroom's caption (two lines over the construction area): letters this high (m). The presenter
+#: layout at 1024 x 768 frames the 16 m construction area about 480 px high: 30 px a metre, 25 px letters.
+CLASSROOM_CAPTION_HEIGHT = 0.85
+
 #: Floor (m) between the running world's arena and compare mode's second one, to its right.
 COMPARE_GAP = 6.0
 #: The narrowest view the far plane allows for: a phone upright.
@@ -61,8 +65,8 @@ PHONE_ASPECT_NARROWEST = 0.4
 PHONE_ASPECT = 0.75
 
 
-def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, *,
-                    whole: bool = True) -> tuple[np.ndarray, np.ndarray, float]:
+def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, *, whole: bool = True,
+                    also: tuple[float, float, float, float] | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """Camera position, look-at point and vertical field of view (radians) that
     frame the whole arena (or, ``whole`` False, the construction area) from
     straight above (tilted a hair so orbiting works), in a view ``aspect``
@@ -70,13 +74,14 @@ def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, 
     for its width. A view much taller than wide (narrower than :data:`PHONE_ASPECT`: a phone,
     where viser lays its panel over the lower half of the page) has the framed square at its top,
     not in its middle. (The server learns only the canvas's shape, not whether the panel covers
-    it: a desktop window that narrow gets the same framing, whole but high.) Compare mode's two
-    worlds: :func:`compare_camera`."""
+    it: a desktop window that narrow gets the same framing, whole but high.) ``also``: a floor box
+    (left, right, bottom, top) framed too (a person's lamp). Compare mode's two worlds: :func:`compare_camera`."""
     if whole:
         c, half = config.arena_size / 2.0, config.arena_size * 0.56  # arena plus a margin
     else:
         c, half = config.centre, config.construction_size * CONSTRUCTION_VIEW / 2.0
-    return camera_over((c - half, c + half, c - half, c + half), aspect, fov_deg, top_on_phone=True)
+    box = (c - half, c + half, c - half, c + half)
+    return camera_over(box if also is None else union(box, also), aspect, fov_deg, top_on_phone=True)
 
 
 def camera_over(box: tuple[float, float, float, float], aspect: float, fov_deg: float = 50.0, *,
@@ -95,11 +100,11 @@ def camera_over(box: tuple[float, float, float, float], aspect: float, fov_deg: 
     return np.array([cx, cy - 1e-3 * height, height]), np.array([cx, cy, 0.0]), float(fov)
 
 
-def frame_arena(client: Any, config: Config, whole: bool = True) -> None:
-    """Point one viewer's camera at the whole arena (or the construction area), for its own window's
-    shape."""
+def frame_arena(client: Any, config: Config, whole: bool = True, also: tuple | None = None) -> None:
+    """Point one viewer's camera at the whole arena (or the construction area; and the floor box ``also``),
+    for its own window's shape."""
     aspect = float(getattr(client.camera, "aspect", 0.0) or 1.4)
-    aim_camera(client, *top_down_camera(config, aspect, whole=whole))
+    aim_camera(client, *top_down_camera(config, aspect, whole=whole, also=also))
 
 
 def aim_camera(client: Any, position: np.ndarray, look_at: np.ndarray, fov: float) -> None:
@@ -156,17 +161,17 @@ def presenter_legend_box(config: Config, height_per_width: float) -> tuple[float
     return right - width, right, top - width * height_per_width, top
 
 
-def presenter_camera(config: Config, aspect: float, height_per_width: float,
-                     fov_deg: float = 50.0) -> tuple[np.ndarray, np.ndarray, float]:
+def presenter_camera(config: Config, aspect: float, height_per_width: float, fov_deg: float = 50.0,
+                     also: tuple | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """Camera position, look-at point and field of view framing the construction area and the
-    presenter's legend beside it, as large as the view's ``aspect`` allows (a margin all round).
-    Compare mode's two worlds: :func:`compare_camera`."""
+    presenter's legend beside it (and the floor box ``also``), as large as the view's ``aspect`` allows
+    (a margin all round). Compare mode's two worlds: :func:`compare_camera`."""
     left, _, bottom, _ = presenter_legend_box(config, height_per_width)
     half = config.construction_size * CONSTRUCTION_VIEW / 2.0
     margin = half - config.construction_size / 2.0
     box = (left - margin, config.centre + half, min(bottom, config.centre - config.construction_size / 2.0) - margin,
            config.centre + half)
-    return camera_over(box, aspect, fov_deg)
+    return camera_over(box if also is None else union(box, also), aspect, fov_deg)
 
 
 # ------------------------------------------------------- compare mode's layout (issue 41, item 1)
@@ -451,6 +456,13 @@ class SceneView:
             low, high, gap = cfg.centre - cfg.construction_size / 2.0, cfg.centre + cfg.construction_size / 2.0, 0.3
         else:
             low, high, gap = 0.0, cfg.arena_size, 0.8
+        if self.caption_over_construction and not self.compared:
+            # A classroom's: two lines over the construction area in letters sized in metres, as large as
+            # the presenter layout leaves room for (25 px at 1024 x 768: read from the back of a room),
+            # and never wider than a phone's framing of the same area.
+            return self.scene.add_label(f"{self.root}/caption", self._caption(snap),
+                                        position=((low + high) / 2.0, high + gap, Z_TOP), anchor="bottom-center",
+                                        font_size_mode="scene", font_scene_height=CLASSROOM_CAPTION_HEIGHT)
         anchor = self.compared or "bottom-right"
         position = ({"bottom-left": low, "bottom-center": (low + high) / 2.0}.get(anchor, high), high + gap)
         # Its size is in screen pixels: at 1.2 it still fits a phone's width (a larger one, for a
@@ -462,6 +474,9 @@ class SceneView:
         """The caption's text: one line, or in compare mode two (the case's name, then its step and what
         lights it; the share in the goal is the readout's, large)."""
         text = caption(snap)
+        if self.caption_over_construction and not self.compared:  # a classroom's: case and step, then the rest
+            name, step, *rest = text.split(" | ")
+            return f"{name} | {step}\n" + " | ".join(rest)
         if not self.compared:
             return text
         name, *rest = text.split(" | ")
