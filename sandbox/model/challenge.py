@@ -56,7 +56,8 @@ def lamp_start(robot_positions: np.ndarray, radius: float,
     whole arena, so their centroid is the arena's middle, where the goal is and few of them are.
     ``within`` (left, right, bottom, top): only a robot on that floor will do (the floor every page
     shows; the densest group elsewhere was under a folded panel or off a phone's edge); with none
-    there, the densest group's robot nearest to it, moved onto its edge."""
+    there, one less than ``radius`` from it, moved onto its edge (the lamp still lights it); with none
+    of those either, any, moved onto its edge."""
     xy = np.asarray(robot_positions, dtype=float).reshape(-1, 2)
     if not len(xy):
         raise ValueError("no robots to light")
@@ -66,9 +67,12 @@ def lamp_start(robot_positions: np.ndarray, radius: float,
     near = (d2 <= radius * radius).sum(axis=1)
     if within is not None:
         left, right, bottom, top = within
-        inside = (xy[:, 0] >= left) & (xy[:, 0] <= right) & (xy[:, 1] >= bottom) & (xy[:, 1] <= top)
-        if inside.any():
-            near = np.where(inside, near, -1)
+        off = np.hypot(np.maximum(0.0, np.maximum(left - xy[:, 0], xy[:, 0] - right)),
+                       np.maximum(0.0, np.maximum(bottom - xy[:, 1], xy[:, 1] - top)))  # how far from the box
+        for reach in (0.0, radius):
+            if (off <= reach).any():
+                near = np.where(off <= reach, near, -1)
+                break
     crowded = np.flatnonzero(near == near.max())
     middle = xy.mean(axis=0)
     best = crowded[np.argmin(np.hypot(*(xy[crowded] - middle).T))]

@@ -180,9 +180,12 @@ class ChallengeFolder:
         r.world = snap.world_key
         r.started = r.most = int(np.count_nonzero(snap.box_in_goal))
         radius = float(self.lamp.radius.value)
-        # On the floor every page frames: the construction view (a phone's, a projector's beside the
-        # folded panel's bar), not the densest group wherever it is.
-        centre = lamp_start(snap.robot_positions, radius, within=construction_box(snap.world_config, CONSTRUCTION_VIEW))
+        # Its disk on the floor every page frames: the construction view (a phone's, a projector's beside
+        # the folded panel's bar), not on the densest group wherever it is.
+        view = construction_box(snap.world_config, CONSTRUCTION_VIEW)
+        inset = min(radius + snap.world_config.light_pitch, (view[1] - view[0]) / 2.0)  # its lit cells whole
+        centre = lamp_start(snap.robot_positions, radius,
+                            within=(view[0] + inset, view[1] - inset, view[2] + inset, view[3] - inset))
 
         def lit(_: Any) -> None:
             self.lockstep.set_playing(True)

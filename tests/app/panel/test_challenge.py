@@ -49,7 +49,8 @@ def test_the_lamp_starts_on_the_floor_every_page_shows():
     box = (21.3, 43.7, 21.3, 43.7)
     assert lamp_start(np.array(crowd + pair), 2.5) in crowd
     assert lamp_start(np.array(crowd + pair), 2.5, within=box) in ((30.0, 30.0), (30.5, 30.0))
-    assert lamp_start(np.array(crowd), 2.5, within=box) == (43.7, 30.0)  # none in it: on its edge
+    assert lamp_start(np.array(crowd + [(45.0, 35.0)]), 2.5, within=box) == (43.7, 35.0)  # within reach: on the edge
+    assert lamp_start(np.array(crowd), 2.5, within=box) == (43.7, 30.0)  # none near it: the densest, on its edge
 
 
 def test_in_the_papers_world_doing_nothing_scores_nothing():
@@ -63,9 +64,9 @@ class Markdown:
     content = ""
 
 
-def frame(step, in_goal, world=2, program=LAMP_PROGRAM, robots=((25.0, 25.0), (25.5, 25.0), (40.0, 40.0))):
-    """A frame of the default world (its construction view is x and y 21.3-43.7 m): a pair of robots and
-    one alone, all in view."""
+def frame(step, in_goal, world=2, program=LAMP_PROGRAM, robots=((25.0, 25.0), (25.5, 25.0), (38.0, 38.0))):
+    """A frame of the default world (its construction view is x and y 21.3-43.7 m; less the lamp's 1 m,
+    22.3-42.7): a pair of robots and one alone, all in view."""
     boxes = np.zeros(10, bool)
     boxes[:in_goal] = True
     return SimpleNamespace(step=step, box_in_goal=boxes, world_key=world, program=program,
