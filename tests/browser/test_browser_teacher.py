@@ -356,3 +356,113 @@ def test_the_software_rendering_notice_covers_nothing_on_a_phone(classroom, brow
         assert after_ms < 100, f"the software-rendering notice covered the phone's floor for {shown_ms:.0f} ms"
     finally:
         context.close()
+
+
+# ------------------------------------------------------------------ compare mode at a projector
+def compare_app(presenter: bool):
+    """`serve --compare star star-switch` (small worlds), with `--classroom`'s presenter layout or not."""
+    from sandbox.app.world.lockstep import side_config
+    from sandbox.commands.serve import App, free_port
+    from sandbox.model.config import Config
+
+    base = Config(robots=40, boxes=80)
+    return App(side_config("star", base), port=free_port(), steps_per_frame=4, fps=15, whole_arena=not presenter,
+               compare=(side_config("star-switch", base), "star-switch")).start()
+
+
+def compare_labels(app, view_height: float) -> dict:
+    """Each compare label's handle and the floor it covers (left, right, bottom, top)."""
+    from sandbox.app.view.scene import caption_box, difference_box, readout_box, shifted
+
+    config, offset = app.runner.latest.world_config, app.panel.framing.offset
+    return {"left caption": (app.view.handles["caption"], caption_box(config, offset, False, view_height)),
+            "right caption": (app.comparison.view.handles["caption"], caption_box(config, offset, True, view_height)),
+            "left readout": (app.view.handles["readout"], readout_box(config)),
+            "right readout": (app.comparison.view.handles["readout"], shifted(readout_box(config), offset)),
+            "difference": (app.comparison._difference, difference_box(config, offset))}
+
+
+def wait_framed(app, client, presenter: bool) -> None:
+    from sandbox.app.view.scene import compare_camera
+
+    config, offset = app.runner.latest.world_config, app.panel.framing.offset
+    legend = app.panel.framing._legend_aspect if presenter else None
+
+    def framed() -> bool:
+        position, look_at, _ = compare_camera(config, client.camera.aspect or 1.0, offset, whole=not presenter,
+                                              legend_height_per_width=legend)
+        return bool(np.allclose(client.camera.look_at, look_at, atol=0.05)
+                    and np.allclose(client.camera.position, position, atol=0.05))
+
+    wait_until(framed, what="the page framed on both worlds")
+
+
+def arenas(app) -> dict:
+    from sandbox.app.view.scene import shifted
+
+    size = app.runner.latest.world_config.arena_size
+    return {"left arena": (0.0, size, 0.0, size), "right arena": shifted((0.0, size, 0.0, size), app.panel.framing.offset)}
+
+
+def crosses(box, arena) -> bool:
+    """Whether a floor box lies partly in and partly out of an arena (over its wall)."""
+    inside = arena[0] <= box[0] and box[1] <= arena[1] and arena[2] <= box[2] and box[3] <= arena[3]
+    apart = box[1] <= arena[0] or arena[1] <= box[0] or box[3] <= arena[2] or arena[3] <= box[2]
+    return not inside and not apart
+
+
+def test_compare_in_the_presenter_layout_is_read_from_the_back_of_the_room(browser):
+    """Item 10: the case and step captions were 13 px, the legend lay over the first world (its lit band)."""
+    from sandbox.app.view.scene import compare_legend_box
+
+    app = compare_app(presenter=True)
+    context = None
+    try:
+        context, page, client = open_page(browser, app)
+        wait_framed(app, client, presenter=True)
+        wait_until(lambda: app.runner.latest.step > 0, what="the run under way")
+        canvas = scene_canvas(page)
+        view_height = canvas["height"] / per_metre(client, canvas)
+        labels = compare_labels(app, view_height)
+        sizes = {name: letters_px(handle, client, canvas) for name, (handle, _) in labels.items()}
+        caption = floor_to_page(client, canvas, labels["left caption"][1])
+        drawn = light_box_rows(page, caption["x"] + 40, caption["y"] - 10, caption["y"] + caption["height"] + 10, 30)
+        shot(page, "teacher-compare.png")
+        legend = compare_legend_box(app.runner.latest.world_config, app.panel.framing.offset,
+                                    app.panel.framing._legend_aspect)
+        print(f"\ncompare, presenter: letters {({k: round(v, 1) for k, v in sizes.items()})}, the left caption's "
+              f"box {drawn} px high; the legend at {np.round(legend, 1)}")
+        small = {name: round(px, 1) for name, px in sizes.items() if px < ROOM_PX}
+        assert not small, f"letters under {ROOM_PX:.0f} px at 1024 x 768: {small}"
+        assert drawn >= 2 * ROOM_PX, f"the left caption's two lines are drawn {drawn} px high"
+        over = [name for name, arena in arenas(app).items() if not (legend[3] <= arena[2] or arena[3] <= legend[2]
+                                                                    or legend[1] <= arena[0] or arena[1] <= legend[0])]
+        assert not over, f"the legend at {legend} lies over the {over}"
+        assert within(floor_to_page(client, canvas, legend), canvas)
+    finally:
+        if context is not None:
+            context.close()
+        app.stop()
+
+
+def test_compare_with_the_panel_open_lays_nothing_over_the_arenas(browser):
+    """Item 10: `serve --compare star star-switch` at 1024 x 768, the panel open beside the floor: the
+    captions (screen-sized over arenas 130 px wide) ran over the arenas' walls into the other world."""
+    app = compare_app(presenter=False)
+    context = None
+    try:
+        context, page, client = open_page(browser, app)
+        wait_framed(app, client, presenter=False)
+        canvas = scene_canvas(page)
+        assert canvas["width"] < 0.7 * PROJECTOR[0]  # the panel open beside it
+        view_height = canvas["height"] / per_metre(client, canvas)
+        shot(page, "teacher-compare-panel-open.png")
+        across = [f"{name} {np.round(box, 1)} over the {wall}" for name, (_, box) in compare_labels(app, view_height).items()
+                  for wall, arena in arenas(app).items() if crosses(box, arena)]
+        assert not across, across
+        for name, (_, box) in compare_labels(app, view_height).items():
+            assert within(floor_to_page(client, canvas, box), canvas), f"{name} is not all in view"
+    finally:
+        if context is not None:
+            context.close()
+        app.stop()

@@ -181,13 +181,19 @@ def presenter_camera(config: Config, aspect: float, height_per_width: float, fov
 #: each other or the other world, however small the page: at a projector's compare framing (1024 px,
 #: about 10 px a metre) a readout is about 35 px high. The captions stay sized in screen pixels (a
 #: line of text must stay readable on a phone that frames both arenas).
-READOUT_HEIGHT, DIFFERENCE_HEIGHT = 3.2, 2.4
+READOUT_HEIGHT, DIFFERENCE_HEIGHT = 3.2, 2.7
+#: Side by side, each world's caption is sized in metres too: letters this high, 26 px at a projector's
+#: compare framing (1024 x 768, the panel folded: about 10.4 px a metre), read from the back of a room
+#: (issue 56, item 10: they were 13 px); each stays over its own world, however small the page (its
+#: longest line, :data:`CAPTION_CHARS`, fits between the construction wall and the arena's: 2.5 m at most).
+COMPARE_CAPTION_HEIGHT = 2.5
 #: A label's block is this many times its font's height (the line's height and viser's padding).
 LABEL_BLOCK = 1.45
 #: Gap (m) between a construction wall and the label above or below it.
 LABEL_GAP = 0.4
-#: The presenter's legend in compare mode: at most this wide (m), in the floor's gap between the worlds.
-COMPARE_LEGEND_WIDTH = 30.0
+#: The presenter's legend in compare mode: at most this wide (m); side by side, under both arenas, at most
+#: :data:`SIDE_LEGEND_WIDTH` (a wider one made the framing taller than the view: everything smaller).
+COMPARE_LEGEND_WIDTH, SIDE_LEGEND_WIDTH = 30.0, 22.0
 
 Box = tuple[float, float, float, float]  # (left, right, bottom, top) on the floor
 
@@ -204,11 +210,26 @@ def is_stacked(offset: tuple[float, float]) -> bool:
 
 
 def caption_anchor(offset: tuple[float, float], second: bool) -> str:
-    """Where a compared world's caption hangs from its construction wall's top: side by side, from its
-    left corner, growing right (two growing towards each other met on a projector's canvas beside the
-    open panel); stacked, from the wall's middle (a tall view is narrow: a caption grown from a corner
-    ran off it). The framing makes room for them (:func:`compare_camera`)."""
-    return "bottom-center" if is_stacked(offset) else "bottom-left"
+    """Where a compared world's caption hangs: side by side, under its share in the goal (the
+    readout), the first world's from the construction wall's left corner growing right, the second's
+    from its right corner growing left, each towards the gap between the worlds and sized in metres
+    (:data:`COMPARE_CAPTION_HEIGHT`), so that each stays over its own world and out of the view's top
+    left, where viser stacks its notices (they were screen-sized over the walls, grown from both left
+    corners: beside the open panel the first ran over the second world); stacked, from the wall's top
+    middle in screen pixels (a tall view is narrow: a caption grown from a corner ran off it). The
+    framing makes room for them (:func:`compare_camera`)."""
+    if is_stacked(offset):
+        return "bottom-center"
+    return "top-right" if second else "top-left"
+
+
+def caption_anchor_point(config: Config, anchor: str) -> tuple[float, float]:
+    """The point on the floor a compared world's caption hangs from (its ``anchor``, :func:`caption_anchor`)."""
+    low, high, _, top = construction_box(config)
+    if anchor == "bottom-center":
+        return (low + high) / 2.0, top + 0.3
+    below = readout_box(config)[2] - LABEL_GAP
+    return (low if anchor == "top-left" else high), below
 
 
 def union(*boxes: Box) -> Box:
@@ -238,8 +259,13 @@ def readout_box(config: Config, text_chars: int = 14) -> Box:
 
 
 def difference_anchor(config: Config, offset: tuple[float, float]) -> tuple[float, float]:
-    """The difference's centre: the middle of the floor between the two worlds' construction areas."""
-    return config.centre + offset[0] / 2.0, config.centre + offset[1] / 2.0
+    """The difference's centre: the middle of the floor between the two worlds' construction areas;
+    side by side, under the gap between the arenas, below their bottom walls (it is wider than the gap:
+    between the worlds it lay over both arenas' walls and floor, and in the view's top left, where
+    viser stacks its notices)."""
+    if is_stacked(offset):
+        return config.centre + offset[0] / 2.0, config.centre + offset[1] / 2.0
+    return config.centre + offset[0] / 2.0, -LABEL_GAP - LABEL_BLOCK * DIFFERENCE_HEIGHT / 2.0
 
 
 def difference_box(config: Config, offset: tuple[float, float], text_chars: int = 26) -> Box:
@@ -249,10 +275,11 @@ def difference_box(config: Config, offset: tuple[float, float], text_chars: int 
 
 
 def compare_legend_box(config: Config, offset: tuple[float, float], height_per_width: float) -> Box:
-    """The presenter's legend in compare mode: side by side, under the difference in the gap between
-    the worlds, as wide as the gap leaves (at most :data:`COMPARE_LEGEND_WIDTH`); stacked, left of
-    both construction areas, level with the gap between them (a phone's or a tall screen's width
-    has room there, not between)."""
+    """The presenter's legend in compare mode: side by side, below both arenas and the difference, under
+    the gap between them (between the worlds it covered the first one's lit band: issue 56, item 10), at most
+    :data:`COMPARE_LEGEND_WIDTH` wide and no wider than the framing's height leaves room for; stacked,
+    left of both construction areas, level with the gap between them (a phone's or a tall screen's
+    width has room there, not between)."""
     view = construction_box(config, CONSTRUCTION_VIEW)
     gx, gy = difference_anchor(config, offset)
     if is_stacked(offset):
@@ -261,8 +288,8 @@ def compare_legend_box(config: Config, offset: tuple[float, float], height_per_w
         height = width * height_per_width
         return (right - width, right, gy - height / 2.0, gy + height / 2.0)
     gap = (view[0] + offset[0]) - view[1]  # between the two construction views
-    width = max(4.0, min(COMPARE_LEGEND_WIDTH, gap - 4.0))
-    top = difference_box(config, offset)[2] - LABEL_GAP
+    width = max(4.0, min(SIDE_LEGEND_WIDTH, gap - 4.0))
+    top = difference_box(config, offset)[2] - LABEL_GAP  # under the difference, under the arenas' bottom walls
     return (gx - width / 2.0, gx + width / 2.0, top - width * height_per_width, top)
 
 
@@ -274,7 +301,7 @@ def compare_floor_box(config: Config, offset: tuple[float, float], whole: bool,
     if whole:
         c, half = config.arena_size / 2.0, config.arena_size * 0.56
         one = (c - half, c + half, c - half, c + half)
-        return union(one, shifted(one, offset))
+        return union(one, shifted(one, offset), difference_box(config, offset))
     one = union(construction_box(config, CONSTRUCTION_VIEW), readout_box(config))
     parts = [one, shifted(one, offset), difference_box(config, offset)]
     if legend_height_per_width is not None:
@@ -289,15 +316,16 @@ CAPTION_CHARS, CHAR_EM = 35, 0.45
 
 def caption_box(config: Config, offset: tuple[float, float], second: bool, view_height: float,
                 chars: int = CAPTION_CHARS) -> Box:
-    """The floor a compare caption covers in a view ``view_height`` metres high: two lines of
-    screen-sized text (12 px x 1.2 an em in an 800 px high view, scaled with the view; a character
-    :data:`CHAR_EM` wide, a line 1.2 em, and viser's padding)."""
-    em = 12 * 1.2 / 800 * view_height
+    """The floor a compare caption covers: two lines of text (a character :data:`CHAR_EM` wide, a line
+    1.2 em, and viser's padding); side by side sized in metres (:data:`COMPARE_CAPTION_HEIGHT`), stacked
+    in screen pixels in a view ``view_height`` metres high (12 px x 1.2 an em in an 800 px high view,
+    scaled with the view)."""
+    em = 12 * 1.2 / 800 * view_height if is_stacked(offset) else COMPARE_CAPTION_HEIGHT
     width, height = CHAR_EM * em * chars, 2.6 * em
-    low, high, _, top = construction_box(config)
-    left = {"bottom-left": low, "bottom-center": (low + high - width) / 2.0}.get(caption_anchor(offset, second),
-                                                                               high - width)
-    box = (left, left + width, top + 0.3, top + 0.3 + height)
+    anchor = caption_anchor(offset, second)
+    x, y = caption_anchor_point(config, anchor)
+    left = {"top-left": x, "bottom-center": x - width / 2.0}.get(anchor, x - width)
+    box = (left, left + width, y, y + height) if anchor.startswith("bottom") else (left, left + width, y - height, y)
     return shifted(box, offset) if second else box
 
 
@@ -452,6 +480,11 @@ class SceneView:
         area, in two lines (:func:`caption_anchor`): a caption is sized in screen pixels, and two on one
         line ran into each other once the arenas were narrower than them."""
         cfg = snap.world_config
+        if self.compared in ("top-left", "top-right"):  # side by side: sized in metres (caption_anchor)
+            return self.scene.add_label(f"{self.root}/caption", self._caption(snap),
+                                        position=(*caption_anchor_point(cfg, self.compared), Z_TOP),
+                                        anchor=self.compared, font_size_mode="scene",
+                                        font_scene_height=COMPARE_CAPTION_HEIGHT)
         if self.caption_over_construction or self.compared:
             low, high, gap = cfg.centre - cfg.construction_size / 2.0, cfg.centre + cfg.construction_size / 2.0, 0.3
         else:

@@ -9,7 +9,8 @@ import pytest
 
 from sandbox.app.world.runner import Runner
 from sandbox.app.world.orders import SetPlaying, StepOnce
-from sandbox.app.view.scene import POINT_GRID, CompactSender, SceneView, compare_camera, compare_offset, top_down_camera
+from sandbox.app.view.scene import (LABEL_GAP, POINT_GRID, CompactSender, SceneView, compare_camera, compare_offset,
+                                    readout_box, top_down_camera)
 from sandbox.app.world.snapshot import caption, case_name
 from sandbox.model.config import Config
 
@@ -254,14 +255,17 @@ def test_the_caption_sits_where_every_framing_of_the_page_shows_it(snapshot):
     assert labels["/caption"]["position"][:2] == (cfg.centre, wall + 0.3)
     assert labels["/caption"]["anchor"] == "bottom-center" and labels["/caption"]["font_size_mode"] == "scene"
     assert labels["/caption"]["font_scene_height"] == 0.85 and classroom._caption(snapshot).count("\n") == 1
-    # Beside a compared world, each world's caption sits directly over its construction wall's top-left
-    # corner in two lines (two captions on one line ran into each other), with its share in the goal
-    # large under the wall, and back when compare mode ends.
+    # Beside a compared world, each world's share in the goal is large under its construction wall and its
+    # caption under that, in two lines (two captions on one line ran into each other) sized in metres, the
+    # first world's from the wall's left corner (issue 56, item 10: 13 px at a projector, and the first
+    # ran over the second world beside the open panel), and back when compare mode ends.
     view = SceneView(LabelScene(), snapshot)
     assert labels["/readout"]["visible"] is False
     view.set_compared((70.0, 0.0), snapshot)
     low = cfg.centre - cfg.construction_size / 2
-    assert labels["/caption"]["position"][:2] == (low, wall + 0.3) and labels["/caption"]["anchor"] == "bottom-left"
+    under = readout_box(cfg)[2] - LABEL_GAP
+    assert labels["/caption"]["position"][:2] == (low, under) and labels["/caption"]["anchor"] == "top-left"
+    assert labels["/caption"]["font_size_mode"] == "scene"
     assert view.handles["readout"].visible and labels["/readout"]["font_size_mode"] == "scene"
     assert view._caption(snapshot).count("\n") == 1 and "% in goal" not in view._caption(snapshot)
     view.set_compared((0.0, -70.0), snapshot, second=True)  # one below the other: from the wall's middle
