@@ -215,7 +215,7 @@ class App:
         # floor: the page's canvas ends at the drawer, page/layout.js); another view keeps its camera.
         phone = min(aspect, fitted or aspect) < PHONE_ASPECT
         if time.monotonic() <= until or phone or self.panel.framing.of(client.client_id) == PRESENTER:
-            self.panel.framing.apply(client)  # as this viewer's View says
+            self.panel.framing.apply(client, lamp_in_view=phone and fitted is not None)  # as its View says
         self._fitting[client.client_id] = (until, aspect)
 
     def _check_viewers(self) -> None:

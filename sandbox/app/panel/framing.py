@@ -37,8 +37,8 @@ VIEWS = (CONSTRUCTION, WHOLE_ARENA, PRESENTER)
 
 def lit_by_hand(snap: Any) -> tuple[float, float, float, float] | None:
     """The floor a person's lamp (or brush) lights, its lit cells' extent (left, right, bottom, top), or
-    None: a view framed while it is lit frames it too (a phone's drawer opened over the lamp reframes
-    the floor above it, issue 56 item 16)."""
+    None: a phone's view framed again as its drawer opens or closes frames it too (the drawer opened
+    over the lamp: issue 56, item 16)."""
     if getattr(snap, "program", None) != LAMP_PROGRAM or snap.intensities is None or not snap.intensities.any():
         return None
     cells, pitch = np.argwhere(snap.intensities > 0), snap.world_config.light_pitch
@@ -85,8 +85,9 @@ class Framing:
         if client is not None:
             self.choose(client, CONSTRUCTION if self.of(client.client_id) == PRESENTER else PRESENTER)
 
-    def apply(self, client: Any) -> None:
-        """Frame this viewer's camera for its view and window; the presenter's legend on its floor.
+    def apply(self, client: Any, lamp_in_view: bool = False) -> None:
+        """Frame this viewer's camera for its view and window; the presenter's legend on its floor;
+        ``lamp_in_view``: a lit lamp too (a phone whose drawer opened or closed over it).
 
         All of it in one event of the app's event thread, from reading the view to moving the camera:
         a View button chosen while a page's camera is fitted is framed after the fit, never overwritten
@@ -103,9 +104,10 @@ class Framing:
                                                legend_height_per_width=self._legend_aspect if presenter
                                                else None))
         elif presenter:
-            aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect, also=lit_by_hand(snap)))
+            aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect,
+                                                 also=lit_by_hand(snap) if lamp_in_view else None))
         else:
-            frame_arena(client, config, whole=view == WHOLE_ARENA, also=lit_by_hand(snap))
+            frame_arena(client, config, whole=view == WHOLE_ARENA, also=lit_by_hand(snap) if lamp_in_view else None)
 
     def arrive(self, client: Any) -> None:
         """A page that connected: the default view's layout (its camera is framed as it reports its shape).

@@ -51,7 +51,7 @@
   const fitScene = () => {
     const scene = document.querySelector(VISER.scene), paper = sheet();
     if (!scene) return;
-    const height = NARROW.matches && paper && sheetOpen(paper) ? Math.round(paper.getBoundingClientRect().top) + "px" : "";
+    const height = NARROW.matches && paper && handleOf(paper) && sheetOpen(paper) ? Math.round(paper.getBoundingClientRect().top) + "px" : "";
     if (scene.style.height !== height && (height || scene.style.height !== "100%")) scene.style.height = height || "100%";
   };
 
