@@ -404,6 +404,10 @@ def arenas(app) -> dict:
     return {"left arena": (0.0, size, 0.0, size), "right arena": shifted((0.0, size, 0.0, size), app.panel.framing.offset)}
 
 
+def apart(box, arena) -> bool:
+    return box[1] <= arena[0] or arena[1] <= box[0] or box[3] <= arena[2] or arena[3] <= box[2]
+
+
 def crosses(box, arena) -> bool:
     """Whether a floor box lies partly in and partly out of an arena (over its wall)."""
     inside = arena[0] <= box[0] and box[1] <= arena[1] and arena[2] <= box[2] and box[3] <= arena[3]
@@ -412,7 +416,8 @@ def crosses(box, arena) -> bool:
 
 
 def test_compare_in_the_presenter_layout_is_read_from_the_back_of_the_room(browser):
-    """Item 10: the case and step captions were 13 px, the legend lay over the first world (its lit band)."""
+    """Item 10: the case and step captions were 13 px, the right one over the lit band, and the legend lay
+    over the first world (its lit band)."""
     from sandbox.app.view.scene import compare_legend_box
 
     app = compare_app(presenter=True)
@@ -438,6 +443,9 @@ def test_compare_in_the_presenter_layout_is_read_from_the_back_of_the_room(brows
         over = [name for name, arena in arenas(app).items() if not (legend[3] <= arena[2] or arena[3] <= legend[2]
                                                                     or legend[1] <= arena[0] or arena[1] <= legend[0])]
         assert not over, f"the legend at {legend} lies over the {over}"
+        lit_floor = [f"{name} over the {where}" for name in ("left caption", "right caption")
+                     for where, arena in arenas(app).items() if not apart(labels[name][1], arena)]
+        assert not lit_floor, f"captions on an arena's floor, where the lit band passes: {lit_floor}"
         assert within(floor_to_page(client, canvas, legend), canvas)
     finally:
         if context is not None:

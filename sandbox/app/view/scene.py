@@ -193,7 +193,7 @@ LABEL_BLOCK = 1.45
 LABEL_GAP = 0.4
 #: The presenter's legend in compare mode: at most this wide (m); side by side, under both arenas, at most
 #: :data:`SIDE_LEGEND_WIDTH` (a wider one made the framing taller than the view: everything smaller).
-COMPARE_LEGEND_WIDTH, SIDE_LEGEND_WIDTH = 30.0, 22.0
+COMPARE_LEGEND_WIDTH, SIDE_LEGEND_WIDTH = 30.0, 18.0
 
 Box = tuple[float, float, float, float]  # (left, right, bottom, top) on the floor
 
@@ -210,14 +210,15 @@ def is_stacked(offset: tuple[float, float]) -> bool:
 
 
 def caption_anchor(offset: tuple[float, float], second: bool) -> str:
-    """Where a compared world's caption hangs: side by side, under its share in the goal (the
-    readout), the first world's from the construction wall's left corner growing right, the second's
-    from its right corner growing left, each towards the gap between the worlds and sized in metres
-    (:data:`COMPARE_CAPTION_HEIGHT`), so that each stays over its own world and out of the view's top
-    left, where viser stacks its notices (they were screen-sized over the walls, grown from both left
-    corners: beside the open panel the first ran over the second world); stacked, from the wall's top
-    middle in screen pixels (a tall view is narrow: a caption grown from a corner ran off it). The
-    framing makes room for them (:func:`compare_camera`)."""
+    """Where a compared world's caption hangs: side by side, under the arena's bottom wall (off the
+    floor the lit band sweeps), the first world's from below the construction wall's left corner
+    growing right, the second's from below its right corner growing left, each towards the gap between
+    the worlds and sized in metres (:data:`COMPARE_CAPTION_HEIGHT`), so that each stays under its own
+    world and out of the view's top left, where viser stacks its notices (they were screen-sized over
+    the walls, grown from both left corners: over the lit band, and beside the open panel the first ran
+    over the second world); stacked, from the wall's top middle in screen pixels (a tall view is
+    narrow: a caption grown from a corner ran off it). The framing makes room for them
+    (:func:`compare_camera`)."""
     if is_stacked(offset):
         return "bottom-center"
     return "top-right" if second else "top-left"
@@ -228,8 +229,7 @@ def caption_anchor_point(config: Config, anchor: str) -> tuple[float, float]:
     low, high, _, top = construction_box(config)
     if anchor == "bottom-center":
         return (low + high) / 2.0, top + 0.3
-    below = readout_box(config)[2] - LABEL_GAP
-    return (low if anchor == "top-left" else high), below
+    return (low if anchor == "top-left" else high), -LABEL_GAP  # under the arena's bottom wall
 
 
 def union(*boxes: Box) -> Box:
@@ -252,20 +252,21 @@ def readout_anchor(config: Config) -> tuple[float, float]:
 
 
 def readout_box(config: Config, text_chars: int = 14) -> Box:
-    """The floor a world's readout covers, about (its width estimated from a digit's width, 0.6 em)."""
+    """The floor a world's readout covers, about (its width estimated from a character's, 0.5 em)."""
     x, top = readout_anchor(config)
-    half = 0.6 * READOUT_HEIGHT * text_chars / 2.0
+    half = 0.5 * READOUT_HEIGHT * text_chars / 2.0  # a figure's width: 0.47 em measured ("2.5 % in goal")
     return (x - half, x + half, top - LABEL_BLOCK * READOUT_HEIGHT, top)
 
 
 def difference_anchor(config: Config, offset: tuple[float, float]) -> tuple[float, float]:
     """The difference's centre: the middle of the floor between the two worlds' construction areas;
-    side by side, under the gap between the arenas, below their bottom walls (it is wider than the gap:
-    between the worlds it lay over both arenas' walls and floor, and in the view's top left, where
-    viser stacks its notices)."""
+    side by side, under the gap between the arenas, below their bottom walls and the captions (it is
+    wider than the gap: between the worlds it lay over both arenas' walls and floor, and in the view's
+    top left, where viser stacks its notices)."""
     if is_stacked(offset):
         return config.centre + offset[0] / 2.0, config.centre + offset[1] / 2.0
-    return config.centre + offset[0] / 2.0, -LABEL_GAP - LABEL_BLOCK * DIFFERENCE_HEIGHT / 2.0
+    captions = CAPTION_LINES_EM * COMPARE_CAPTION_HEIGHT  # their block, under the arenas' bottom walls
+    return config.centre + offset[0] / 2.0, -2 * LABEL_GAP - captions - LABEL_BLOCK * DIFFERENCE_HEIGHT / 2.0
 
 
 def difference_box(config: Config, offset: tuple[float, float], text_chars: int = 26) -> Box:
@@ -312,6 +313,8 @@ def compare_floor_box(config: Config, offset: tuple[float, float], whole: bool,
 #: A compare caption's longest line, in characters, as framed for ("step 14,700 | contracting, cycle 12": 35),
 #: and a character's width in ems (viser's sans-serif: "step 5,425 | contracting, cycle 0" measured 0.44).
 CAPTION_CHARS, CHAR_EM = 35, 0.45
+#: A compare caption's two lines and viser's padding, in ems.
+CAPTION_LINES_EM = 2.6
 
 
 def caption_box(config: Config, offset: tuple[float, float], second: bool, view_height: float,
@@ -321,7 +324,7 @@ def caption_box(config: Config, offset: tuple[float, float], second: bool, view_
     in screen pixels in a view ``view_height`` metres high (12 px x 1.2 an em in an 800 px high view,
     scaled with the view)."""
     em = 12 * 1.2 / 800 * view_height if is_stacked(offset) else COMPARE_CAPTION_HEIGHT
-    width, height = CHAR_EM * em * chars, 2.6 * em
+    width, height = CHAR_EM * em * chars, CAPTION_LINES_EM * em
     anchor = caption_anchor(offset, second)
     x, y = caption_anchor_point(config, anchor)
     left = {"top-left": x, "bottom-center": x - width / 2.0}.get(anchor, x - width)

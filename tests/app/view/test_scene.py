@@ -10,7 +10,7 @@ import pytest
 from sandbox.app.world.runner import Runner
 from sandbox.app.world.orders import SetPlaying, StepOnce
 from sandbox.app.view.scene import (LABEL_GAP, POINT_GRID, CompactSender, SceneView, compare_camera, compare_offset,
-                                    readout_box, top_down_camera)
+                                    top_down_camera)
 from sandbox.app.world.snapshot import caption, case_name
 from sandbox.model.config import Config
 
@@ -256,15 +256,15 @@ def test_the_caption_sits_where_every_framing_of_the_page_shows_it(snapshot):
     assert labels["/caption"]["anchor"] == "bottom-center" and labels["/caption"]["font_size_mode"] == "scene"
     assert labels["/caption"]["font_scene_height"] == 0.85 and classroom._caption(snapshot).count("\n") == 1
     # Beside a compared world, each world's share in the goal is large under its construction wall and its
-    # caption under that, in two lines (two captions on one line ran into each other) sized in metres, the
-    # first world's from the wall's left corner (issue 56, item 10: 13 px at a projector, and the first
-    # ran over the second world beside the open panel), and back when compare mode ends.
+    # caption under the arena's bottom wall, off the lit floor, in two lines (two captions on one line ran
+    # into each other) sized in metres, the first world's from below the construction wall's left corner
+    # (issue 56, item 10: 13 px at a projector, over the lit band, and beside the open panel the first ran
+    # over the second world), and back when compare mode ends.
     view = SceneView(LabelScene(), snapshot)
     assert labels["/readout"]["visible"] is False
     view.set_compared((70.0, 0.0), snapshot)
     low = cfg.centre - cfg.construction_size / 2
-    under = readout_box(cfg)[2] - LABEL_GAP
-    assert labels["/caption"]["position"][:2] == (low, under) and labels["/caption"]["anchor"] == "top-left"
+    assert labels["/caption"]["position"][:2] == (low, -LABEL_GAP) and labels["/caption"]["anchor"] == "top-left"
     assert labels["/caption"]["font_size_mode"] == "scene"
     assert view.handles["readout"].visible and labels["/readout"]["font_size_mode"] == "scene"
     assert view._caption(snapshot).count("\n") == 1 and "% in goal" not in view._caption(snapshot)
