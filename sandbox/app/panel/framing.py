@@ -106,8 +106,10 @@ class Framing:
         elif presenter:
             aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect,
                                                  also=lit_by_hand(snap) if lamp_in_view else None))
+        elif lamp_in_view and lit_by_hand(snap) is not None:
+            frame_arena(client, config, whole=view == WHOLE_ARENA, also=lit_by_hand(snap))
         else:
-            frame_arena(client, config, whole=view == WHOLE_ARENA, also=lit_by_hand(snap) if lamp_in_view else None)
+            frame_arena(client, config, whole=view == WHOLE_ARENA)
 
     def arrive(self, client: Any) -> None:
         """A page that connected: the default view's layout (its camera is framed as it reports its shape).
