@@ -38,7 +38,7 @@ from sandbox.app.panel.framing import PRESENTER, WHOLE_ARENA
 from sandbox.app.world.child import ProcessRunner, SimulationCrashed
 from sandbox.app.world.orders import PlayDesign, SetProgram
 from sandbox.app.world.runner import Runner
-from sandbox.app.view.scene import SceneView, configure_scene
+from sandbox.app.view.scene import PHONE_ASPECT, SceneView, configure_scene
 from sandbox.app.world.snapshot import Snapshot
 from sandbox.app.web.stopping import interruptible, starting, term_stops
 from sandbox.app.web.viser_seam import ViserMismatch
@@ -225,19 +225,23 @@ class App:
         self._fit(client)
 
     def _fit(self, client: Any) -> None:
-        """While a page lays itself out, frame the arena for its window's shape (unless it follows a
-        robot: then the inspector moves its camera)."""
+        """While a page lays itself out, frame the arena for its window's shape, and in the presenter
+        layout whenever its window changes shape (unless it follows a robot: then the inspector moves
+        its camera)."""
         fitting = self._fitting.get(client.client_id)
         if fitting is None:
             return
         until, fitted = fitting
-        if time.monotonic() > until:
-            del self._fitting[client.client_id]
-            return
         aspect = client.camera.aspect
-        if aspect and aspect != fitted and client.client_id not in self.panel.inspector.followers:
-            self.panel.framing.apply(client)  # as this viewer's View says
-            self._fitting[client.client_id] = (until, aspect)
+        if not aspect or aspect == fitted or client.client_id in self.panel.inspector.followers:
+            return
+        # Later, the window changed shape: the presenter layout, which promises the floor framed for the
+        # room, is framed again (its panel opened or folded), and so is a phone (its drawer opened over the
+        # floor: the page's canvas ends at the drawer, page/layout.js); another view keeps its camera.
+        phone = min(aspect, fitted or aspect) < PHONE_ASPECT
+        if time.monotonic() <= until or phone or self.panel.framing.of(client.client_id) == PRESENTER:
+            self.panel.framing.apply(client, lamp_in_view=phone and fitted is not None)  # as its View says
+        self._fitting[client.client_id] = (until, aspect)
 
     def _check_viewers(self) -> None:
         """Every second: with no viewer for a while, pause (unless --keep-running)."""

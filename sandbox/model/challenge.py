@@ -20,8 +20,9 @@ import numpy as np
 
 from sandbox.model.config import Config
 
-#: A round's length in world steps: 11 minutes of simulated time, about a minute of play.
-ROUND_STEPS = 20_000
+#: A round's length in world steps (25 minutes of simulated time): about a minute of play at `serve`'s
+#: default pace, 25 steps a frame at 30 frames a second (750 a second); 20,000 lasted 27-29 s.
+ROUND_STEPS = 45_000
 #: The seed every round starts from (the paper's evaluations' first).
 ROUND_SEED = 0
 #: Robots :func:`lamp_start` compares pairwise, at most (1,000: 8 MB and a few milliseconds).
@@ -48,10 +49,15 @@ class Gain:
         return self.brought / outside if outside > 0 else 0.0
 
 
-def lamp_start(robot_positions: np.ndarray, radius: float) -> tuple[float, float]:
+def lamp_start(robot_positions: np.ndarray, radius: float,
+               within: tuple[float, float, float, float] | None = None) -> tuple[float, float]:
     """Where a round's lamp is first lit: on the robot with the most others within ``radius`` (the
     densest group the lamp can cover), the most central of equals. Robots start scattered over the
-    whole arena, so their centroid is the arena's middle, where the goal is and few of them are."""
+    whole arena, so their centroid is the arena's middle, where the goal is and few of them are.
+    ``within`` (left, right, bottom, top): only a robot on that floor will do (the floor every page
+    shows; the densest group elsewhere was under a folded panel or off a phone's edge); with none
+    there, one less than ``radius`` from it, moved onto its edge (the lamp still lights it); with none
+    of those either, any, moved onto its edge."""
     xy = np.asarray(robot_positions, dtype=float).reshape(-1, 2)
     if not len(xy):
         raise ValueError("no robots to light")
@@ -59,10 +65,21 @@ def lamp_start(robot_positions: np.ndarray, radius: float) -> tuple[float, float
     xy = xy[np.linspace(0, len(xy) - 1, min(len(xy), MOST_ROBOTS_COMPARED)).astype(int)]
     d2 = (xy[:, None, 0] - xy[None, :, 0]) ** 2 + (xy[:, None, 1] - xy[None, :, 1]) ** 2
     near = (d2 <= radius * radius).sum(axis=1)
+    if within is not None:
+        left, right, bottom, top = within
+        off = np.hypot(np.maximum(0.0, np.maximum(left - xy[:, 0], xy[:, 0] - right)),
+                       np.maximum(0.0, np.maximum(bottom - xy[:, 1], xy[:, 1] - top)))  # how far from the box
+        for reach in (0.0, radius):
+            if (off <= reach).any():
+                near = np.where(off <= reach, near, -1)
+                break
     crowded = np.flatnonzero(near == near.max())
     middle = xy.mean(axis=0)
     best = crowded[np.argmin(np.hypot(*(xy[crowded] - middle).T))]
-    return float(xy[best, 0]), float(xy[best, 1])
+    x, y = float(xy[best, 0]), float(xy[best, 1])
+    if within is not None:
+        x, y = min(max(x, within[0]), within[1]), min(max(y, within[2]), within[3])
+    return x, y
 
 
 def paper_gain(config: Config, seed: int, steps: int, shape: np.ndarray | None | str = "from-config") -> Gain:

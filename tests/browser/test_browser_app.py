@@ -715,7 +715,7 @@ def test_a_challenge_round_is_scored_against_the_paper(app, page):
     from sandbox.app.world.snapshot import PAPER_PROGRAM
 
     folder = app.panel.challenge
-    folder.round_steps = 300  # a short round (the page says 20,000)
+    folder.round_steps = 300  # a short round (the page says 45,000)
     open_folder(page, "Challenge")
     # viser's text inputs are not tied to their label (its for= names another id): find the input in the row.
     label = page.locator("label:text-is('Your name')")

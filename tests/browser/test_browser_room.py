@@ -121,6 +121,7 @@ def test_start_over_is_offered_to_a_controlling_page_mid_run_not_to_a_watcher(ap
     from sandbox.app.panel import presenter
 
     monkeypatch.setattr(presenter, "OFFER_SECONDS", 900.0)  # a loaded machine shows the page late: no expiry here
+    monkeypatch.setattr(presenter, "OFFER_FROM_STEP", 1)  # any step is far along here (pages came before)
     runner = app.runner
     if not runner.playing:
         app.events.call(app.lockstep.set_playing, True)

@@ -78,7 +78,8 @@ class Panel:
         self.program = ProgramFolder(gui, runner, server, allowed=allow_programs, on_change=self.metrics.mark,
                                      may_load=may_load_programs)
         self.lamp = LampFolder(gui, runner, on_change=self.metrics.mark)
-        self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark, events=events)
+        self.challenge = ChallengeFolder(gui, runner, lockstep, self.lamp, on_change=self.metrics.mark, events=events,
+                                         scene=server.scene)
         self.compare = CompareFolder(gui, runner, comparison, on_change=self.metrics.mark, events=events)
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
         self.result = ResultFolder(gui, runner, server.scene, events=events)

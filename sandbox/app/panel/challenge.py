@@ -12,6 +12,10 @@ configuration, seed, goal, steps and definition). After :data:`HINT_SECONDS`
 without a box brought in, a one-line hint says what to try. The page keeps
 each player's best score of the session, by name.
 
+The round's score and hint are also written on the floor, under the
+construction wall, in letters sized in metres (:data:`FLOOR_TEXT_HEIGHT`):
+the presenter layout folds the panel, and the room reads the floor.
+
 Runs on the app's event thread, which owns the round and the reference runs'
 pools (a worker only starts a pool, which blocks, and hands it over).
 """
@@ -27,6 +31,7 @@ import viser
 
 from sandbox.app.panel.common import notify_error
 from sandbox.app.panel.plain import plain
+from sandbox.app.view.scene import CONSTRUCTION_VIEW, construction_box
 from sandbox.app.world.orders import SetLamp, WorldSpec
 from sandbox.app.world.snapshot import LAMP_PROGRAM, Snapshot
 from sandbox.model.challenge import ROUND_SEED, ROUND_STEPS, Gain, lamp_start, paper_gain
@@ -39,6 +44,11 @@ HINT_SECONDS = 10.0
 #: What to try when nothing happens: one line.
 HINT = ("Hint: light the robots where they are, then move the lamp a little at a time towards the goal: "
         "they follow the light and push the boxes ahead of them.")
+#: The hint as the floor says it: short enough for one line under the construction area.
+FLOOR_HINT = "Hint: light the robots, then lead them to the goal"
+#: The floor's score and hint: letters this high (m). The presenter layout at 1024 x 768 frames the
+#: construction area (16 m) about 480 px high: 30 px a metre, 25 px letters, read from the back of a room.
+FLOOR_TEXT_HEIGHT = 0.85
 
 
 @dataclass
@@ -70,12 +80,14 @@ def describe(gain: Gain) -> str:
 
 class ChallengeFolder:
     def __init__(self, gui: Any, runner: Any, lockstep: Any, lamp: Any, on_change: Callable[[str], None], *,
-                 events: Any):
+                 events: Any, scene: Any = None):
         """The round's reset, play and pause act on ``lockstep``: in compare mode the second world (the
         paper's lights, say) plays the round beside the player's. ``events``: the app's event queue
         (:mod:`sandbox.app.web.events`), where the paper's reference run reports and whose timer shows
-        the hint. Everything here runs on its thread."""
+        the hint. ``scene``: where the floor's score and hint are written (none: the folder only).
+        Everything here runs on its thread."""
         self.gui, self.runner, self.lockstep, self.lamp, self._on_change = gui, runner, lockstep, lamp, on_change
+        self._scene, self._floor, self._floor_text = scene, None, ""
         self._events = events
         #: World steps a round lasts, and seconds without progress before the hint (tests shorten both).
         self.round_steps = ROUND_STEPS
@@ -104,6 +116,39 @@ class ChallengeFolder:
             self.scores = gui.add_markdown("")
         self.start_button.on_click(lambda event: self.start(self.name.value, event.client))
 
+    # ------------------------------------------------------------ the floor's words
+    def _write_floor(self, text: str) -> None:
+        """The round's score (and hint) on the floor under the construction wall, centred; "" hides it."""
+        if self._scene is None or text == self._floor_text:
+            return
+        self._floor_text = text
+        if self._floor is None:
+            cfg = self.runner.latest.world_config
+            below = (cfg.centre, cfg.centre - cfg.construction_size / 2.0 - 0.4, 0.12)  # the caption's height
+            self._floor = self._scene.add_label("/challenge", text or " ", position=below, anchor="top-center",
+                                                font_size_mode="scene", font_scene_height=FLOOR_TEXT_HEIGHT,
+                                                visible=bool(text))
+            return
+        if text:
+            self._floor.text = text
+        self._floor.visible = bool(text)
+
+    def _floor_words(self, r: Round, now: int | None = None, step: int | None = None) -> None:
+        """What the floor says of round ``r``: its score so far (``now`` boxes in the goal at ``step``) and
+        the hint, or its end beside the paper's."""
+        if r.score is not None:
+            line = f"{r.player}: {r.score.brought} brought in"
+            if r.paper is not None:
+                line += f"; the paper's controller: {r.paper.brought}"
+                line += " - you beat it!" if r.score.brought > r.paper.brought else ""
+            self._write_floor(line)
+            return
+        if now is None or step is None:
+            self._write_floor(f"{r.player}: get ready")
+            return
+        line = f"{r.player}: {now - r.started} brought in, step {step:,} of {r.steps:,}"
+        self._write_floor(line + ("\n" + FLOOR_HINT if self.hint.content else ""))
+
     # ------------------------------------------------------------ a round
     def start(self, name: str, client: Any) -> None:
         """A new world from the paper's seed; once built, the lamp lit where the robots are, playing."""
@@ -112,6 +157,7 @@ class ChallengeFolder:
         r = self.round = Round(player, int(self.round_steps))
         self.status.content = f"**{plain(player)}**: building the round's world..."
         self.hint.content = ""
+        self._floor_words(r)
         self.lockstep.set_playing(False)
 
         def built(world_key: int) -> None:
@@ -134,7 +180,12 @@ class ChallengeFolder:
         r.world = snap.world_key
         r.started = r.most = int(np.count_nonzero(snap.box_in_goal))
         radius = float(self.lamp.radius.value)
-        centre = lamp_start(snap.robot_positions, radius)
+        # Its disk on the floor every page frames: the construction view (a phone's, a projector's beside
+        # the folded panel's bar), not on the densest group wherever it is.
+        view = construction_box(snap.world_config, CONSTRUCTION_VIEW)
+        inset = min(radius + snap.world_config.light_pitch, (view[1] - view[0]) / 2.0)  # its lit cells whole
+        centre = lamp_start(snap.robot_positions, radius,
+                            within=(view[0] + inset, view[1] - inset, view[2] + inset, view[3] - inset))
 
         def lit(_: Any) -> None:
             self.lockstep.set_playing(True)
@@ -166,6 +217,7 @@ class ChallengeFolder:
         if snap.step < r.steps:
             self.status.content = (f"**{plain(r.player)}**: step {snap.step:,} of {r.steps:,}, "
                                    f"{describe(Gain(r.started, now, len(snap.box_in_goal)))}")
+            self._floor_words(r, now, snap.step)
             return
         r.score, r.at_step = Gain(r.started, now, len(snap.box_in_goal)), int(snap.step)
         self._cancel_hint()
@@ -173,6 +225,7 @@ class ChallengeFolder:
         self.lockstep.set_playing(False)
         self.status.content = (f"**{plain(r.player)}**: {describe(r.score)} after {r.at_step:,} steps. "
                                "The paper's controller is playing the same world...")
+        self._floor_words(r)
         self.runner.ask(WorldSpec(), on_done=lambda spec: self._score_the_paper(r, spec),
                         on_error=lambda exc: self._show(r, problem=f"no reference: {exc}"))
 
@@ -183,6 +236,7 @@ class ChallengeFolder:
         self._cancel_hint()
         self.hint.content = ""
         self.status.content = f"**{plain(r.player)}**: round abandoned ({plain(why)})."
+        self._write_floor("")
 
     # ------------------------------------------------------------ the hint
     def _arm_hint(self, r: Round) -> None:
@@ -267,5 +321,6 @@ class ChallengeFolder:
                    if r.paper is not None else plain(problem))
         verdict = "" if r.paper is None else (" You beat it!" if r.score.brought > r.paper.brought else "")
         self.status.content = f"**{plain(r.player)}**: **{describe(r.score)}**; {against}.{verdict}"
+        self._floor_words(r)
         self.scores.content = ("| player | best: boxes brought in, of those outside |\n|---|---|\n"
                                + "".join(f"| {plain(name)} | {100 * share:.0f} % |\n" for name, share in ranked))

@@ -21,7 +21,10 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
+import numpy as np
+
 from sandbox.app.view.legend import legend_picture
+from sandbox.app.world.snapshot import LAMP_PROGRAM
 from sandbox.app.view.scene import (PHONE_ASPECT, add_floor_legend, aim_camera, compare_camera, compare_legend_box,
                                frame_arena, presenter_camera)
 
@@ -30,6 +33,17 @@ WHOLE_ARENA = "Whole arena"
 PRESENTER = "Presenter"
 #: The View buttons: each frames the clicking page's own camera.
 VIEWS = (CONSTRUCTION, WHOLE_ARENA, PRESENTER)
+
+
+def lit_by_hand(snap: Any) -> tuple[float, float, float, float] | None:
+    """The floor a person's lamp (or brush) lights, its lit cells' extent (left, right, bottom, top), or
+    None: a phone's view framed again as its drawer opens or closes frames it too (the drawer opened
+    over the lamp: issue 56, item 16)."""
+    if getattr(snap, "program", None) != LAMP_PROGRAM or snap.intensities is None or not snap.intensities.any():
+        return None
+    cells, pitch = np.argwhere(snap.intensities > 0), snap.world_config.light_pitch
+    (x0, y0), (x1, y1) = cells.min(axis=0) * pitch, (cells.max(axis=0) + 1) * pitch
+    return float(x0), float(x1), float(y0), float(y1)
 
 
 class Framing:
@@ -71,14 +85,16 @@ class Framing:
         if client is not None:
             self.choose(client, CONSTRUCTION if self.of(client.client_id) == PRESENTER else PRESENTER)
 
-    def apply(self, client: Any) -> None:
-        """Frame this viewer's camera for its view and window; the presenter's legend on its floor.
+    def apply(self, client: Any, lamp_in_view: bool = False) -> None:
+        """Frame this viewer's camera for its view and window; the presenter's legend on its floor;
+        ``lamp_in_view``: a lit lamp too (a phone whose drawer opened or closed over it).
 
         All of it in one event of the app's event thread, from reading the view to moving the camera:
         a View button chosen while a page's camera is fitted is framed after the fit, never overwritten
         by a view read before it (seen on a loaded machine when the fitting ran in a thread of its own:
         the whole arena chosen, the presenter's camera left)."""
-        config = self.runner.latest.world_config
+        snap = self.runner.latest
+        config = snap.world_config
         aspect = float(getattr(client.camera, "aspect", 0.0) or 1.4)
         view = self.of(client.client_id)
         presenter = view == PRESENTER and (aspect >= PHONE_ASPECT or self.offset is not None)
@@ -88,7 +104,10 @@ class Framing:
                                                legend_height_per_width=self._legend_aspect if presenter
                                                else None))
         elif presenter:
-            aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect))
+            aim_camera(client, *presenter_camera(config, aspect, self._legend_aspect,
+                                                 also=lit_by_hand(snap) if lamp_in_view else None))
+        elif lamp_in_view and lit_by_hand(snap) is not None:
+            frame_arena(client, config, whole=view == WHOLE_ARENA, also=lit_by_hand(snap))
         else:
             frame_arena(client, config, whole=view == WHOLE_ARENA)
 

@@ -17,10 +17,14 @@ floor's side of the panel, for a room. Runs on the app's event thread.
   empty in every framing. Real viser controls: the gate checks each click
   as it checks the panel's.
 - **Joining mid-run.** A page that may control the simulation and arrives
-  after step 0 is offered *Start over* (a reset with the same seed: the same
-  run again from its start) in a floating panel at the canvas's bottom
-  right, which goes away after two minutes or when answered. A watching page
-  gets nothing: it just watches.
+  when the run is far along (:data:`OFFER_FROM_STEP`), the server having
+  shown it to an earlier page, is offered *Start over* (a reset with the
+  same seed: the same run again from its start) in a floating panel at the
+  canvas's bottom right, which goes away after two minutes or when answered.
+  The server's first page is not joining anything: whoever just typed
+  ``phototaxis`` sees the run the server began for them. The offer names no
+  step: it stays two minutes while the run goes on (a number in it went
+  stale beside the caption's). A watching page gets nothing: it just watches.
 
 "First visit" is read as "arrives while the world has not been played yet":
 viser gives the server no cookies, so a page cannot be told from one that
@@ -43,6 +47,9 @@ from sandbox.app.world.snapshot import Snapshot, case_name
 
 #: How long the Start over offer stays (s): a loaded classroom laptop may take half a minute to show it.
 OFFER_SECONDS = 120.0
+#: A run is far along enough to offer Start over from this step on: about 7 s at the default pace (750
+#: steps a second), past the band's first sweep that a page arriving earlier hardly missed.
+OFFER_FROM_STEP = 5_000
 #: The on-screen bar's and the offer's width (CSS px): buttons large enough to hit on a projector.
 BAR_WIDTH, OFFER_WIDTH = 210.0, 300.0
 #: Their gap to the canvas's edges (CSS px).
@@ -76,6 +83,8 @@ class PresenterScreen:
         self.bars: dict[int, Any] = {}
         #: per page offered Start over: the offer's panel, and the world it offers to start over
         self.offers: dict[int, tuple[Any, int]] = {}
+        #: Whether a page came before (the server's first page joins nothing: the run began for it).
+        self.seen_a_page = False
 
     # The panel builds and refreshes every folder; this one has nothing in the shared panel.
     def build(self, snap: Snapshot) -> None:
@@ -92,12 +101,15 @@ class PresenterScreen:
 
     # ------------------------------------------------------------ pages
     def arrive(self, client: Any, controls: bool) -> None:
-        """A page connected: its title card at step 0, or its Start over offer mid-run."""
+        """A page connected: its title card at step 0, or its Start over offer when it joins a run that an
+        earlier page saw and that is far along."""
         self.controls[client.client_id] = controls
         snap = self.runner.latest
+        joins = self.seen_a_page and snap.step >= OFFER_FROM_STEP
+        self.seen_a_page = True
         if snap.step == 0 and not self.lockstep.playing:
             self.show_card(client, controls)
-        elif controls and snap.step > 0:
+        elif controls and joins:
             self.offer_start_over(client)
 
     def forget(self, client_id: int) -> None:
@@ -149,10 +161,10 @@ class PresenterScreen:
 
     # ------------------------------------------------------------ joining mid-run
     def offer_start_over(self, client: Any) -> None:
-        step = self.runner.latest.step
         panel = client.gui.add_panel()
         with panel.add_tab("Joining mid-run", viser.Icon.PLAYER_SKIP_BACK):
-            client.gui.add_markdown(f"This run is at step {step:,}. See it from the start?")
+            # No step number: the offer stays while the run goes on (the caption says the step).
+            client.gui.add_markdown("This run began before you came. See it from the start?")
             start = client.gui.add_button("Start over", icon=viser.Icon.PLAYER_SKIP_BACK,
                                           hint="The same run again from step 0 (the same seed), for every page")
             keep = client.gui.add_button("Go on from here", icon=viser.Icon.X)

@@ -51,6 +51,10 @@ Z_LEGEND = 0.10  # the presenter's legend: over the bodies and lines, under the 
 CONSTRUCTION_VIEW = 1.4
 
 
+#: A classroom's caption (two lines over the construction area): letters this high (m). The presenter
+#: layout at 1024 x 768 frames the 16 m construction area about 480 px high: 30 px a metre, 25 px letters.
+CLASSROOM_CAPTION_HEIGHT = 0.85
+
 #: Floor (m) between the running world's arena and compare mode's second one, to its right.
 COMPARE_GAP = 6.0
 #: The narrowest view the far plane allows for: a phone upright.
@@ -61,8 +65,8 @@ PHONE_ASPECT_NARROWEST = 0.4
 PHONE_ASPECT = 0.75
 
 
-def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, *,
-                    whole: bool = True) -> tuple[np.ndarray, np.ndarray, float]:
+def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, *, whole: bool = True,
+                    also: tuple[float, float, float, float] | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """Camera position, look-at point and vertical field of view (radians) that
     frame the whole arena (or, ``whole`` False, the construction area) from
     straight above (tilted a hair so orbiting works), in a view ``aspect``
@@ -70,13 +74,14 @@ def top_down_camera(config: Config, aspect: float = 1.4, fov_deg: float = 50.0, 
     for its width. A view much taller than wide (narrower than :data:`PHONE_ASPECT`: a phone,
     where viser lays its panel over the lower half of the page) has the framed square at its top,
     not in its middle. (The server learns only the canvas's shape, not whether the panel covers
-    it: a desktop window that narrow gets the same framing, whole but high.) Compare mode's two
-    worlds: :func:`compare_camera`."""
+    it: a desktop window that narrow gets the same framing, whole but high.) ``also``: a floor box
+    (left, right, bottom, top) framed too (a person's lamp). Compare mode's two worlds: :func:`compare_camera`."""
     if whole:
         c, half = config.arena_size / 2.0, config.arena_size * 0.56  # arena plus a margin
     else:
         c, half = config.centre, config.construction_size * CONSTRUCTION_VIEW / 2.0
-    return camera_over((c - half, c + half, c - half, c + half), aspect, fov_deg, top_on_phone=True)
+    box = (c - half, c + half, c - half, c + half)
+    return camera_over(box if also is None else union(box, also), aspect, fov_deg, top_on_phone=True)
 
 
 def camera_over(box: tuple[float, float, float, float], aspect: float, fov_deg: float = 50.0, *,
@@ -95,11 +100,11 @@ def camera_over(box: tuple[float, float, float, float], aspect: float, fov_deg: 
     return np.array([cx, cy - 1e-3 * height, height]), np.array([cx, cy, 0.0]), float(fov)
 
 
-def frame_arena(client: Any, config: Config, whole: bool = True) -> None:
-    """Point one viewer's camera at the whole arena (or the construction area), for its own window's
-    shape."""
+def frame_arena(client: Any, config: Config, whole: bool = True, also: tuple | None = None) -> None:
+    """Point one viewer's camera at the whole arena (or the construction area; and the floor box ``also``),
+    for its own window's shape."""
     aspect = float(getattr(client.camera, "aspect", 0.0) or 1.4)
-    aim_camera(client, *top_down_camera(config, aspect, whole=whole))
+    aim_camera(client, *top_down_camera(config, aspect, whole=whole, also=also))
 
 
 def aim_camera(client: Any, position: np.ndarray, look_at: np.ndarray, fov: float) -> None:
@@ -156,17 +161,17 @@ def presenter_legend_box(config: Config, height_per_width: float) -> tuple[float
     return right - width, right, top - width * height_per_width, top
 
 
-def presenter_camera(config: Config, aspect: float, height_per_width: float,
-                     fov_deg: float = 50.0) -> tuple[np.ndarray, np.ndarray, float]:
+def presenter_camera(config: Config, aspect: float, height_per_width: float, fov_deg: float = 50.0,
+                     also: tuple | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """Camera position, look-at point and field of view framing the construction area and the
-    presenter's legend beside it, as large as the view's ``aspect`` allows (a margin all round).
-    Compare mode's two worlds: :func:`compare_camera`."""
+    presenter's legend beside it (and the floor box ``also``), as large as the view's ``aspect`` allows
+    (a margin all round). Compare mode's two worlds: :func:`compare_camera`."""
     left, _, bottom, _ = presenter_legend_box(config, height_per_width)
     half = config.construction_size * CONSTRUCTION_VIEW / 2.0
     margin = half - config.construction_size / 2.0
     box = (left - margin, config.centre + half, min(bottom, config.centre - config.construction_size / 2.0) - margin,
            config.centre + half)
-    return camera_over(box, aspect, fov_deg)
+    return camera_over(box if also is None else union(box, also), aspect, fov_deg)
 
 
 # ------------------------------------------------------- compare mode's layout (issue 41, item 1)
@@ -176,13 +181,19 @@ def presenter_camera(config: Config, aspect: float, height_per_width: float,
 #: each other or the other world, however small the page: at a projector's compare framing (1024 px,
 #: about 10 px a metre) a readout is about 35 px high. The captions stay sized in screen pixels (a
 #: line of text must stay readable on a phone that frames both arenas).
-READOUT_HEIGHT, DIFFERENCE_HEIGHT = 3.2, 2.4
+READOUT_HEIGHT, DIFFERENCE_HEIGHT = 3.2, 2.7
+#: Side by side, each world's caption is sized in metres too: letters this high, 26 px at a projector's
+#: compare framing (1024 x 768, the panel folded: about 10.4 px a metre), read from the back of a room
+#: (issue 56, item 10: they were 13 px); each stays over its own world, however small the page (its
+#: longest line, :data:`CAPTION_CHARS`, fits between the construction wall and the arena's: 2.5 m at most).
+COMPARE_CAPTION_HEIGHT = 2.5
 #: A label's block is this many times its font's height (the line's height and viser's padding).
 LABEL_BLOCK = 1.45
 #: Gap (m) between a construction wall and the label above or below it.
 LABEL_GAP = 0.4
-#: The presenter's legend in compare mode: at most this wide (m), in the floor's gap between the worlds.
-COMPARE_LEGEND_WIDTH = 30.0
+#: The presenter's legend in compare mode: at most this wide (m); side by side, under both arenas, at most
+#: :data:`SIDE_LEGEND_WIDTH` (a wider one made the framing taller than the view: everything smaller).
+COMPARE_LEGEND_WIDTH, SIDE_LEGEND_WIDTH = 30.0, 18.0
 
 Box = tuple[float, float, float, float]  # (left, right, bottom, top) on the floor
 
@@ -199,11 +210,26 @@ def is_stacked(offset: tuple[float, float]) -> bool:
 
 
 def caption_anchor(offset: tuple[float, float], second: bool) -> str:
-    """Where a compared world's caption hangs from its construction wall's top: side by side, from its
-    left corner, growing right (two growing towards each other met on a projector's canvas beside the
-    open panel); stacked, from the wall's middle (a tall view is narrow: a caption grown from a corner
-    ran off it). The framing makes room for them (:func:`compare_camera`)."""
-    return "bottom-center" if is_stacked(offset) else "bottom-left"
+    """Where a compared world's caption hangs: side by side, under the arena's bottom wall (off the
+    floor the lit band sweeps), the first world's from below the construction wall's left corner
+    growing right, the second's from below its right corner growing left, each towards the gap between
+    the worlds and sized in metres (:data:`COMPARE_CAPTION_HEIGHT`), so that each stays under its own
+    world and out of the view's top left, where viser stacks its notices (they were screen-sized over
+    the walls, grown from both left corners: over the lit band, and beside the open panel the first ran
+    over the second world); stacked, from the wall's top middle in screen pixels (a tall view is
+    narrow: a caption grown from a corner ran off it). The framing makes room for them
+    (:func:`compare_camera`)."""
+    if is_stacked(offset):
+        return "bottom-center"
+    return "top-right" if second else "top-left"
+
+
+def caption_anchor_point(config: Config, anchor: str) -> tuple[float, float]:
+    """The point on the floor a compared world's caption hangs from (its ``anchor``, :func:`caption_anchor`)."""
+    low, high, _, top = construction_box(config)
+    if anchor == "bottom-center":
+        return (low + high) / 2.0, top + 0.3
+    return (low if anchor == "top-left" else high), -LABEL_GAP  # under the arena's bottom wall
 
 
 def union(*boxes: Box) -> Box:
@@ -226,15 +252,21 @@ def readout_anchor(config: Config) -> tuple[float, float]:
 
 
 def readout_box(config: Config, text_chars: int = 14) -> Box:
-    """The floor a world's readout covers, about (its width estimated from a digit's width, 0.6 em)."""
+    """The floor a world's readout covers, about (its width estimated from a character's, 0.5 em)."""
     x, top = readout_anchor(config)
-    half = 0.6 * READOUT_HEIGHT * text_chars / 2.0
+    half = 0.5 * READOUT_HEIGHT * text_chars / 2.0  # a figure's width: 0.47 em measured ("2.5 % in goal")
     return (x - half, x + half, top - LABEL_BLOCK * READOUT_HEIGHT, top)
 
 
 def difference_anchor(config: Config, offset: tuple[float, float]) -> tuple[float, float]:
-    """The difference's centre: the middle of the floor between the two worlds' construction areas."""
-    return config.centre + offset[0] / 2.0, config.centre + offset[1] / 2.0
+    """The difference's centre: the middle of the floor between the two worlds' construction areas;
+    side by side, under the gap between the arenas, below their bottom walls and the captions (it is
+    wider than the gap: between the worlds it lay over both arenas' walls and floor, and in the view's
+    top left, where viser stacks its notices)."""
+    if is_stacked(offset):
+        return config.centre + offset[0] / 2.0, config.centre + offset[1] / 2.0
+    captions = CAPTION_LINES_EM * COMPARE_CAPTION_HEIGHT  # their block, under the arenas' bottom walls
+    return config.centre + offset[0] / 2.0, -2 * LABEL_GAP - captions - LABEL_BLOCK * DIFFERENCE_HEIGHT / 2.0
 
 
 def difference_box(config: Config, offset: tuple[float, float], text_chars: int = 26) -> Box:
@@ -244,10 +276,11 @@ def difference_box(config: Config, offset: tuple[float, float], text_chars: int 
 
 
 def compare_legend_box(config: Config, offset: tuple[float, float], height_per_width: float) -> Box:
-    """The presenter's legend in compare mode: side by side, under the difference in the gap between
-    the worlds, as wide as the gap leaves (at most :data:`COMPARE_LEGEND_WIDTH`); stacked, left of
-    both construction areas, level with the gap between them (a phone's or a tall screen's width
-    has room there, not between)."""
+    """The presenter's legend in compare mode: side by side, below both arenas and the difference, under
+    the gap between them (between the worlds it covered the first one's lit band: issue 56, item 10), at most
+    :data:`COMPARE_LEGEND_WIDTH` wide and no wider than the framing's height leaves room for; stacked,
+    left of both construction areas, level with the gap between them (a phone's or a tall screen's
+    width has room there, not between)."""
     view = construction_box(config, CONSTRUCTION_VIEW)
     gx, gy = difference_anchor(config, offset)
     if is_stacked(offset):
@@ -256,8 +289,8 @@ def compare_legend_box(config: Config, offset: tuple[float, float], height_per_w
         height = width * height_per_width
         return (right - width, right, gy - height / 2.0, gy + height / 2.0)
     gap = (view[0] + offset[0]) - view[1]  # between the two construction views
-    width = max(4.0, min(COMPARE_LEGEND_WIDTH, gap - 4.0))
-    top = difference_box(config, offset)[2] - LABEL_GAP
+    width = max(4.0, min(SIDE_LEGEND_WIDTH, gap - 4.0))
+    top = difference_box(config, offset)[2] - LABEL_GAP  # under the difference, under the arenas' bottom walls
     return (gx - width / 2.0, gx + width / 2.0, top - width * height_per_width, top)
 
 
@@ -269,7 +302,7 @@ def compare_floor_box(config: Config, offset: tuple[float, float], whole: bool,
     if whole:
         c, half = config.arena_size / 2.0, config.arena_size * 0.56
         one = (c - half, c + half, c - half, c + half)
-        return union(one, shifted(one, offset))
+        return union(one, shifted(one, offset), difference_box(config, offset))
     one = union(construction_box(config, CONSTRUCTION_VIEW), readout_box(config))
     parts = [one, shifted(one, offset), difference_box(config, offset)]
     if legend_height_per_width is not None:
@@ -280,19 +313,22 @@ def compare_floor_box(config: Config, offset: tuple[float, float], whole: bool,
 #: A compare caption's longest line, in characters, as framed for ("step 14,700 | contracting, cycle 12": 35),
 #: and a character's width in ems (viser's sans-serif: "step 5,425 | contracting, cycle 0" measured 0.44).
 CAPTION_CHARS, CHAR_EM = 35, 0.45
+#: A compare caption's two lines and viser's padding, in ems.
+CAPTION_LINES_EM = 2.6
 
 
 def caption_box(config: Config, offset: tuple[float, float], second: bool, view_height: float,
                 chars: int = CAPTION_CHARS) -> Box:
-    """The floor a compare caption covers in a view ``view_height`` metres high: two lines of
-    screen-sized text (12 px x 1.2 an em in an 800 px high view, scaled with the view; a character
-    :data:`CHAR_EM` wide, a line 1.2 em, and viser's padding)."""
-    em = 12 * 1.2 / 800 * view_height
-    width, height = CHAR_EM * em * chars, 2.6 * em
-    low, high, _, top = construction_box(config)
-    left = {"bottom-left": low, "bottom-center": (low + high - width) / 2.0}.get(caption_anchor(offset, second),
-                                                                               high - width)
-    box = (left, left + width, top + 0.3, top + 0.3 + height)
+    """The floor a compare caption covers: two lines of text (a character :data:`CHAR_EM` wide, a line
+    1.2 em, and viser's padding); side by side sized in metres (:data:`COMPARE_CAPTION_HEIGHT`), stacked
+    in screen pixels in a view ``view_height`` metres high (12 px x 1.2 an em in an 800 px high view,
+    scaled with the view)."""
+    em = 12 * 1.2 / 800 * view_height if is_stacked(offset) else COMPARE_CAPTION_HEIGHT
+    width, height = CHAR_EM * em * chars, CAPTION_LINES_EM * em
+    anchor = caption_anchor(offset, second)
+    x, y = caption_anchor_point(config, anchor)
+    left = {"top-left": x, "bottom-center": x - width / 2.0}.get(anchor, x - width)
+    box = (left, left + width, y, y + height) if anchor.startswith("bottom") else (left, left + width, y - height, y)
     return shifted(box, offset) if second else box
 
 
@@ -447,10 +483,22 @@ class SceneView:
         area, in two lines (:func:`caption_anchor`): a caption is sized in screen pixels, and two on one
         line ran into each other once the arenas were narrower than them."""
         cfg = snap.world_config
+        if self.compared in ("top-left", "top-right"):  # side by side: sized in metres (caption_anchor)
+            return self.scene.add_label(f"{self.root}/caption", self._caption(snap),
+                                        position=(*caption_anchor_point(cfg, self.compared), Z_TOP),
+                                        anchor=self.compared, font_size_mode="scene",
+                                        font_scene_height=COMPARE_CAPTION_HEIGHT)
         if self.caption_over_construction or self.compared:
             low, high, gap = cfg.centre - cfg.construction_size / 2.0, cfg.centre + cfg.construction_size / 2.0, 0.3
         else:
             low, high, gap = 0.0, cfg.arena_size, 0.8
+        if self.caption_over_construction and not self.compared:
+            # A classroom's: two lines over the construction area in letters sized in metres, as large as
+            # the presenter layout leaves room for (25 px at 1024 x 768: read from the back of a room),
+            # and never wider than a phone's framing of the same area.
+            return self.scene.add_label(f"{self.root}/caption", self._caption(snap),
+                                        position=((low + high) / 2.0, high + gap, Z_TOP), anchor="bottom-center",
+                                        font_size_mode="scene", font_scene_height=CLASSROOM_CAPTION_HEIGHT)
         anchor = self.compared or "bottom-right"
         position = ({"bottom-left": low, "bottom-center": (low + high) / 2.0}.get(anchor, high), high + gap)
         # Its size is in screen pixels: at 1.2 it still fits a phone's width (a larger one, for a
@@ -462,6 +510,9 @@ class SceneView:
         """The caption's text: one line, or in compare mode two (the case's name, then its step and what
         lights it; the share in the goal is the readout's, large)."""
         text = caption(snap)
+        if self.caption_over_construction and not self.compared:  # a classroom's: case and step, then the rest
+            name, step, *rest = text.split(" | ")
+            return f"{name} | {step}\n" + " | ".join(rest)
         if not self.compared:
             return text
         name, *rest = text.split(" | ")

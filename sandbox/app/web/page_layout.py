@@ -16,6 +16,10 @@ top third of the screen until closed.
   closed (its own handle, "Phototaxis sandbox", opens and closes it), so
   the arena is whole; the framing already fits the arena to the width,
   at the page's top, and the open drawer stops below it.
+- **The floor above the drawer.** The open drawer's page has the scene
+  (viser's dock root, and its canvas) end where the drawer begins: the
+  canvas reports its new shape and the server frames the floor, and a lit
+  lamp, above the drawer (issue 56, item 16: the drawer covered the lamp).
 - **One tap away.** Two buttons over the floor's lower left, under the
   open drawer: *Be the light* presses the panel's own button (its label
   follows the panel's: *Give the light back*), *Challenge* opens the
@@ -28,7 +32,8 @@ top third of the screen until closed.
   folder after a run to the end). viser 1.1.1 opens a folder only when it
   is first built (``expand_by_default``), and for every page at once.
 - **The notice goes.** The software-rendering notice closes after
-  :data:`NOTICE_SECONDS`, on every width.
+  :data:`NOTICE_SECONDS`; on a phone's width at once, hidden as it comes
+  (issue 56, item 15: it covered the caption and the floor's top for 4 s).
 - **Tap, not space.** On a page with a touch screen (a coarse pointer) or a
   phone's width, the title card's last line (:mod:`sandbox.app.panel.presenter`)
   says :data:`TAP_PLAY` instead of :data:`PRESS_PLAY`: a phone has no space
@@ -93,6 +98,9 @@ CLIENT = (
            "one fixed at the page's bottom, a title the one whose first child is its label's text (a click on it "
            "opens or closes the folder)", MANTINE, found=(_SHEET, _FOLDER_TITLE)),
     Relies(".mantine-Combobox-dropdown", _LIST, MANTINE),
+    Relies("[data-dock-root]", "viser's dock root, the box that holds the scene's canvas (its height 100%): made as "
+           "tall as the floor above the open drawer, the canvas resizes and reports its shape",
+           found=(r'"data-dock-root":!0,.{0,60}?style:\{position:`relative`,width:`100%`,height:`100%`',)),
     Relies(".mantine-Select-dropdown", _LIST, MANTINE),
     Relies('div[style*="cursor: pointer"]', "the sheet's handle, its first element styled cursor: pointer: a click "
            "opens or closes the sheet, and the closed sheet is as tall as it (3.5em)", found=(_HANDLE,)),

@@ -40,6 +40,19 @@ def test_the_lamp_starts_on_the_densest_group_of_robots_not_their_centroid():
         lamp_start(np.zeros((0, 2)), 2.5)
 
 
+def test_the_lamp_starts_on_the_floor_every_page_shows():
+    """Issue 56, item 13: the densest group lay under the folded panel's bar, or off a phone's edge. Within
+    a box, the densest group of the robots in it; with none in it, the densest group's robot moved onto
+    its edge."""
+    crowd = [(60.0, 30.0), (60.5, 30.0), (61.0, 30.0)]  # out of the box: the densest
+    pair = [(30.0, 30.0), (30.5, 30.0)]  # in it
+    box = (21.3, 43.7, 21.3, 43.7)
+    assert lamp_start(np.array(crowd + pair), 2.5) in crowd
+    assert lamp_start(np.array(crowd + pair), 2.5, within=box) in ((30.0, 30.0), (30.5, 30.0))
+    assert lamp_start(np.array(crowd + [(45.0, 35.0)]), 2.5, within=box) == (43.7, 35.0)  # within reach: on the edge
+    assert lamp_start(np.array(crowd), 2.5, within=box) == (43.7, 30.0)  # none near it: the densest, on its edge
+
+
 def test_in_the_papers_world_doing_nothing_scores_nothing():
     """Issue 41: 'doing nothing scores about 33 %': a third of the paper's scattered boxes start in the goal."""
     gain = paper_gain(Config(), 0, 0, None)
@@ -51,11 +64,13 @@ class Markdown:
     content = ""
 
 
-def frame(step, in_goal, world=2, program=LAMP_PROGRAM, robots=((10.0, 10.0), (10.5, 10.0), (40.0, 40.0))):
+def frame(step, in_goal, world=2, program=LAMP_PROGRAM, robots=((25.0, 25.0), (25.5, 25.0), (38.0, 38.0))):
+    """A frame of the default world (its construction view is x and y 21.3-43.7 m; less the lamp's 1 m,
+    22.3-42.7): a pair of robots and one alone, all in view."""
     boxes = np.zeros(10, bool)
     boxes[:in_goal] = True
     return SimpleNamespace(step=step, box_in_goal=boxes, world_key=world, program=program,
-                           robot_positions=np.array(robots))
+                           robot_positions=np.array(robots), world_config=Config())
 
 
 def challenge_folder(reset, playing, events, lamps):
@@ -83,7 +98,7 @@ def a_round(hint_seconds=10.0):
 
 def test_a_round_lights_the_robots_counts_from_its_start_and_hints_after_no_progress():
     folder, timers, lamps, playing = a_round(hint_seconds=10.0)
-    assert lamps in ([(10.0, 10.0)], [(10.5, 10.0)]) and playing == [False, True]  # on the pair, then playing
+    assert lamps in ([(25.0, 25.0)], [(25.5, 25.0)]) and playing == [False, True]  # on the pair, then playing
     assert folder.round.started == 3
     assert [t.due for t in timers.timers] == [10.0]
     folder.update(frame(100, 3))
@@ -232,3 +247,19 @@ def test_a_pool_started_after_the_queue_stopped_is_ended_by_its_worker(reference
     for thread in starters:
         thread.join(10)
     assert pools.made[0].calls == [("terminate", "challenge-reference")]
+
+
+def test_a_round_lasts_about_a_minute_at_the_default_pace_as_the_page_says():
+    """Issue 56, item 13: a round of 20,000 steps lasted 27-29 s where the docs said about a minute. The
+    round is the minute: its steps at `serve`'s default pace (steps a frame times frames a second)."""
+    import inspect
+    from pathlib import Path
+
+    from sandbox.commands.serve import App
+    from sandbox.model.challenge import ROUND_STEPS
+
+    defaults = inspect.signature(App).parameters
+    per_second = defaults["steps_per_frame"].default * defaults["fps"].default
+    assert 55 <= ROUND_STEPS / per_second <= 65, ROUND_STEPS / per_second
+    docs = " ".join((Path(__file__).resolve().parents[3] / "docs" / "browser.md").read_text(encoding="utf-8").split())
+    assert f"{ROUND_STEPS:,} steps" in docs and "about a minute" in docs

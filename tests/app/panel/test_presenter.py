@@ -70,8 +70,8 @@ def test_a_page_at_step_0_gets_the_title_card_and_any_play_closes_every_card():
 def test_a_controlling_page_that_arrives_mid_run_is_offered_start_over_a_watcher_is_not():
     presenter, world, run = screen(10_600, playing=True)
     teacher, student = page(1), page(2)
+    presenter.arrive(student, controls=False)  # (the server's first page: it joins nothing)
     presenter.arrive(teacher, controls=True)
-    presenter.arrive(student, controls=False)
     assert 1 in presenter.offers and 2 not in presenter.offers and presenter.cards == {}
     assert "Start over" in labels(teacher) and not student.gui.add_panel.called
     start = next(call.args[0] for call, label in zip(teacher.gui.add_button.return_value.on_click.call_args_list,
@@ -84,8 +84,9 @@ def test_a_controlling_page_that_arrives_mid_run_is_offered_start_over_a_watcher
 def test_an_offer_to_start_over_goes_when_a_new_world_starts():
     # A designer arriving mid-run who uses a drawn goal instead: the new world is at step 0, and the offer
     # about the old run (in the designer's loop, over the arena's lower right for the whole minute) goes.
-    presenter, world, run = screen(2_450, playing=True)
+    presenter, world, run = screen(12_450, playing=True)
     designer = page(1)
+    presenter.seen_a_page = True  # an earlier page saw the run
     presenter.arrive(designer, controls=True)
     presenter.update(world.latest)  # the same world's next frame: it stays
     assert 1 in presenter.offers
@@ -126,3 +127,20 @@ def test_the_title_card_says_what_the_class_sees_in_three_lines():
     assert "yellow band" in watch and "Play (space)" in act
     looking, watch, _ = title_lines(snap, snap, controls=False)
     assert looking.startswith("The same start twice") and "which one" in watch
+
+
+def test_the_servers_first_page_and_a_run_just_begun_get_no_offer_and_an_offer_names_no_step():
+    """Issue 56, item 12: whoever just typed `phototaxis` was told they were joining a run they never saw,
+    and the offer's step (10,275) went stale beside the caption's (13,400)."""
+    presenter, world, run = screen(30_000, playing=True)
+    first, early, late = page(1), page(2), page(3)
+    presenter.arrive(first, controls=True)  # the server's first page, however far the run
+    assert presenter.offers == {}
+    world.latest.step = 4_999  # a second page, the run just begun: it missed nothing
+    presenter.arrive(early, controls=True)
+    assert presenter.offers == {}
+    world.latest.step = 10_275
+    presenter.arrive(late, controls=True)
+    assert set(presenter.offers) == {3}
+    said = " ".join(call.args[0] for call in late.gui.add_markdown.call_args_list)
+    assert "began before you came" in said and not any(ch.isdigit() for ch in said), said

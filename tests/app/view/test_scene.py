@@ -9,7 +9,8 @@ import pytest
 
 from sandbox.app.world.runner import Runner
 from sandbox.app.world.orders import SetPlaying, StepOnce
-from sandbox.app.view.scene import POINT_GRID, CompactSender, SceneView, compare_camera, compare_offset, top_down_camera
+from sandbox.app.view.scene import (LABEL_GAP, POINT_GRID, CompactSender, SceneView, compare_camera, compare_offset,
+                                    top_down_camera)
 from sandbox.app.world.snapshot import caption, case_name
 from sandbox.model.config import Config
 
@@ -247,17 +248,24 @@ def test_the_caption_sits_where_every_framing_of_the_page_shows_it(snapshot):
     SceneView(LabelScene(), snapshot)
     assert labels["/caption"]["position"][:2] == (cfg.arena_size, cfg.arena_size + 0.8)
     assert labels["/caption"]["anchor"] == "bottom-right"
-    SceneView(LabelScene(), snapshot, caption_over_construction=True)
+    classroom = SceneView(LabelScene(), snapshot, caption_over_construction=True)
     wall = cfg.centre + cfg.construction_size / 2
-    assert labels["/caption"]["position"][:2] == (wall, wall + 0.3)
-    # Beside a compared world, each world's caption sits directly over its construction wall's top-left
-    # corner in two lines (two captions on one line ran into each other), with its share in the goal
-    # large under the wall, and back when compare mode ends.
+    # A classroom's: over the construction wall's middle, two lines in letters sized in metres (issue 56,
+    # item 11: 14 px at 1024 x 768; 0.85 m is 25 px there).
+    assert labels["/caption"]["position"][:2] == (cfg.centre, wall + 0.3)
+    assert labels["/caption"]["anchor"] == "bottom-center" and labels["/caption"]["font_size_mode"] == "scene"
+    assert labels["/caption"]["font_scene_height"] == 0.85 and classroom._caption(snapshot).count("\n") == 1
+    # Beside a compared world, each world's share in the goal is large under its construction wall and its
+    # caption under the arena's bottom wall, off the lit floor, in two lines (two captions on one line ran
+    # into each other) sized in metres, the first world's from below the construction wall's left corner
+    # (issue 56, item 10: 13 px at a projector, over the lit band, and beside the open panel the first ran
+    # over the second world), and back when compare mode ends.
     view = SceneView(LabelScene(), snapshot)
     assert labels["/readout"]["visible"] is False
     view.set_compared((70.0, 0.0), snapshot)
     low = cfg.centre - cfg.construction_size / 2
-    assert labels["/caption"]["position"][:2] == (low, wall + 0.3) and labels["/caption"]["anchor"] == "bottom-left"
+    assert labels["/caption"]["position"][:2] == (low, -LABEL_GAP) and labels["/caption"]["anchor"] == "top-left"
+    assert labels["/caption"]["font_size_mode"] == "scene"
     assert view.handles["readout"].visible and labels["/readout"]["font_size_mode"] == "scene"
     assert view._caption(snapshot).count("\n") == 1 and "% in goal" not in view._caption(snapshot)
     view.set_compared((0.0, -70.0), snapshot, second=True)  # one below the other: from the wall's middle

@@ -6,7 +6,8 @@
   window.__phototaxisLayout = true;
   // viser's phone layout (its breakpoint), its software-rendering notice's title, its bottom sheet's place,
   // and how long its sheet and a folder take to open (ms).
-  const VISER = {narrow: $narrow, notice: $notice, sheet: {position: "fixed", bottom: "0px"}, openMs: 350};
+  const VISER = {narrow: $narrow, notice: $notice, sheet: {position: "fixed", bottom: "0px"},
+                 scene: "[data-dock-root]", openMs: 350};
   const NARROW = window.matchMedia(VISER.narrow), TOUCH = window.matchMedia($touch);
   const PRESS_PLAY = $press, TAP_PLAY = $tap;
   const NOTICE = VISER.notice, NOTICE_MS = $notice_ms;
@@ -16,12 +17,14 @@
     (b) => labels.includes(b.textContent.trim()) && !b.closest("#" + BAR));
   const shown = (el) => !!el && el.getBoundingClientRect().height > 0;
 
-  // viser's software-rendering notice: closed after a few seconds.
+  // viser's software-rendering notice: closed after a few seconds; on a phone at once, unseen (it lay over
+  // the caption and the floor's top, and a phone can do nothing about how it draws).
   const closeNotice = () => {
     for (const note of document.querySelectorAll(".mantine-Notification-root")) {
       if (closing.has(note) || !note.textContent.includes(NOTICE)) continue;
       closing.add(note);
-      setTimeout(() => note.querySelector(".mantine-Notification-closeButton")?.click(), NOTICE_MS);
+      if (NARROW.matches) note.style.visibility = "hidden";
+      setTimeout(() => note.querySelector(".mantine-Notification-closeButton")?.click(), NARROW.matches ? 0 : NOTICE_MS);
     }
   };
 
@@ -40,6 +43,16 @@
     paper.style.maxHeight = "max(40vh, calc(100vh - 100vw - 4px))";
     for (const box of paper.querySelectorAll("div[style*='width: 20em']")) box.style.width = "100%";  // its contents
     if (sheetOpen(paper)) handleOf(paper).click();  // closed: the arena whole until the drawer is opened
+  };
+
+  // The open drawer's page: the scene (viser's dock root, which holds its canvas) ends where the drawer
+  // begins, so the canvas reports its new shape and the server frames the floor, and a lit lamp, above
+  // the drawer (sandbox.app.panel.framing); closed, the scene is the page's whole height again.
+  const fitScene = () => {
+    const scene = document.querySelector(VISER.scene), paper = sheet();
+    if (!scene) return;
+    const height = NARROW.matches && paper && handleOf(paper) && sheetOpen(paper) ? Math.round(paper.getBoundingClientRect().top) + "px" : "";
+    if (scene.style.height !== height && (height || scene.style.height !== "100%")) scene.style.height = height || "100%";
   };
 
   // A folder opened (the drawer first) and its title scrolled to the panel's top; ``inside``: the labels
@@ -123,6 +136,7 @@
   const look = () => {
     closeNotice();
     if (NARROW.matches) makeDrawer();
+    fitScene();
     shortcuts();
     cardWords();
   };
