@@ -339,6 +339,8 @@ class Host:
         housekeeping = time.monotonic()
         while not self.ended:
             self._take_waiting(orders)
+            if self.ended:
+                break
             self._between_frames()
             if self.under_way is None and self.builds:
                 self._next_build()

@@ -121,8 +121,12 @@ class HostProcess:
                 pass
 
 
+#: Put in a slot's inbox when it is left: a reader waiting on it returns at once.
+_LEFT = object()
+
+
 class SlotProcess:
-    """A slot seen as a process: alive while its host is and its world was not closed."""
+    """A slot seen as a process: alive while its host is, its world was not closed and it was not left."""
 
     def __init__(self, slot: "Slot"):
         self._slot = slot
@@ -136,7 +140,8 @@ class SlotProcess:
         return 1 if self._slot.closed else self._slot.host.process.exitcode
 
     def is_alive(self) -> bool:
-        return not self._slot.closed and not self._slot.host.dead
+        slot = self._slot
+        return not (slot.closed or slot.left or slot.host.dead)
 
     def join(self, timeout: float | None = None) -> None:
         """Waits for nothing: a world ends with its host (or its slot is left, at once)."""
@@ -163,14 +168,17 @@ class Slot:
         return not self.left and self.host.send(self.key, message)
 
     def read(self, timeout: float) -> Any:
+        """The next message within ``timeout`` seconds, or None (none came, or the slot was left)."""
         try:
-            return self.inbox.get(timeout=timeout) if timeout > 0 else self.inbox.get_nowait()
+            message = self.inbox.get(timeout=timeout) if timeout > 0 and not self.left else self.inbox.get_nowait()
         except queue.Empty:
             return None
+        return None if message is _LEFT else message
 
     def leave(self) -> None:
         if not self.left:
             self.left = True
+            self.inbox.put(_LEFT)  # whoever waits to read hears it at once, as a child's closed pipe says
             self.host.detach(self)
 
     def end(self, kill: bool = False, timeout: float = 5.0) -> None:

@@ -22,6 +22,8 @@ from sandbox.app.world import orders as commands
 from sandbox.app.world.orders import (Apply, Arrival, Build, BuildCancelled, CancelBuild, Command, Control, Reset,
                                       RunnerStopped, Setting, SetOutline, SkipAhead, StepOnce)
 from sandbox.app.world.child import ProcessRunner, SimulationCrashed
+from sandbox.app.world.hosted import HostedRunner
+from sandbox.app.world.pool import HostPool
 from sandbox.app.world.runner import Runner
 from sandbox.model.config import Config
 from tests.waiting import wait_until
@@ -167,23 +169,40 @@ def test_a_frame_that_fails_halts_the_world_and_leaves_play_to_its_owner(monkeyp
 
 # ------------------------------------------------------------------ process runner
 @pytest.fixture
-def process_runner():
+def only_process_runner():
     runner = ProcessRunner(SMALL, shape=None, fps=60, steps_per_frame=2)
     runner.start()
     yield runner
     runner.stop()
 
 
+@pytest.fixture(params=["process", "hosted"])
+def process_runner(request):
+    """A runner whose world runs in another process: a child of its own, or a world host's (which the
+    proxy sees as its child: the same tests hold for both)."""
+    pool = HostPool(hosts=1)
+    if request.param == "process":
+        runner = ProcessRunner(SMALL, shape=None, fps=60, steps_per_frame=2)
+    else:
+        runner = HostedRunner(SMALL, pool=pool, shape=None, fps=60, steps_per_frame=2)
+    runner.start()
+    yield runner
+    runner.stop()
+    pool.stop()
+
+
 def test_stopping_fails_every_call_the_process_owes(process_runner, tmp_path):
     runner = process_runner
     heard: list[BaseException] = []
-    busy = runner.submit(Apply(functools.partial(blocks_until, path=str(tmp_path / "never"))))
+    released = tmp_path / "released"  # after the stop (a host's other worlds wait behind a busy one)
+    busy = runner.submit(Apply(functools.partial(blocks_until, path=str(released))))
     owed = [runner.ask(Reset(1), on_error=heard.append), runner.ask(Apply(where_am_i), on_error=heard.append), busy]
     runner.stop(timeout=1)
     done, pending = wait(owed, timeout=10)
     assert not pending and all(isinstance(f.exception(), RunnerStopped) for f in owed)
     wait_until(lambda: len(heard) == 2, timeout=10, what="both callers to hear")
     assert not runner.process.is_alive()
+    released.touch()
 
 
 @pytest.mark.slow
@@ -252,8 +271,8 @@ class StopsWhileSpawning:
 
 
 @pytest.mark.slow
-def test_a_process_spawned_while_the_runner_stops_is_stopped_too(process_runner):
-    runner = process_runner
+def test_a_process_spawned_while_the_runner_stops_is_stopped_too(only_process_runner):
+    runner = only_process_runner
     runner.restart_pause = 0.0
     spawning = runner._context = StopsWhileSpawning(runner)
     old = runner.process.pid
