@@ -20,6 +20,7 @@ steps a second, three times real time at the paper's step of 1/30 s.
 
 from __future__ import annotations
 
+import itertools
 import threading
 from typing import Any, Callable
 
@@ -34,6 +35,7 @@ from sandbox.model.config import Config
 CLASS_FPS = 10.0
 CLASS_STEPS_PER_FRAME = 9
 
+_runners = itertools.count(1)  # numbers the runners of this process (their commands' ids)
 # the pool a runner made without one shares: made by the first such runner (any thread)
 _default_lock = threading.Lock()
 _default_pool: HostPool | None = None
@@ -61,6 +63,9 @@ class HostedRunner(ProcessRunner):
         self._queue_listeners: list[Callable[[int | None], None]] = []
         super().__init__(config, shape=shape, seed=seed, fps=fps, steps_per_frame=steps_per_frame, playing=playing,
                          chart_every=chart_every, program_time_limit=program_time_limit, wait=wait, deliver=deliver)
+        # The ids of its commands are its own: the answer to an earlier runner's command on the same world
+        # (a build that was under way when its page reloaded) settles nothing of this one's.
+        self._ids = itertools.count(next(_runners) << 32)
 
     def _new_child(self, settings: dict) -> Slot:
         return self.pool.open(self.key, settings)

@@ -95,10 +95,13 @@ class HostProcess:
                 self.kept.discard(key)
             slots = list(self.slots.values()) if key is None else [self.slots.get(key)]
         for slot in slots:  # (key None: the host's last words, for all its worlds)
-            if slot is not None:
+            if slot is None:
+                continue
+            if isinstance(message, Closed):  # read as a child that ended (its last words came before)
+                slot.closed = True
+                slot.inbox.put(_WAKE)
+            else:
                 slot.inbox.put(message)
-                if isinstance(message, Closed):
-                    slot.closed = True
 
     def _died(self) -> None:
         """The host ended (killed, or stopped): every slot reads as a process that ended."""
@@ -106,6 +109,9 @@ class HostProcess:
         with self._lock:
             self.dead = True
             self.kept.clear()
+            slots = list(self.slots.values())
+        for slot in slots:  # whoever waits to read hears it at once, as a child's closed pipe says
+            slot.inbox.put(_WAKE)
 
     def stop(self, timeout: float = 5.0) -> None:
         self.send(None, None)
@@ -121,8 +127,8 @@ class HostProcess:
                 pass
 
 
-#: Put in a slot's inbox when it is left: a reader waiting on it returns at once.
-_LEFT = object()
+#: Put in a slot's inbox when it is left, closed or its host died: a reader waiting on it returns at once.
+_WAKE = object()
 
 
 class SlotProcess:
@@ -169,16 +175,17 @@ class Slot:
 
     def read(self, timeout: float) -> Any:
         """The next message within ``timeout`` seconds, or None (none came, or the slot was left)."""
+        ended = self.left or self.closed or self.host.dead
         try:
-            message = self.inbox.get(timeout=timeout) if timeout > 0 and not self.left else self.inbox.get_nowait()
+            message = self.inbox.get(timeout=timeout) if timeout > 0 and not ended else self.inbox.get_nowait()
         except queue.Empty:
             return None
-        return None if message is _LEFT else message
+        return None if message is _WAKE else message
 
     def leave(self) -> None:
         if not self.left:
             self.left = True
-            self.inbox.put(_LEFT)  # whoever waits to read hears it at once, as a child's closed pipe says
+            self.inbox.put(_WAKE)  # whoever waits to read hears it at once, as a child's closed pipe says
             self.host.detach(self)
 
     def end(self, kill: bool = False, timeout: float = 5.0) -> None:

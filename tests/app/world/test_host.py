@@ -69,8 +69,10 @@ def test_worlds_in_one_host_each_step_at_their_own_pace(pool):
         assert len({r.call(Apply(where_am_i)) for r in runners}) == 1 and len(pool.hosts) == 1
         wait_until(lambda: all(r.latest.step > 0 for r in runners), what="every world to step")
         speeds = steps_per_second(runners, 1.0)
+        # Generous: on a loaded machine a world falls behind, then makes up to 2 s of it at a few frames' steps a
+        # frame (Runner: BEHIND_AT_MOST); the paces are 2.25 and 4 times apart.
         for (fps, spf), speed in zip(paces, speeds):
-            assert 0.75 * fps * spf <= speed <= 1.25 * fps * spf, (fps * spf, speeds)
+            assert 0.6 * fps * spf <= speed <= 1.5 * fps * spf, (fps * spf, speeds)
     finally:
         for r in runners:
             r.stop()
@@ -119,7 +121,9 @@ def test_a_run_to_the_end_in_one_world_leaves_the_others_their_pace(pool):
         took = time.perf_counter() - started
         stepped = other.latest.step - step
         assert arrival.step == 6_000 and took > 0.3  # long enough to matter
-        assert stepped >= 0.8 * 90 * took - 2 * 3, (stepped, took)  # its pace, less a frame or two in flight
+        # Its pace, within a bound: at least half of it on a loaded machine (a host given half a core runs over its
+        # slices), less a frame or two in flight; a build in the scheduler's turn left it none until the end.
+        assert stepped >= 0.5 * 90 * took - 2 * 3, (stepped, took)
     finally:
         busy.stop()
         other.stop()
