@@ -110,19 +110,27 @@ def measure(pool: HostPool, runners: list[HostedRunner], seconds: float) -> dict
     wall = time.perf_counter() - started
     step_rates = [(runner.latest.step - s) / wall for runner, s in zip(runners, steps)]
     frame_rates = [(runner.frames_published - f) / wall for runner, f in zip(runners, frames)]
-    per_host = []
+    per_host, host_cpu = [], 0.0
     for pid in pids:
+        host_cpu += cpu_seconds(pid) - cpu[pid]
         rss, pss = memory_mb(pid)
         per_host.append({"pid": pid, "worlds": sum(runner.process.pid == pid for runner in runners),
                          "cpu_share": round((cpu_seconds(pid) - cpu[pid]) / wall, 3),
                          "rss_mb": round(rss, 1), "pss_mb": round(pss, 1)})
+    target = runners[0].fps * runners[0].steps_per_frame
+    cpu_per_step = host_cpu / max(sum(step_rates) * wall, 1)  # the hosts' CPU a step costs, frames and all
     return {
+        # what a loaded machine does not change much: the CPU a world's step costs in its host, and so how many
+        # worlds one core holds at the target pace
+        "host_cpu_us_per_step": round(cpu_per_step * 1e6, 1),
+        "worlds_per_core_at_target": round(1 / (cpu_per_step * target), 1) if cpu_per_step > 0 else None,
         "steps_per_second": {"min": round(min(step_rates), 1), "median": round(statistics.median(step_rates), 1),
                              "max": round(max(step_rates), 1)},
         "frames_per_second": {"min": round(min(frame_rates), 1),
                               "median": round(statistics.median(frame_rates), 1)},
-        "worlds_below_target": sum(rate < 0.95 * runners[0].fps * runners[0].steps_per_frame for rate in step_rates),
+        "worlds_below_target": sum(rate < 0.95 * target for rate in step_rates),
         "per_host": per_host,
         "app_cpu_share": round((time.process_time() - app_cpu) / wall, 3),
+        "load_average": round(os.getloadavg()[0], 1),  # what else the machine ran (the 1-minute load)
         "restarts": sum(runner.restarts for runner in runners),
     }
