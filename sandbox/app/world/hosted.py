@@ -36,7 +36,8 @@ CLASS_FPS = 10.0
 CLASS_STEPS_PER_FRAME = 9
 
 _runners = itertools.count(1)  # numbers the runners of this process (their commands' ids)
-# the pool a runner made without one shares: made by the first such runner (any thread)
+# the pool a runner made without one shares: made by the first such runner; shared by the threads that make
+# runners (the main thread, the event thread, workers)
 _default_lock = threading.Lock()
 _default_pool: HostPool | None = None
 
@@ -61,6 +62,7 @@ class HostedRunner(ProcessRunner):
         self.pool = pool or default_pool()
         self.key = key or self.pool.new_key()
         self._queue_listeners: list[Callable[[int | None], None]] = []
+        self._watched = True  # what watch() said last: a world restarted after a crash is told it again
         super().__init__(config, shape=shape, seed=seed, fps=fps, steps_per_frame=steps_per_frame, playing=playing,
                          chart_every=chart_every, program_time_limit=program_time_limit, wait=wait, deliver=deliver)
         # The ids of its commands are its own: the answer to an earlier runner's command on the same world
@@ -68,7 +70,10 @@ class HostedRunner(ProcessRunner):
         self._ids = itertools.count(next(_runners) << 32)
 
     def _new_child(self, settings: dict) -> Slot:
-        return self.pool.open(self.key, settings)
+        slot = self.pool.open(self.key, settings)
+        if not self._watched:
+            slot.send(Watch(False))
+        return slot
 
     def _take(self, message: Any) -> None:
         if isinstance(message, Queued):
@@ -85,4 +90,5 @@ class HostedRunner(ProcessRunner):
     def watch(self, on: bool) -> None:
         """Someone watches the world (it steps, and sends frames), or nobody does (it pauses)."""
         with self._child_lock:
-            self._child.send(Watch(bool(on)))
+            self._watched = bool(on)
+            self._child.send(Watch(self._watched))
