@@ -11,6 +11,7 @@ import time
 
 import pytest
 
+from sandbox.app.world.child import SimulationCrashed
 from sandbox.app.world.host import FREE_AFTER
 from sandbox.app.world.hosted import CLASS_FPS, CLASS_STEPS_PER_FRAME, HostedRunner
 from sandbox.app.world.orders import Apply, SetPlaying, SkipAhead
@@ -161,6 +162,20 @@ def test_one_worlds_failure_leaves_the_others_running(pool):
         assert not other_halted and not other.errors and other.restarts == broken.restarts == 0
     finally:
         broken.stop()
+        other.stop()
+
+
+def test_a_world_that_cannot_be_built_fails_alone(pool):
+    """Its runner says why, as a process runner whose child could not build its first world; the host and
+    its other worlds go on."""
+    other = hosted(pool)
+    try:
+        with pytest.raises(SimulationCrashed, match="the world could not be built"):
+            HostedRunner(SMALL, pool=pool, shape=[[0.0, 0.0], [1.0, 0.0]])  # a goal with no area
+        step = other.latest.step
+        wait_until(lambda: other.latest.step > step + 10, what="the host's other world to go on")
+        assert other.restarts == 0 and pool.worlds() == 1
+    finally:
         other.stop()
 
 
