@@ -72,9 +72,11 @@ class Open(NamedTuple):
 
 
 class Leave(NamedTuple):
-    """To the host: the proxy of ``visit`` stopped: the world pauses, and is kept free_after seconds."""
+    """To the host: the proxy of ``visit`` stopped: the world pauses, and is kept free_after seconds (or
+    freed at once with ``free``: nobody will come back for it)."""
 
     visit: int
+    free: bool = False
 
 
 class Watch(NamedTuple):
@@ -222,7 +224,7 @@ class Host:
             return  # a world freed, or never built: its proxy hears nothing more
         elif isinstance(message, Leave):
             if message.visit == world.visit:
-                self.leave(world)
+                self.leave(world, message.free)
         elif isinstance(message, Watch):
             world.watched = bool(message.on)
             world.due = time.perf_counter()
@@ -253,10 +255,11 @@ class Host:
         world.on_halt(lambda why: self.send(key, Halted(why)))
         return world
 
-    def leave(self, world: HostedWorld) -> None:
-        """Its proxy stopped: the world pauses and is kept free_after seconds."""
+    def leave(self, world: HostedWorld, free: bool = False) -> None:
+        """Its proxy stopped: the world pauses and is kept free_after seconds (``free``: freed at the next
+        housekeeping, once no build of its own waits or runs)."""
         world.attached = world.started = False
-        world.left_at = time.monotonic()
+        world.left_at = -float("inf") if free else time.monotonic()
 
     def order(self, world: HostedWorld, order: Order) -> None:
         """A command for ``world``: a control at once; a build to the queue; any other to the world,

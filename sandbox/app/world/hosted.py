@@ -10,6 +10,7 @@ answer, frame, crash and restart goes as a process runner's does, from the setti
 - ``key``: the world's name in the pool. A runner stopped leaves its world paused in its host, and a
   runner made later with the same key finds it again (where it was, its goal, its series) until the
   host frees it (``free_after``, 10 min by default);
+- :meth:`HostedRunner.free`: stop, and free the world at once (nobody will come back for it);
 - :meth:`HostedRunner.watch`: whether anyone watches (a world nobody watches pauses and sends no frames);
 - :meth:`HostedRunner.on_queue`: a build's place in its host's queue (``3``: "3rd in the queue"), None
   when its turn has come.
@@ -86,6 +87,13 @@ class HostedRunner(ProcessRunner):
         """``listener(place)`` hears that a build waits in its host's queue, ``place``-th (the build
         under way is the first); ``listener(None)`` when its turn has come (its progress follows)."""
         self._queue_listeners.append(listener)
+
+    def free(self) -> None:
+        """Stop, and have the host free the world now rather than keep it for a reopen (a student who left
+        the class)."""
+        with self._child_lock:
+            self._child.free = True
+        self.stop()
 
     def watch(self, on: bool) -> None:
         """Someone watches the world (it steps, and sends frames), or nobody does (it pauses)."""

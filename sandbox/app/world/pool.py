@@ -72,7 +72,7 @@ class HostProcess:
         with self._lock:
             if self.slots.get(slot.key) is slot:
                 del self.slots[slot.key]
-        self.send(slot.key, Leave(slot.visit))
+        self.send(slot.key, Leave(slot.visit, slot.free))
 
     def _receive_loop(self) -> None:
         while True:
@@ -164,6 +164,7 @@ class Slot:
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()
         self.closed = False
         self.left = False
+        self.free = False  # left for good: the host frees the world at once
         self.process = SlotProcess(self)
 
     def send(self, message: Any) -> bool:

@@ -112,6 +112,12 @@ def test_a_world_left_is_found_again_by_its_key_until_it_is_freed():
         pool.stop()
 
 
+def test_a_world_freed_is_not_kept(pool):
+    runner = hosted(pool, key="student-2")
+    runner.free()
+    wait_until(lambda: pool.worlds() == 0, what="the host to free it")  # at its next housekeeping, within 1 s
+
+
 def test_a_run_to_the_end_in_one_world_leaves_the_others_their_pace(pool):
     """Before slices, the run to the end held the host: the other world stood still until it was over."""
     busy, other = hosted(pool), hosted(pool)
