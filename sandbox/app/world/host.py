@@ -7,8 +7,8 @@ Each world is an ordinary :class:`~sandbox.app.world.runner.Runner` that starts 
 frame a started runner's loop runs: its commands, its frame's steps at its fps x steps_per_frame, a
 snapshot) whenever the world whose frame is due soonest is due. The host speaks the child's protocol
 (sandbox.app.world.child), each message tagged with the world's key: ``(key, Order)`` in, ``(key,
-Frame)``, ``Done``, ``Failed``, ``Progress``, ``Building``, ``Halted``, ``LastWords`` out; and a few of
-its own (below): a world is opened (:class:`Open`, built or found again by its key), left
+visit, Frame)``, ``Done``, ``Failed``, ``Progress``, ``Building``, ``Halted``, ``LastWords`` out; and a few of
+its own (below): a world is opened (:class:`Open`, built or :class:`Found` again by its key), left
 (:class:`Leave`: the proxy stopped; the world pauses), watched or not (:class:`Watch`), and freed (:class:`Freed`) after
 ``free_after`` seconds left alone.
 
@@ -26,6 +26,7 @@ its own (below): a world is opened (:class:`Open`, built or found again by its k
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import multiprocessing
 import os
@@ -41,7 +42,7 @@ from sandbox.app.world import faults
 from sandbox.app.world.baton import Baton
 from sandbox.app.world.child import (STUCK_EXIT, Building, Done, Failed, FrameSamples, Halted, LastWords, Order,
                                      Progress, _not_built, _picklable, _picklable_error)
-from sandbox.app.world.orders import Build
+from sandbox.app.world.orders import Build, Controls
 from sandbox.app.world.runner import Runner
 from sandbox.model import watchdog
 
@@ -90,6 +91,13 @@ class Queued(NamedTuple):
     the first); None: its turn has come (its progress follows)."""
 
     place: int | None
+
+
+class Found(NamedTuple):
+    """From the host, before the first frame of a world found again: the controls it ran with (playing,
+    speed, ...), which the new proxy takes rather than its own."""
+
+    controls: Controls
 
 
 class Closed(NamedTuple):
@@ -192,10 +200,14 @@ class Host:
         self.ended = False
 
     # ------------------------------------------------------------ sending
-    def send(self, key: str | None, message: Any) -> None:
+    def send(self, key: str | None, message: Any, visit: int | None = None) -> None:
+        """Send ``(key, visit, message)``: the visit is the proxy's the world has now (or ``visit``), so
+        that a message sent to a proxy that has left never reaches the one that took the world over."""
+        if visit is None and key is not None and (world := self.worlds.get(key)) is not None:
+            visit = world.visit
         with self._send_lock:
             try:
-                self._pipe.send((key, message))
+                self._pipe.send((key, visit, message))
             except (BrokenPipeError, EOFError, OSError):
                 self.ended = True  # the app is gone
 
@@ -235,12 +247,14 @@ class Host:
         """Attach a proxy to the world ``key``: the one the host holds (left less than free_after ago),
         else one built from ``settings``. The proxy's first frame follows at once."""
         world = self.worlds.get(key)
-        if world is None:
+        if world is not None:
+            self.send(key, Found(dataclasses.replace(world.controls)), visit)
+        else:
             try:
                 world = self._build(key, settings)
             except Exception as exc:  # noqa: BLE001 - this world cannot be built; the others go on
-                self.send(key, LastWords(_not_built(exc)))
-                self.send(key, Closed(_not_built(exc)))
+                self.send(key, LastWords(_not_built(exc)), visit)
+                self.send(key, Closed(_not_built(exc)), visit)
                 return
             self.worlds[key] = world
         world.attached, world.started, world.watched, world.left_at = True, False, True, None

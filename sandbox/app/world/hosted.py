@@ -8,8 +8,8 @@ answer, frame, crash and restart goes as a process runner's does, from the setti
 (sandbox.app.world.standing). What it adds:
 
 - ``key``: the world's name in the pool. A runner stopped leaves its world paused in its host, and a
-  runner made later with the same key finds it again (where it was, its goal, its series) until the
-  host frees it (``free_after``, 10 min by default);
+  runner made later with the same key finds it again (where it was, its goal, its series, and its
+  controls: playing or paused, its speed) until the host frees it (``free_after``, 10 min by default);
 - :meth:`HostedRunner.free`: stop, and free the world at once (nobody will come back for it);
 - :meth:`HostedRunner.watch`: whether anyone watches (a world nobody watches pauses and sends no frames);
 - :meth:`HostedRunner.on_queue`: a build's place in its host's queue (``3``: "3rd in the queue"), None
@@ -27,7 +27,7 @@ from typing import Any, Callable
 
 from sandbox.app.world.child import ProcessRunner
 from sandbox.app.world.contract import Deliver
-from sandbox.app.world.host import Queued, Watch
+from sandbox.app.world.host import Found, Queued, Watch
 from sandbox.app.world.pool import HostPool, Slot
 from sandbox.model import watchdog
 from sandbox.model.config import Config
@@ -80,6 +80,9 @@ class HostedRunner(ProcessRunner):
         if isinstance(message, Queued):
             for listener in list(self._queue_listeners):
                 self._deliver(listener, message.place)
+        elif isinstance(message, Found):  # (heard before its first frame: in the constructor, or ready())
+            for setting in message.controls.settings():  # the world goes on as it was: paused, at its speed
+                self.submit(setting)
         else:
             ProcessRunner._take(self, message)
 

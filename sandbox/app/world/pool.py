@@ -77,16 +77,18 @@ class HostProcess:
     def _receive_loop(self) -> None:
         while True:
             try:
-                key, message = self.receive.recv()
+                key, visit, message = self.receive.recv()
             except (EOFError, OSError):
                 break
             except Exception:  # noqa: BLE001 - one message that cannot be read must not end the host's worlds
                 log.exception("a message from a world host could not be read")
                 continue
-            self._hand(key, message)
+            self._hand(key, visit, message)
         self._died()
 
-    def _hand(self, key: str | None, message: Any) -> None:
+    def _hand(self, key: str | None, visit: int | None, message: Any) -> None:
+        """Hand a message to its world's slot: the slot of the visit it was sent to (one sent to a slot
+        that has left is for nobody: a frame of the world it left must not be a new slot's first)."""
         with self._lock:
             if isinstance(message, Freed):
                 self.kept.discard(key)
@@ -95,7 +97,7 @@ class HostProcess:
                 self.kept.discard(key)
             slots = list(self.slots.values()) if key is None else [self.slots.get(key)]
         for slot in slots:  # (key None: the host's last words, for all its worlds)
-            if slot is None:
+            if slot is None or (key is not None and slot.visit != visit):
                 continue
             if isinstance(message, Closed):  # read as a child that ended (its last words came before)
                 slot.closed = True

@@ -14,7 +14,7 @@ import pytest
 from sandbox.app.world.child import SimulationCrashed
 from sandbox.app.world.host import FREE_AFTER
 from sandbox.app.world.hosted import CLASS_FPS, CLASS_STEPS_PER_FRAME, HostedRunner
-from sandbox.app.world.orders import Apply, SetPlaying, SkipAhead
+from sandbox.app.world.orders import Apply, SetPlaying, SetSpeed, SkipAhead
 from sandbox.app.world.pool import HostPool
 from sandbox.model.config import Config
 from tests.waiting import wait_until, wait_until_steady
@@ -99,9 +99,13 @@ def test_a_world_left_is_found_again_by_its_key_until_it_is_freed():
     try:
         runner = hosted(pool, key="student-1")
         runner.call(SkipAhead(500))
+        runner.submit(SetSpeed(5))
+        runner.submit(SetPlaying(False))
         runner.stop()  # the page is gone: the world pauses, kept
-        again = hosted(pool, key="student-1")
+        again = hosted(pool, key="student-1")  # made with playing=True and 3 steps a frame
         assert again.latest.step >= 500 and again.latest.world_key == runner.latest.world_key
+        assert not again.controls.playing and again.controls.steps_per_frame == 5  # as the student left it
+        wait_until(lambda: not again.latest.playing, what="its frames to say paused")
         again.stop()
         host = pool.hosts[0]
         wait_until(lambda: "student-1" not in host.kept, what="the world to be freed")
