@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import os
 import signal
+import threading
 
 import pytest
 
 from sandbox.app.world.hosted import HostedRunner
-from sandbox.app.world.pool import HostPool
+from sandbox.app.world.pool import HostPool, HostProcess, Slot
 from sandbox.model.config import Config
 from tests.waiting import wait_until
 
@@ -49,3 +50,16 @@ def test_a_dead_host_is_replaced(pool):
         later.stop()
     finally:
         first.stop()
+
+
+def test_a_message_sent_to_a_slot_that_left_reaches_no_other():
+    """A reopen raced the frames of the world sent to the slot that had left: one became the new slot's
+    first frame, before the controls it found (every message now says which visit it is for)."""
+    host = HostProcess.__new__(HostProcess)  # its routing alone, no process
+    host._lock, host.kept, host.dead = threading.Lock(), {"k"}, False
+    host.slots = {"k": Slot(host, "k", visit=2)}
+    host._hand("k", 1, "a frame sent to visit 1")
+    host._hand("k", 2, "its own")
+    host._hand(None, None, "the host's last words")
+    slot = host.slots["k"]
+    assert [slot.read(0), slot.read(0), slot.read(0)] == ["its own", "the host's last words", None]
