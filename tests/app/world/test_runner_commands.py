@@ -281,3 +281,16 @@ def test_a_process_spawned_while_the_runner_stops_is_stopped_too(only_process_ru
     spawning.stopper.join(30)
     assert not spawning.stopper.is_alive()
     assert spawning.spawned and all(p.pid is None or not p.is_alive() for p in spawning.spawned)
+
+
+def test_the_settings_follow_the_running_config_and_the_changes_waiting_for_a_reset():
+    """Runner.settings is kept between frames (building a Config checks every value: a quarter of a class
+    world's frame) and made again when either changes."""
+    runner = Runner(SMALL, shape=None)
+    assert runner.settings is runner.sim.config and runner.settings is runner.settings
+    runner.call(commands.UpdateConfig({"robots": 14}))  # waits for a reset
+    assert runner.settings.robots == 14 and runner.sim.config.robots == 12 and runner.latest.config.robots == 14
+    runner.call(commands.UpdateConfig({"switch": 0.25}))  # live: a new running config
+    assert runner.settings.switch == 0.25 and runner.settings.robots == 14
+    runner.call(Reset())
+    assert runner.settings is runner.sim.config and (runner.settings.robots, runner.settings.switch) == (14, 0.25)
