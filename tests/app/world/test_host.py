@@ -69,11 +69,19 @@ def test_worlds_in_one_host_each_step_at_their_own_pace(pool):
     try:
         assert len({r.call(Apply(where_am_i)) for r in runners}) == 1 and len(pool.hosts) == 1
         wait_until(lambda: all(r.latest.step > 0 for r in runners), what="every world to step")
-        speeds = steps_per_second(runners, 1.0)
-        # Generous: on a loaded machine a world falls behind, then makes up to 2 s of it at a few frames' steps a
-        # frame (Runner: BEHIND_AT_MOST); the paces are 2.25 and 4 times apart.
-        for (fps, spf), speed in zip(paces, speeds):
-            assert 0.6 * fps * spf <= speed <= 1.5 * fps * spf, (fps * spf, speeds)
+        seen: list[list[float]] = []
+
+        def each_at_its_pace() -> bool:
+            seen.append(steps_per_second(runners, 0.6))
+            return all(0.7 * fps * spf <= speed <= 1.3 * fps * spf for (fps, spf), speed in zip(paces, seen[-1]))
+
+        # A window at a time: on a loaded machine a world falls behind, then makes up to 2 s of it at up to 4
+        # frames' steps a frame (Runner: BEHIND_AT_MOST, CATCH_UP_PER_FRAME); a window of catching up is not
+        # its pace. Worlds that all stepped alike (one pace for the host) would never show theirs.
+        try:
+            wait_until(each_at_its_pace, timeout=20, what="each world at its pace")
+        except AssertionError:
+            raise AssertionError(f"no window showed each world at its pace {paces}: {seen[-3:]}") from None
     finally:
         for r in runners:
             r.stop()
