@@ -17,7 +17,7 @@ from sandbox.app.world.hosted import CLASS_FPS, CLASS_STEPS_PER_FRAME, HostedRun
 from sandbox.app.world.orders import Apply, SetPlaying, SetSpeed, SkipAhead
 from sandbox.app.world.pool import HostPool
 from sandbox.model.config import Config
-from tests.waiting import wait_until, wait_until_steady
+from tests.waiting import wait_until
 
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 
@@ -91,7 +91,8 @@ def test_a_world_nobody_watches_pauses_and_sends_no_frames(pool):
     runner, other = hosted(pool), hosted(pool)
     try:
         runner.watch(False)
-        paused = wait_until_steady(lambda: (runner.latest.step, runner.frames_published), quiet=0.3)
+        runner.call(Apply(where_am_i))  # answered after the host took the Watch, and after every frame sent before
+        paused = (runner.latest.step, runner.frames_published)
         step = other.latest.step
         wait_until(lambda: other.latest.step > step + 20, what="the watched world to go on")
         assert (runner.latest.step, runner.frames_published) == paused
