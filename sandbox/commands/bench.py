@@ -65,6 +65,11 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                    "the paper's circle trial, 100,000 steps, as whole processes, in turn with ours; prints the ratio")
     p.add_argument("--rounds", type=int, default=1, help="with --compare-reference: alternate this many times "
                    "and report medians (default 1)")
+    p.add_argument("--advice", action="store_true",
+                   help="time the default advice (phototaxis advise) on every shape in shapes/, the circle and the "
+                        "drawing templates, and check each first choice against the best at 100,000 steps in the "
+                        "committed evaluations (static/shapes; from the repository's root): a table, or --json; "
+                        "exit 1 if one is more than a point below the best. About 10 CPU-minutes")
     add_config_arguments(p)
     p.set_defaults(func=bench_command)
     return p
@@ -217,6 +222,8 @@ def bench_command(args: argparse.Namespace) -> int:
 
     if not (args.scale > 0 and math.isfinite(args.scale)):
         raise UserError(f"--scale must be a positive number, got {args.scale}")
+    if args.advice:
+        return advice_bench(args)
     if args.steps is None:
         args.steps = 20_000  # a benchmark default: two full cycles, not a whole trial
     config = scaled(config_from_args(args), args.scale)
@@ -249,3 +256,29 @@ def bench_command(args: argparse.Namespace) -> int:
         for key, value in result.items():
             print(f"{key:<{width}}  {value}")
     return 0
+
+
+def advice_bench(args: argparse.Namespace) -> int:
+    """``bench --advice``: the default advice on every shape checked, timed and checked
+    (:mod:`sandbox.experiments.advice_check`)."""
+    from sandbox.commands.generated import ADVICE_EVALUATIONS, ADVICE_SHAPES
+    from sandbox.experiments import advice_check
+    from sandbox.experiments.advise import default_workers
+
+    config, workers = config_from_args(args), default_workers()
+    truth = advice_check.read_evaluations(ADVICE_EVALUATIONS)
+    runs = []
+    for shape in advice_check.shapes_checked(ADVICE_SHAPES):
+        if not args.no_progress:
+            print(f"bench --advice: {shape}", file=sys.stderr, flush=True)
+        runs.append(advice_check.timed_advice(shape, config, workers=workers))
+    verdicts = [advice_check.judge(run.shape, run.ranking, truth) for run in runs]
+    if args.json:
+        json.dump([{"shape": v.shape, "verdict": run.verdict, "first_at_100k": v.at_100k, "best": v.best,
+                    "best_at_100k": v.best_at_100k, "status": v.status, "seconds": round(run.seconds, 1),
+                    "cpu_seconds": round(run.cpu_seconds, 1), "estimates": run.estimates}
+                   for v, run in zip(verdicts, runs)], sys.stdout)
+        sys.stdout.write("\n")
+    else:
+        print(advice_check.table(runs, truth, workers))
+    return 1 if any(v.status == "wrong" for v in verdicts) else 0

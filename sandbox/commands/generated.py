@@ -75,6 +75,9 @@ TABLE: tuple[Generated, ...] = (
                ("--grid", "static/shapes/notched/evaluation-plain.toml"), trials=4),
     evaluation("templates", "the drawing templates", "static/shapes/templates",
                ("--grid", "static/shapes/templates/evaluation.toml"), trials=4),
+    evaluation("templates-candidates", "the drawing templates with chase, for the advisor's check (bench --advice)",
+               "static/shapes/templates/candidates", ("--grid", "static/shapes/templates/evaluation-candidates.toml"),
+               trials=2),
     evaluation("iterations", "solver iterations 10 against 5", "static/tuning/iterations",
                ("--grid", "static/tuning/iterations.toml"), trials=8),
     evaluation("iterations6", "solver iterations 10 against 6 (docs/performance.md)", "static/tuning/iterations6",
@@ -83,3 +86,10 @@ TABLE: tuple[Generated, ...] = (
                ("--grid", "static/tuning/sleep.toml"), trials=16),
     demos(),
 )
+
+#: What ``phototaxis bench --advice`` checks the advisor on: every shape in shapes/, the circle and the
+#: drawing templates, against the candidates these evaluations ran to 100,000 steps (rows above).
+ADVICE_SHAPES = ("circle", "shapes/*.txt", "static/shapes/templates/shapes/*.txt")
+ADVICE_EVALUATIONS = ("static/shapes/final.csv", "static/shapes/chase/final.csv",
+                      "static/shapes/scaled-chase/final.csv", "static/closed-loop/final.csv",
+                      "static/shapes/templates/final.csv", "static/shapes/templates/candidates/final.csv")

@@ -26,7 +26,7 @@ import zlib
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, BinaryIO, Iterator
+from typing import Any, BinaryIO, Callable, Iterator
 
 import numpy as np
 
@@ -325,8 +325,20 @@ def load(path: str | os.PathLike) -> Design:
     """The design in ``path``, checked; a :class:`DesignError` in one line if it is not one. Nothing is
     unpacked past a bound: the file's size, the archive's directory and each array's header are
     checked before what they describe is read."""
+    return _checked(lambda: _opened(path), path)
+
+
+def load_bytes(content: bytes, name: str) -> Design:
+    """The design in ``content``, a file's bytes (a page's upload) named ``name`` in what is said: the
+    same checks as :func:`load`, the same one-line :class:`DesignError`, without a file on disk."""
+    return _checked(lambda: _in_memory(bytes(content), name), name)
+
+
+def _checked(open_archive: Callable[[], Any], path: Any) -> Design:
+    """The design in the file ``open_archive()`` opens (a context manager of a seekable binary file),
+    checked; every failure one line that names ``path``."""
     try:
-        with _opened(path) as handle, bounded_npz.Archive(handle) as archive:
+        with open_archive() as handle, bounded_npz.Archive(handle) as archive:
             return _design(archive, path)
     except DesignError:
         raise
@@ -351,13 +363,28 @@ def _opened(path: Any) -> Iterator[BinaryIO]:
         raise DesignError(f"cannot read design file {path}: {exc.strerror or exc}") from None
     with handle:
         _check_file(os.fstat(handle.fileno()), path)  # the file opened, not one that replaced it
-        start = handle.read(8)
-        if not start.startswith(b"PK"):
-            what = next((kind for magic, kind in _MAGIC.items() if start.startswith(magic)),
-                        "empty" if not start else "not a NumPy .npz archive")
-            raise DesignError(f"{path} is not a design file: it is {what}")
+        _check_start(handle.read(8), path)
         handle.seek(0)
         yield handle
+
+
+@contextmanager
+def _in_memory(content: bytes, name: str) -> Iterator[BinaryIO]:
+    """``content`` as a file, once it is known to be at most :data:`MAX_FILE_BYTES` and to start like a
+    zip archive (as :func:`_opened` checks a file on disk)."""
+    if len(content) > MAX_FILE_BYTES:
+        raise DesignError(f"{name} is too large: {_megabytes(len(content))}; a design file is at most "
+                          f"{_megabytes(MAX_FILE_BYTES)}")
+    _check_start(content[:8], name)
+    yield io.BytesIO(content)
+
+
+def _check_start(start: bytes, path: Any) -> None:
+    """A design file starts as a zip archive does; anything else is named (a PNG image, empty...)."""
+    if not start.startswith(b"PK"):
+        what = next((kind for magic, kind in _MAGIC.items() if start.startswith(magic)),
+                    "empty" if not start else "not a NumPy .npz archive")
+        raise DesignError(f"{path} is not a design file: it is {what}")
 
 
 def _check_file(info: os.stat_result, path: Any) -> None:

@@ -170,17 +170,19 @@ def test_use_and_run_to_the_end_opens_the_result_folder_too(app, page):
 
 
 def test_the_advisor_speaks_plainly_and_says_the_time_left(app, page, monkeypatch):
-    """Item 7: while it runs, the time left; then the ranking's plain column names."""
+    """Item 7: while it runs, the time left; then the verdict in one line and the ranking's plain column names
+    (issue 56, item 5)."""
     advice = app.panel.advice
     advice.seeds, advice.steps = 1, 600  # short trials: the words, not the ranking, are under test
-    # Short trials can all end before a loaded page draws the progress line: hold them after the first
-    # until the page has shown it (the hold is in the trials' own thread; the app runs on).
+    # Short trials can all end before a loaded page draws the progress line: hold them once the time left is
+    # known (a trial of each kind done) until the page has shown it (the hold is in the trials' own thread;
+    # the app runs on).
     shown, real = threading.Event(), experiments_advice.advise
 
     def held(*args, progress, **kwargs):
-        def told(done: int, total: int) -> None:
-            progress(done, total)
-            if done >= 1:
+        def told(done: int, total: int, left: float | None) -> None:
+            progress(done, total, left)
+            if left is not None:
                 shown.wait(120)
         return real(*args, progress=told, **kwargs)
 
@@ -188,14 +190,17 @@ def test_the_advisor_speaks_plainly_and_says_the_time_left(app, page, monkeypatc
     try:
         open_folder(page, "Which strategy builds my shape?")
         press(page, "Try them all")
-        wait_until(lambda: advice.running and advice.status.content.startswith("Running: 1 of"),
-                   what="the first trial done, the rest held")
-        assert " left." in advice.status.content, advice.status.content  # the time left, from the pace so far
+        wait_until(lambda: advice.running and " left." in advice.status.content,
+                   what="the time left known, the rest of the trials held")
+        assert advice.status.content.startswith("Running: "), advice.status.content  # the time left, from the pace
         page.get_by_text("trials done", exact=False).first.wait_for()
         page.get_by_text(" left.", exact=False).first.wait_for()
     finally:
         shown.set()
     wait_until(lambda: not advice.running, 300, what="the trials")
+    verdict = advice.status.content.splitlines()[0]  # one line in percentages, in bold
+    assert verdict.startswith("**Use ") and (verdict.endswith(" %)**") or verdict.endswith("(the default)**")), verdict
+    page.get_by_text(verdict.strip("*"), exact=False).first.wait_for()
     page.get_by_text("stray boxes' mean distance to the goal (m)", exact=False).first.wait_for()
     page.get_by_text("boxes in the goal", exact=False).first.wait_for()
     assert not page.get_by_role("button", name="Use the best and run to the end", exact=True).is_disabled()

@@ -199,6 +199,24 @@ def test_damaged_and_foreign_files_are_refused_in_one_line(star_design, tmp_path
     assert "no such file" in refused(tmp_path / "missing.npz").lower()
 
 
+def test_a_designs_bytes_load_as_its_file_does_and_are_refused_in_the_same_words(star_design):
+    """load_bytes (a page's upload, issue 56 item 7): the same design as load, the same one-line refusals,
+    named after the upload."""
+    from sandbox.model.design import MAX_FILE_BYTES, load_bytes
+
+    raw = star_design.read_bytes()
+    design, on_disk = load_bytes(raw, "up.npz"), load(star_design)
+    assert design.config == on_disk.config and np.array_equal(design.patterns, on_disk.patterns)
+    assert design.steps.tolist() == on_disk.steps.tolist() and design.result == on_disk.result
+    for content, said in ((raw[: len(raw) // 2], "up.npz is damaged (cut short or altered?)"),
+                          (b"", "up.npz is not a design file: it is empty"),
+                          ((ROOT / "static" / "sandbox.png").read_bytes(), "up.npz is not a design file: it is a PNG image"),
+                          (b"PK" + bytes(MAX_FILE_BYTES), "up.npz is too large: ")):
+        with pytest.raises(DesignError) as caught:
+            load_bytes(content, "up.npz")
+        assert str(caught.value).startswith(said) and "\n" not in str(caught.value), str(caught.value)
+
+
 def test_a_changed_byte_is_caught_by_the_archives_checksums(star_design, tmp_path):
     raw = bytearray(star_design.read_bytes())
     with zipfile.ZipFile(io.BytesIO(bytes(raw))) as archive:

@@ -28,13 +28,14 @@ from sandbox.app.panel.framing import WHOLE_ARENA, Framing
 from sandbox.app.panel.inspector import InspectorFolder
 from sandbox.app.panel.lamp import LampFolder
 from sandbox.app.panel.metrics import MetricsFolder
+from sandbox.app.panel.opening import DesignOpener
 from sandbox.app.panel.parameters import ParametersFolder
 from sandbox.app.panel.presenter import PresenterScreen
 from sandbox.app.panel.program import ProgramFolder
 from sandbox.app.panel.recording import RecordFolder
 from sandbox.app.panel.result import ResultFolder
 from sandbox.app.panel.run import RunFolder
-from sandbox.app.panel.shape import ShapeFolder
+from sandbox.app.panel.shape import ShapeFolder, upload_name
 from sandbox.app.panel.strategies import StrategiesFolder
 from sandbox.app.world.snapshot import Snapshot
 
@@ -82,6 +83,9 @@ class Panel:
         self.inspector = InspectorFolder(gui, runner, server, reframe=self.framing.apply)
         self.result = ResultFolder(gui, runner, server.scene, events=events)
         self.record = RecordFolder(gui, server, runner)
+        #: Opens a design file uploaded in the Result folder (issue 56, item 7).
+        self.opening = DesignOpener(runner, comparison, events=events, opened=self._design_opened,
+                                    ended_comparison=lambda: self.metrics.mark("compare: off"))
         self.presenter = PresenterScreen(runner, lockstep, self.run, compared=lambda: comparison.runner, events=events)
         self.folders = (self.run, self.compare, self.shape, self.advice, self.strategies, self.program, self.lamp,
                         self.challenge, self.metrics, self.result, self.inspector, self.record, self.parameters,
@@ -93,6 +97,8 @@ class Panel:
         #: Learn's *Show me* buttons, one per strategy.
         self.show_me_buttons = self._build_learn(gui, self.show_me)
         server.scene.on_click()(self._on_scene_click)
+        self.result.open_design.on_upload(lambda event: self.opening.take_upload(
+            upload_name(event.file.name or "design.npz"), event.file.content, event.client))
 
     def update(self, snap: Snapshot, force: bool = False) -> None:
         """Refresh the read-outs (throttled to PANEL_HZ)."""
@@ -139,6 +145,13 @@ class Panel:
     def _afresh_to_the_end(self, client: Any) -> None:
         """A new world with the same seed (the settings just given), run to the Run folder's end step."""
         self.run.reset(client, on_done=lambda _: self._to_the_end(client))
+
+    def _design_opened(self, design: Any, name: str, client: Any) -> None:
+        """A design's world runs: the controls show its settings, the chart marks it, the drawing gives way."""
+        self.show_settings(design.config)
+        self.inspector.stop()
+        self.shape.draw.give_way()
+        self.metrics.mark(f"design {name}", 0)  # its first step
 
     def _after_reset(self, client: Any) -> None:
         self.inspector.stop()

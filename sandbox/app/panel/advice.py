@@ -3,9 +3,9 @@ outlines and strategies tried in short trials beside the live simulation
 (:mod:`sandbox.experiments.advise`), ranked, with one click to use the best.
 Runs on the app's event thread; the trials run in a pool started by a worker, whose answers are posted back.
 
-The trials run in one worker process at a lower priority, and while they run
-the folder compares the live simulation's speed with its speed before: when
-it falls below :data:`SLOWED` of it, the folder says so.
+The trials run in worker processes at a lower priority, one a core, and while
+they run the folder compares the live simulation's speed with its speed before:
+when it falls below :data:`SLOWED` of it, the folder says so.
 
 Runs on the app's event thread; the trials' thread only posts to it (its
 progress, its end) and hears one thing back: the cancel event.
@@ -40,12 +40,13 @@ class AdviceFolder:
         self.run_to_the_end = run_to_the_end
         self.seeds, self.steps = seeds, steps
         self.results: list[advice.Ranked] = []
+        self.default: advice.Candidate | None = None  # what the goal gets without advice, for the verdict
         self._cancel = threading.Event()  # set here, read by the trials' thread: how it hears Cancel
         self._thread: threading.Thread | None = None
         self._busy = False
         self._speed_before = 0.0
         self._progress = (0, 0)
-        self._started = 0.0  # when the running trials began (time.monotonic), for the time left
+        self._left: tuple[float | None, float] = (None, 0.0)  # the seconds left, and when they were (monotonic)
         self._shown = ""
 
     def build(self, snap: Snapshot) -> None:
@@ -96,7 +97,7 @@ class AdviceFolder:
         config, vertices = snap.world_config.replace(shape=snap.shape_name), snap.goal_vertices
         self._cancel.clear()
         self._speed_before = snap.steps_per_second
-        self._progress, self._started = (0, 0), time.monotonic()
+        self._progress, self._left = (0, 0), (None, time.monotonic())
         self.results, self.use_best.disabled, self.best_to_the_end.disabled = [], True, True
         self.start.disabled, self.cancel.visible, self.bar.visible, self.bar.value = True, True, True, 0.0
         self._busy = True
@@ -107,19 +108,21 @@ class AdviceFolder:
     def _run(self, config: Any, vertices: Any, client: Any) -> None:
         """The trials, in a thread of their own; what they change, they change on the event thread."""
         try:
-            results = advice.advise(config, vertices, seeds=self.seeds, steps=self.steps, workers=1,
-                                    progress=lambda done, total: self._post(self._heard, done, total),
-                                    cancel=self._cancel)
+            default = advice.default_candidate(config, vertices)
+            results = advice.advise(config, vertices, seeds=self.seeds, steps=self.steps,
+                                    workers=advice.default_workers(),
+                                    progress=self._progress_heard, cancel=self._cancel)
         except advice.Cancelled:
             self._post(self._ended, [], client, ("Advice cancelled", "The trials were stopped.", "blue"))
         except Exception as exc:  # noqa: BLE001 - a goal the advice refuses, a worker that died: say so
             self._post(self._ended, [], client, ("Advice failed", str(exc), "red"))
         else:
-            best = results[0].candidate.label if results else "nothing"
-            self._post(self._ended, results, client, ("Advice ready", f"Best for this goal: {best}.", "green"))
+            self._post(self._ended, results, client, ("Advice ready", advice.verdict(results, default), "green"),
+                       default)
 
-    def _ended(self, results: list, client: Any, notice: tuple[str, str, str]) -> None:
-        self.results = results
+    def _ended(self, results: list, client: Any, notice: tuple[str, str, str],
+               default: advice.Candidate | None = None) -> None:
+        self.results, self.default = results, default
         title, body, colour = notice
         if colour == "red":
             notify_error(client, title, body)
@@ -130,8 +133,12 @@ class AdviceFolder:
         self.use_best.disabled = self.best_to_the_end.disabled = not self.results
         self._show()
 
-    def _heard(self, done: int, total: int) -> None:
-        self._progress = (done, total)
+    def _progress_heard(self, done: int, total: int, seconds_left: float | None) -> None:
+        """In the trials' thread: to the event thread, with the moment the time left was reckoned."""
+        self._post(self._heard, done, total, seconds_left, time.monotonic())
+
+    def _heard(self, done: int, total: int, seconds_left: float | None = None, at: float | None = None) -> None:
+        self._progress, self._left = (done, total), (seconds_left, time.monotonic() if at is None else at)
         self.bar.value = 100.0 * done / max(total, 1)
 
     def apply_best(self, client: Any) -> bool:
@@ -155,7 +162,8 @@ class AdviceFolder:
     def _text(self, snap: Snapshot | None = None) -> str:
         if self.running:
             done, total = self._progress
-            left = advice.time_left(time.monotonic() - self._started, done, total)
+            seconds, at = self._left  # counted down from the last finished trial's estimate
+            left = advice.in_words(None if seconds is None else max(seconds - (time.monotonic() - at), 0.0))
             line = f"Running: {done} of {total or '...'} trials done, {left}."
             speed = (snap or self.runner.latest).steps_per_second
             if self._speed_before > 0 and speed < SLOWED * self._speed_before:
@@ -163,7 +171,7 @@ class AdviceFolder:
                          f"its speed** (Cancel to give it back).")
             return line
         if self.results:
-            return advice.table(self.results, self.steps)
+            return f"**{advice.verdict(self.results, self.default)}**\n\n{advice.table(self.results, self.steps)}"
         return ""
 
     def stop(self) -> list[threading.Thread]:

@@ -11,6 +11,10 @@ polygon) a dashed preview of the goal at the size it will be built with the
 smallest and largest outlines of its light band; a line of text says what
 *Close and use* and the other buttons are waiting for.
 
+Once a goal is in use the drawing gives way to the result (issue 56, item 3): its line, handles,
+numbers and preview leave the floor, the points stay in the folder, and the next edit (*Edit this
+goal*, *Start drawing*, a template, typed points, undo) brings them back.
+
 Every callback runs on the app's event thread (:mod:`sandbox.app.web.events`), in order.
 """
 
@@ -27,6 +31,7 @@ from sandbox.app.view.sketch import DrawView
 from sandbox.app.panel.common import notify_error
 from sandbox.app.panel.plain import plain
 from sandbox.app.world.snapshot import Snapshot
+from sandbox.model.family import make_goal
 from sandbox.model.preview import GoalPreview, preview_goal
 from sandbox.shapes import ShapeError, validate_polygon
 from sandbox.shapes.drawing import (
@@ -40,7 +45,7 @@ from sandbox.shapes.drawing import (
     vertex_at,
     without_repeats,
 )
-from sandbox.shapes.geometry import fit_to_area, signed_area
+from sandbox.shapes.geometry import fit_to_area
 from sandbox.shapes.templates import placed, template_names, template_vertices
 
 SOURCE = "drawn shape"
@@ -73,13 +78,20 @@ def metres_per_pixel(client: Any, point: Point) -> float | None:
     return 2.0 * distance * math.tan(fov / 2.0) / height
 
 
+#: The status line's first words once the drawing has given way to the goal in use.
+GIVEN_WAY = ("**In use**: the drawing is off the floor so that the goal built shows. **Edit this goal** brings "
+             "the running goal back as points, **Start drawing** this drawing as it was.")
+
+
 def status_text(n: int, drawing: bool, problem: str, preview: GoalPreview | None, typed_error: str = "",
-                red: list[str] = (), selected: int | None = None) -> str:
+                red: list[str] = (), selected: int | None = None, given_way: bool = False) -> str:
     """The line under the buttons: what the disabled ones wait for, or what Close and use will build."""
     place = f"Click the floor (or press, drag and release) to place point {n + 1}; click an edge to insert " \
         "one there." if drawing else \
         "Press **Start drawing** to click points on the floor, pick a **Template**, or type **Points**."
-    if n == 0:
+    if given_way and n:
+        text = GIVEN_WAY
+    elif n == 0:
         text = f"**No points yet**: Undo, Clear and Close and use need some. {place}"
     elif n < 3:
         text = f"**Close and use needs at least 3 points**: {n} so far. {place}"
@@ -123,6 +135,8 @@ class DrawFolder:
         #: The index of the selected point (its handle clicked or dragged; Delete removes it), or None.
         self.selected: int | None = None
         self.drawing = False
+        #: The drawing has given way to the goal in use: kept, but not on the floor (issue 56, item 3).
+        self.given_way = False
         self._problem = ""
         self._red: list[str] = []  # the crossing edges, by vertex numbers
         self._typed_error = ""
@@ -214,6 +228,8 @@ class DrawFolder:
         """A click on the floor by ``client``'s page (returns whether the drawing took it). On a point's
         handle: selects that point, drawing or not. While drawing, elsewhere: on an edge, inserts a
         point there between its two ends; anywhere else, adds the next point."""
+        if self.given_way:
+            return False  # the points are not on the floor: a click there is the inspector's
         scale = metres_per_pixel(client, point) if client is not None else None
         radius = self.view.handle_radius
         vertex = vertex_at(self.points, point, max(radius, PICK_PIXELS * scale) if scale else radius)
@@ -249,7 +265,7 @@ class DrawFolder:
 
     def vertex_drag(self, index: int, phase: str, point: Point | None) -> None:
         """A numbered handle dragged: its vertex follows, snapped; the preview returns on release."""
-        if not 0 <= index < len(self.points):
+        if not 0 <= index < len(self.points) or self.given_way:
             return
         if point is not None:
             moved = snap(point, self.step)
@@ -288,7 +304,16 @@ class DrawFolder:
 
     def _set_drawing(self, on: bool) -> None:
         self.drawing = on
+        if on:
+            self.given_way = False  # drawing again: the points come back to the floor
         self.view.set_pad(on)
+        self._refresh()
+
+    def give_way(self) -> None:
+        """A goal is in use (this drawing's, or any other): the drawing leaves the floor so that the
+        goal built, its edge and its boxes show; the points stay here for the next edit."""
+        self.given_way, self.drawing, self.selected = True, False, None
+        self.view.set_pad(False)
         self._refresh()
 
     def _close_and_use(self, event: viser.GuiEvent, to_the_end: bool = False) -> None:
@@ -300,7 +325,7 @@ class DrawFolder:
             return
         run, client = self.run_to_the_end, event.client
         then = (lambda: run(client)) if to_the_end and run is not None else None
-        self._use(vertices, "drawn", client, then=then)
+        self._use(vertices, "drawn", client, then=then)  # the drawing gives way once the goal is in use
         self.drawing = False  # the points stay: the goal can be tweaked and used again
         self.view.set_pad(False)
         self._refresh()
@@ -326,28 +351,35 @@ class DrawFolder:
             notify_error(event.client, "Points not applied", str(exc))
             self._sync_controls()
             return
-        # Typed points are a shape in their own coordinates: shown centred in the arena at the size it
-        # will be built (not snapped: they are what was asked).
-        self._change(self._centred_at_goal_size(without_repeats(points)))
+        # Typed points are a shape in their own coordinates: shown where the goal will be built, at its
+        # size (not snapped: they are what was asked).
+        self._change(self._where_built(without_repeats(points)))
 
-    def _centred_at_goal_size(self, points: list[Point]) -> list[Point]:
-        """``points`` scaled to the goal's area (the boxes' total area, as the running goal has it) and
-        centred in the arena; only centred while they are not yet a polygon."""
+    def _where_built(self, points: list[Point]) -> list[Point]:
+        """``points`` where the goal they make will be built: scaled to the goal's area (the boxes' total
+        area), centred in the arena, and moved as the model moves a goal to lie inside the construction
+        wall (issue 56, item 2: they were drawn 1.25 m off the goal built). Only centred while they are
+        not yet a polygon; not moved when the goal cannot be built (the status line says why)."""
         if not points:
             return points
         try:
             validate_polygon(points, SOURCE)
         except ShapeError:
             return [tuple(p) for p in placed(np.asarray(points, float), self._centre).tolist()]
-        goal = self.runner.latest
-        area = abs(signed_area(goal.goal_vertices if goal.goal_vertices is not None else goal.goal_outline))
+        config = self.runner.latest.world_config
+        area = max(config.boxes, 1) * config.box_area  # the goal's area, as the model fits it (fit_goal)
         fitted = fit_to_area(np.asarray(points, float), area, np.asarray(self._centre, float))
+        try:
+            fitted = fitted + np.asarray(make_goal(config, fitted).moved, float)
+        except ShapeError:
+            pass  # refused when used: shown centred, with the reason under the buttons
         return [(round(float(x), 3), round(float(y), 3)) for x, y in fitted]
 
     def _change(self, points: list[Point], selected: int | None = None) -> None:
         """The drawing is now ``points``, with point ``selected`` selected (None: none): redraw,
         re-check, re-preview, and show them as text."""
         self.points = list(points)
+        self.given_way = False  # an edit: the drawing is back on the floor
         self.selected = selected if selected is not None and 0 <= selected < len(self.points) else None
         self._typed_error = ""
         self._refresh()
@@ -359,8 +391,11 @@ class DrawFolder:
         n = len(self.points)
         self._red = [edge_name(e, n) for e in sorted({e for pair in crossings for e in pair})]
         self._problem, self._preview = self._check()
-        self.view.show(self.points, crossings, self.selected)
-        if self._preview is not None and self.show_preview.value:
+        if self.given_way:
+            self.view.show([], [])
+        else:
+            self.view.show(self.points, crossings, self.selected)
+        if self._preview is not None and self.show_preview.value and not self.given_way:
             self.view.show_preview(self._preview.goal, self._preview.smallest, self._preview.largest)
         else:
             self.view.show_preview(None)
@@ -390,4 +425,4 @@ class DrawFolder:
         self.close_and_run.disabled = self.close.disabled or self.run_to_the_end is None
         self.grid.disabled = not self.snap_on.value
         self.status.content = status_text(n, self.drawing, self._problem, self._preview, self._typed_error,
-                                          self._red, self.selected)
+                                          self._red, self.selected, self.given_way)

@@ -80,6 +80,11 @@ class ResultFolder:
                 hint="One file: the goal, the settings, the seed and the light program that ran, every light "
                      "pattern with the step it started (phototaxis run --design FILE replays it; "
                      "docs/design-files.md)")
+            # Its opener is sandbox.app.panel.opening, wired by the panel (issue 56, item 7).
+            self.open_design = self.gui.add_upload_button(
+                "Open design", icon=viser.Icon.UPLOAD, mime_type=".npz",
+                hint="A design file (.npz, at most 1 MB): the world starts from its goal, settings and seed, lit "
+                     "by its recorded light program, as serve --design starts it")
         self.explain_button.on_click(lambda event: self.explain())
         self.download_design.on_click(lambda event: self.send_design(event.client))
         self.highlight.on_update(lambda event: self._show_rings(self.runner.latest))

@@ -19,8 +19,8 @@ import viser
 from sandbox.app.web import viser_seam
 from sandbox.app.panel.common import notify, notify_error
 from sandbox.app.panel.draw import DrawFolder
-from sandbox.app.world.orders import SetShape
-from sandbox.app.world.snapshot import Snapshot
+from sandbox.app.world.orders import SetProgram, SetShape
+from sandbox.app.world.snapshot import DESIGN_PROGRAM, Snapshot
 from sandbox.model.design import MAX_NAME_CHARS
 from sandbox.model.goal import fit_goal
 from sandbox.shapes import (
@@ -190,11 +190,16 @@ class ShapeFolder:
             self.shape.value = self._shown  # the dropdown goes back to what runs
 
         if quiet:
-            self.runner.ask(SetShape(vertices, name), on_error=refused)
+            self.runner.ask(SetShape(vertices, name), on_done=lambda notes: self.draw.give_way(), on_error=refused)
             return
         keep = bool(self.keep.value)
+        # A design's recorded lights were made for its own goal: a new goal hands the floor back to the paper.
+        handed_back = self.runner.latest.program == DESIGN_PROGRAM
 
         def fitted(notes: list[str]) -> None:  # the goal fits: start it afresh
+            if handed_back:
+                self.runner.ask(SetProgram(None))
+                notes = [*notes, "the design's recorded lights handed back to the paper's controller"]
             if not keep:
                 self.back_to_defaults(client)
             if self._reset is None:
@@ -204,6 +209,7 @@ class ShapeFolder:
 
         def started(notes: list[str]) -> None:
             self._on_change(f"shape {name}", 0)  # the first step of the new world
+            self.draw.give_way()  # the drawing leaves the goal built to be seen
             # One notice for the action: what is used, how it started, then what to know about it.
             what = f"Using {name}" + ("" if vertices is None else f" ({len(vertices)} vertices)")
             if self._reset is not None:

@@ -34,6 +34,10 @@ top third of the screen until closed.
   says :data:`TAP_PLAY` instead of :data:`PRESS_PLAY`: a phone has no space
   bar. Only the page knows it is touched; the server sends every card the
   keyboard's words, which a desktop page keeps.
+- **Notices whole.** A notice is as tall as its text, up to the window's
+  height less its margins, and scrolls beyond (Mantine holds each at 200
+  px with its overflow hidden: the *Goal changed* of a drawn F lost the
+  top and bottom of its 242 px; issue 56, item 1).
 - **Lists fit the screen.** A dropdown's list opens as a sheet along the
   screen's bottom, the screen's width (8 px margins), at most half its
   height. viser's lists are placed for the 20em sheet and do not flip: at

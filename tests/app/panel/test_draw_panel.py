@@ -317,3 +317,81 @@ def test_use_and_run_to_the_end_builds_the_drawing_then_runs_it_to_the_end_step(
         assert app.runner.latest.goal_key != key and len(draw.points) == 4
     finally:
         run.end_step.value = ending
+
+
+# ------------------------------------------- the drawing and the goal built (issue 56, items 2 and 3)
+def test_after_use_the_drawing_gives_way_and_edit_this_goal_brings_it_back(app, draw, page):
+    """Issue 56, item 3: after *Close and use* the thick line, the numbered handles and the dashed preview
+    left nothing over the goal built; they leave the floor (the points stay in the folder) and *Edit this
+    goal* brings the running goal back as points, on the floor again."""
+    draw._change(SQUARE)
+    assert draw.view.line.visible and draw.view.preview_goal.visible and len(draw.view._labels) == 4
+    key = app.runner.latest.goal_key
+    page.click(uuid_of(draw.close))
+    wait_until(lambda: app.runner.latest.goal_key != key and app.runner.latest.shape_name == "drawn",
+               what="the square in use")
+    view = draw.view
+    wait_until(lambda: not view.line.visible, 10, what="the drawing leaving the floor")
+    assert not (view.line.visible or view.closing.visible or view.preview_goal.visible or view.preview_band.visible)
+    assert not view._handles.visible and view._labels == [] and view._pad is None
+    assert draw.given_way and draw.points == SQUARE and "**In use**" in draw.status.content  # kept, and said
+    assert not draw.click(SQUARE[2])  # a hidden point is not picked up by a click on the floor
+    page.click(uuid_of(draw.edit))
+    wait_until(lambda: view.line.visible and len(view._labels) == 4, what="the running goal back as points")
+    np.testing.assert_allclose(draw.points, app.runner.latest.goal_vertices, atol=1e-3)
+    assert view.line.visible and view._handles.visible and len(view._labels) == 4 and view.preview_goal.visible
+
+
+def test_a_goal_picked_elsewhere_moves_the_drawing_aside_too(app, draw, page):
+    """Any goal used (picked, uploaded, a paper case) is the result to see: the drawing gives way to it."""
+    draw._change(SQUARE)
+    key = app.runner.latest.goal_key
+    app.events.call(lambda: app.panel.shape.use(np.array(SQUARE) * 2, "square", None))
+    wait_until(lambda: app.runner.latest.goal_key != key, what="the picked goal in use")
+    wait_until(lambda: not draw.view.line.visible, 10, what="the drawing leaving the floor")
+    assert draw.given_way and draw.points == SQUARE
+    draw._set_drawing(True)  # Start drawing: the kept points come back
+    assert not draw.given_way and draw.view.line.visible and len(draw.view._labels) == 4
+
+
+#: The designer's typed F-like shape of issue 56, item 2, and where the default world builds it: the offset
+#: goal moved 1.2507 m up so that it lies inside the construction wall (y 24.75-38.37, read back from the
+#: goal built and from its design file); the points were drawn at y 23.50-37.12 before.
+TYPED = "0 0\n2 0\n2 6\n5 6\n5 8\n-3 8\n-3 6\n0 6"
+BUILT_Y = (24.750, 38.373)
+
+
+@pytest.fixture(scope="module")
+def default_boxes_app():
+    """A world with the default 500 boxes (few robots): the one where the goal is moved inside the wall."""
+    from sandbox.commands.serve import App, free_port
+    from sandbox.model.config import Config
+
+    a = App(Config(robots=12, update_every=10, hold_steps=3), port=free_port(), fps=30, steps_per_frame=2,
+            process=False).start()
+    yield a
+    a.stop()
+
+
+def test_typed_points_are_drawn_where_the_goal_is_built(default_boxes_app):
+    app = default_boxes_app
+    draw = OnEvents(app.panel.shape.draw, app.events)
+    client = RawClient(app.port, own_page(app))
+    client.id = connected(app, client)
+    try:
+        client.set_value(uuid_of(draw.typed), TYPED)
+        wait_until(lambda: draw.typed.value == TYPED, what="the typed text")
+        client.click(uuid_of(draw.apply))
+        # Close and use enabled too: the points are stored before the buttons follow, and the gate refuses a
+        # click on a disabled button.
+        wait_until(lambda: len(draw.points) == 8 and not draw.close.disabled, what="the typed points, ready")
+        ys = np.array(draw.points)[:, 1]
+        assert (round(ys.min(), 3), round(ys.max(), 3)) == pytest.approx(BUILT_Y, abs=2e-3)
+        np.testing.assert_allclose(draw._preview.goal, draw.points, atol=2e-3)  # on the dashed preview
+        key = app.runner.latest.goal_key
+        client.click(uuid_of(draw.close))
+        wait_until(lambda: app.runner.latest.goal_key != key and app.runner.latest.shape_name == "drawn",
+                   what="the typed shape in use")
+        np.testing.assert_allclose(app.runner.latest.goal_vertices, draw.points, atol=2e-3)  # and on the goal built
+    finally:
+        client.close()

@@ -74,7 +74,8 @@ OURS = {
     ("panel/run.py", "cfg.robots"): "an int, in the model's range",
     ("panel/run.py", "cfg.boxes"): "an int, in the model's range",
     ("sandbox/experiments/advise.py", "enumerate(results, 1)"): "a rank (the candidate's label is below)",
-    ("sandbox/experiments/advise.py", "divmod(seconds, 60)"): "minutes and seconds: ints",
+    ("sandbox/experiments/pace.py", "divmod(seconds, 60)"): "minutes and seconds: ints",
+    ("sandbox/experiments/pace.py", "seconds"): "seconds: an int",
     ("sandbox/model/explain.py", "strays.count"): "a count of boxes",
     ("sandbox/model/explain.py", "strays.near_goal"): "a count of boxes",
     ("sandbox/model/explain.py", "strays.against_wall"): "a count of boxes",
@@ -90,6 +91,8 @@ OURS = {
     ("sandbox/experiments/advise.py", "r.candidate.label"): "an outline and strategies, named by advise.py",
     ("sandbox/experiments/advise.py", "a.candidate.label"): "an outline and strategies, named by advise.py",
     ("sandbox/experiments/advise.py", "b.candidate.label"): "an outline and strategies, named by advise.py",
+    ("sandbox/experiments/advise.py", "best.candidate.label"): "an outline and strategies, named by advise.py",
+    ("sandbox/experiments/advise.py", "other.candidate.label"): "an outline and strategies, named by advise.py",
 }
 
 

@@ -113,6 +113,13 @@
     " bottom: 8px !important; width: auto !important; max-height: 50vh !important; overflow-y: auto !important; } }";
   document.head.appendChild(lists);
 
+  // A notice as tall as its text (Mantine holds each at 200 px, its overflow hidden: the "Goal changed" of
+  // an F cut 242 px of text at top and bottom), up to the window's height, then a scroll bar of its own.
+  const notices = document.createElement("style");
+  notices.textContent = ".mantine-Notification-root { max-height: calc(100vh - 2em) !important;" +
+    " overflow-y: auto !important; }";
+  document.head.appendChild(notices);
+
   const look = () => {
     closeNotice();
     if (NARROW.matches) makeDrawer();
