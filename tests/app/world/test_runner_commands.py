@@ -294,3 +294,29 @@ def test_the_settings_follow_the_running_config_and_the_changes_waiting_for_a_re
     assert runner.settings.switch == 0.25 and runner.settings.robots == 14
     runner.call(Reset())
     assert runner.settings is runner.sim.config and (runner.settings.robots, runner.settings.switch) == (14, 0.25)
+
+
+def test_a_frame_leaves_out_the_intensities_its_parent_has():
+    """The lights' intensities are 33 of the paper's world's 58 KB a frame, and change once per 100 steps."""
+    from sandbox.app.world.child import FrameSamples
+
+    runner, sender = Runner(SMALL, shape=None), FrameSamples()
+    first = sender.frame(runner, runner.latest)
+    runner.advance(1)
+    same_lights = sender.frame(runner, runner.latest)
+    runner.call(commands.SetLamp((0.0, 0.0), 2.0))  # new lights
+    runner.advance(1)
+    new_lights = sender.frame(runner, runner.latest)
+    assert first.snap.intensities is not None and runner.latest.intensities is not None
+    assert same_lights.snap.lights_key == first.snap.lights_key and same_lights.snap.intensities is None
+    assert new_lights.snap.lights_key != first.snap.lights_key and new_lights.snap.intensities is not None
+
+
+def test_every_frame_heard_has_the_lights_intensities(process_runner):
+    """The parent puts them back from the frame before (same lights)."""
+    seen = []
+    process_runner.subscribe(seen.append)
+    wait_until(lambda: len(seen) >= 12, what="a dozen frames")
+    keys = [snap.lights_key for snap in seen]
+    assert len(set(keys)) < len(keys)  # some frames came without them
+    assert all(snap.intensities is not None and snap.intensities.shape == seen[0].intensities.shape for snap in seen)
