@@ -1,5 +1,5 @@
 """Imported once by the fork server of :mod:`sandbox.processes`, before it forks a simulation
-process: the model, the live app's simulation process module (no web server), numba's compiled
+process: the model, the live app's simulation process module and the world host's (no web server), numba's compiled
 kernels loaded from its cache and the robots' compiled velocity function. Every process forked
 afterwards has them already. Nothing else imports it: it sets the process's Ctrl+C aside.
 
@@ -13,7 +13,7 @@ import signal
 
 signal.signal(signal.SIGINT, signal.SIG_IGN)
 
-from sandbox.app.world import child  # noqa: E402,F401  (the child's entry point, and the runner)
+from sandbox.app.world import child, host  # noqa: E402,F401  (the child's and the world host's entry points)
 from sandbox.model import kernels, simulation, undamped  # noqa: E402,F401
 
 kernels.warm_up()

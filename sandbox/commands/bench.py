@@ -4,7 +4,8 @@ Runs the paper's configuration (or any other: every parameter is a flag)
 and reports steps per second, the share of wall time inside pymunk's
 ``Space.step`` against our own code, and peak memory. ``--scale K``
 multiplies both populations by K in an arena K^(1/2) times wider (density
-kept); ``--live`` measures the browser app with a real client connected.
+kept); ``--live`` measures the browser app with a real client connected; ``--hosted K`` K worlds in
+world hosts, headless (:mod:`.hosted_bench`).
 """
 
 from __future__ import annotations
@@ -49,6 +50,15 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--compare-with", metavar="CASE", default=None,
                    help="with --live: in compare mode against this case (a paper case, or 'star + chase'), "
                         "both worlds measured")
+    p.add_argument("--hosted", type=int, default=None, metavar="K",
+                   help="K worlds in world hosts (a class's worlds, headless, no web server) at 3x real time on "
+                        "hosts up to the core count, for --seconds: steps and frames per second of each world, "
+                        "CPU and memory of each host")
+    p.add_argument("--hosts", type=int, default=None, metavar="N",
+                   help="with --hosted: at most N host processes (default: the number of cores)")
+    p.add_argument("--skip", type=int, default=0, metavar="STEPS",
+                   help="with --hosted: first run world i of K to step STEPS x i / K (spread over a run and its "
+                        "denser phases, as a class's worlds are), through the hosts' queues of builds")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.add_argument("--compare-reference", metavar="PATH",
                    help="also time a locally built binary of the authors' program (github AdamBignell/push) on "
@@ -219,6 +229,10 @@ def bench_command(args: argparse.Namespace) -> int:
     config = scaled(config_from_args(args), args.scale)
     if args.compare_reference:
         result = compare_reference(args.compare_reference, args.rounds, config)
+    elif args.hosted is not None:
+        from sandbox.commands import hosted_bench
+
+        result = hosted_bench.run(config, args.hosted, args.seconds, hosts=args.hosts, skip=args.skip)
     elif args.live:
         if not args.seconds > 0:
             raise UserError(f"--seconds must be positive, got {args.seconds}")

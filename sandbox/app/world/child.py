@@ -37,6 +37,7 @@ take it, so a child spawned while stopping is stopped too.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import logging
 import multiprocessing
@@ -282,7 +283,7 @@ class ProcessRunner(SimulationRunner):
                         chart_every=self.chart_every, program_time_limit=self.program_time_limit,
                         first_world_key=0 if self._latest is None else self._latest.world_key + 1,
                         faults=faults.from_environment())
-        self._child = Child(self._context, settings)
+        self._child = self._new_child(settings)
         self._spawned, self._shape, self._building, self._framed = world, world.shape, None, False
         for setting in self.controls.settings():  # the robots followed, the heat map, the hold
             self._child.send(Order(None, setting))
@@ -296,6 +297,11 @@ class ProcessRunner(SimulationRunner):
         with self._series_lock:
             self._series, self._series_world = [], None
         self._state = STARTING
+
+    def _new_child(self, settings: dict) -> "Child":
+        """A simulation process for ``settings`` (a hosted runner takes a slot in a shared host instead:
+        sandbox.app.world.hosted)."""
+        return Child(self._context, settings)
 
     def _await_first_frame(self) -> None:
         """Read the new child's messages until its first frame; if none comes, end it and raise."""
@@ -321,6 +327,8 @@ class ProcessRunner(SimulationRunner):
 
     def _take_frame(self, message: Frame) -> None:
         snap = message.snap
+        if snap.intensities is None and self._latest is not None and self._latest.lights_key == snap.lights_key:
+            snap = dataclasses.replace(snap, intensities=self._latest.intensities)  # sent once per lights
         with self._series_lock:
             if message.world != self._series_world:  # a new world: its samples start a new series
                 self._series, self._series_world = [], message.world
@@ -637,6 +645,28 @@ def _unpicklable(command: Command) -> BaseException | None:
 
 
 # ------------------------------------------------------------------ child
+class FrameSamples:
+    """Makes a runner's :class:`Frame` messages: each with the metric samples of its world the parent has
+    not had yet (a new world starts its series again), and without the lights' intensities when the
+    parent has them (the same lights as the frame before: 33 of the paper's world's 58 KB a frame; the
+    parent puts them back, :meth:`ProcessRunner._take_frame`). One per runner, on the thread that sends
+    its frames."""
+
+    def __init__(self) -> None:
+        self._world: int | None = None
+        self._count = 0
+        self._lights: tuple | None = None  # the lights_key of the frame sent last
+
+    def frame(self, runner: Runner, snap: Snapshot) -> Frame:
+        world, series = runner.series_of_world()
+        start = self._count if self._world == world else 0
+        self._world, self._count = world, len(series)
+        if snap.lights_key == self._lights:
+            snap = dataclasses.replace(snap, intensities=None)
+        self._lights = snap.lights_key
+        return Frame(snap, series[start:], world)
+
+
 def _child_main(settings: dict, commands: Any, send: Any) -> None:
     """The simulation process: an ordinary Runner, driven by the queue (an :class:`Order` each; None ends
     it), answering with the typed messages above."""
@@ -651,7 +681,7 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
     except Exception as exc:  # noqa: BLE001 - its first world cannot be built: say why in a line
         send.send(LastWords(_not_built(exc)))
         os._exit(1)
-    sent = {"world": None, "count": 0}
+    samples = FrameSamples()
 
     def send_message(message: Any) -> None:
         with lock:
@@ -660,11 +690,8 @@ def _child_main(settings: dict, commands: Any, send: Any) -> None:
             except (BrokenPipeError, EOFError, OSError):
                 runner.stop(timeout=0)  # the parent is gone
 
-    def on_frame(snap: Snapshot) -> None:  # with the samples the parent has not had, of this world
-        world, series = runner.series_of_world()
-        start = sent["count"] if sent["world"] == world else 0
-        sent.update(world=world, count=len(series))
-        send_message(Frame(snap, series[start:], world))
+    def on_frame(snap: Snapshot) -> None:
+        send_message(samples.frame(runner, snap))
 
     def answer(ident: int, future: Future) -> None:
         exc = future.exception()

@@ -6,8 +6,10 @@ The app (server, scene, panel, recorder) drives a simulation only through
 :class:`~sandbox.app.world.runner.Runner` (the simulation in a thread of this
 process: tests, headless recording) and
 :class:`~sandbox.app.world.child.ProcessRunner` (in a process of its own: the
-live app). A caller makes a command (:mod:`sandbox.app.world.orders`, where
-each command says what it does) and hands it to :meth:`SimulationRunner.submit`,
+live app), of which :class:`~sandbox.app.world.hosted.HostedRunner` (one of
+the many worlds of a shared host process: a class's) is one kind. A caller
+makes a command (:mod:`sandbox.app.world.orders`, where each command says
+what it does) and hands it to :meth:`SimulationRunner.submit`,
 the one thing each runner does its own way; it returns a
 :class:`concurrent.futures.Future` of the answer. :meth:`SimulationRunner.ask`
 adds callbacks that hear the answer on the app's thread;

@@ -111,6 +111,7 @@ class Runner(SimulationRunner):
         #: Changes that need a new world, kept until the next reset (the simulation holds only the
         #: configuration its world was built with).
         self.pending: dict[str, Any] = {}
+        self._settings_of: tuple | None = None  # (config, pending, the settings they make): see settings
         self._commands: queue.SimpleQueue = queue.SimpleQueue()  # (command, future), for the loop
         # a command is queued before the runner closes, or refused: shared by the threads that submit
         # (the event thread, workers, main) and the one that stops it
@@ -221,8 +222,12 @@ class Runner(SimulationRunner):
 
     @property
     def settings(self) -> Config:
-        """The running configuration with the changes waiting for a reset."""
-        return self.sim.config.replace(**self.pending)
+        """The running configuration with the changes waiting for a reset. Kept while neither changes: every
+        snapshot reads it, and building a Config checks every value (a quarter of a class world's frame)."""
+        key = (self.sim.config, self.pending)
+        if self._settings_of is None or self._settings_of[0] is not key[0] or self._settings_of[1] is not key[1]:
+            self._settings_of = (*key, self.sim.config.replace(**self.pending) if self.pending else self.sim.config)
+        return self._settings_of[2]
 
     def on_progress(self, listener: Callable[[float | None], None]) -> None:
         """``listener(fraction)`` hears how far building a world has got; None when it is over."""

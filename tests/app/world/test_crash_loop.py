@@ -19,6 +19,8 @@ import pytest
 
 from sandbox.app.world.faults import CRASH_BUILD
 from sandbox.app.world.child import ProcessRunner, SimulationCrashed
+from sandbox.app.world.hosted import HostedRunner
+from sandbox.app.world.pool import HostPool
 from sandbox.app.world.orders import Reset, UpdateConfig
 from sandbox.model.config import Config
 from tests.viser_wire import RawClient
@@ -29,10 +31,15 @@ KILLED = "the simulation process was killed, most likely out of memory (exit cod
 NEVER = 10**9  # steps or seconds: no world runs long enough to count as having run
 
 
-@pytest.fixture
-def runner(monkeypatch):
+@pytest.fixture(params=["process", "hosted"])
+def runner(monkeypatch, request):
+    """A process runner, or a world in a host (whose host dies as a process runner's child does)."""
     monkeypatch.setenv(CRASH_BUILD, "light_pitch=0.5")
-    r = ProcessRunner(SMALL, shape=None, fps=60, steps_per_frame=2)
+    pool = HostPool(hosts=1)  # after the fault is set: a host reads it as it starts
+    if request.param == "process":
+        r = ProcessRunner(SMALL, shape=None, fps=60, steps_per_frame=2)
+    else:
+        r = HostedRunner(SMALL, pool=pool, shape=None, fps=60, steps_per_frame=2)
     r.restart_pause = 0.05
     r.heard, r.went_back = [], []
     r.on_crash(r.heard.append)
@@ -40,6 +47,7 @@ def runner(monkeypatch):
     r.start()
     yield r
     r.stop()
+    pool.stop()
 
 
 def running_again(r: ProcessRunner, restarts: int) -> None:

@@ -22,6 +22,8 @@ from sandbox.app.world import orders as commands
 from sandbox.app.world.orders import (Apply, Arrival, Build, BuildCancelled, CancelBuild, Command, Control, Reset,
                                       RunnerStopped, Setting, SetOutline, SkipAhead, StepOnce)
 from sandbox.app.world.child import ProcessRunner, SimulationCrashed
+from sandbox.app.world.hosted import HostedRunner
+from sandbox.app.world.pool import HostPool
 from sandbox.app.world.runner import Runner
 from sandbox.model.config import Config
 from tests.waiting import wait_until
@@ -167,23 +169,40 @@ def test_a_frame_that_fails_halts_the_world_and_leaves_play_to_its_owner(monkeyp
 
 # ------------------------------------------------------------------ process runner
 @pytest.fixture
-def process_runner():
+def only_process_runner():
     runner = ProcessRunner(SMALL, shape=None, fps=60, steps_per_frame=2)
     runner.start()
     yield runner
     runner.stop()
 
 
+@pytest.fixture(params=["process", "hosted"])
+def process_runner(request):
+    """A runner whose world runs in another process: a child of its own, or a world host's (which the
+    proxy sees as its child: the same tests hold for both)."""
+    pool = HostPool(hosts=1)
+    if request.param == "process":
+        runner = ProcessRunner(SMALL, shape=None, fps=60, steps_per_frame=2)
+    else:
+        runner = HostedRunner(SMALL, pool=pool, shape=None, fps=60, steps_per_frame=2)
+    runner.start()
+    yield runner
+    runner.stop()
+    pool.stop()
+
+
 def test_stopping_fails_every_call_the_process_owes(process_runner, tmp_path):
     runner = process_runner
     heard: list[BaseException] = []
-    busy = runner.submit(Apply(functools.partial(blocks_until, path=str(tmp_path / "never"))))
+    released = tmp_path / "released"  # after the stop (a host's other worlds wait behind a busy one)
+    busy = runner.submit(Apply(functools.partial(blocks_until, path=str(released))))
     owed = [runner.ask(Reset(1), on_error=heard.append), runner.ask(Apply(where_am_i), on_error=heard.append), busy]
     runner.stop(timeout=1)
     done, pending = wait(owed, timeout=10)
     assert not pending and all(isinstance(f.exception(), RunnerStopped) for f in owed)
     wait_until(lambda: len(heard) == 2, timeout=10, what="both callers to hear")
     assert not runner.process.is_alive()
+    released.touch()
 
 
 @pytest.mark.slow
@@ -252,8 +271,8 @@ class StopsWhileSpawning:
 
 
 @pytest.mark.slow
-def test_a_process_spawned_while_the_runner_stops_is_stopped_too(process_runner):
-    runner = process_runner
+def test_a_process_spawned_while_the_runner_stops_is_stopped_too(only_process_runner):
+    runner = only_process_runner
     runner.restart_pause = 0.0
     spawning = runner._context = StopsWhileSpawning(runner)
     old = runner.process.pid
@@ -262,3 +281,42 @@ def test_a_process_spawned_while_the_runner_stops_is_stopped_too(process_runner)
     spawning.stopper.join(30)
     assert not spawning.stopper.is_alive()
     assert spawning.spawned and all(p.pid is None or not p.is_alive() for p in spawning.spawned)
+
+
+def test_the_settings_follow_the_running_config_and_the_changes_waiting_for_a_reset():
+    """Runner.settings is kept between frames (building a Config checks every value: a quarter of a class
+    world's frame) and made again when either changes."""
+    runner = Runner(SMALL, shape=None)
+    assert runner.settings is runner.sim.config and runner.settings is runner.settings
+    runner.call(commands.UpdateConfig({"robots": 14}))  # waits for a reset
+    assert runner.settings.robots == 14 and runner.sim.config.robots == 12 and runner.latest.config.robots == 14
+    runner.call(commands.UpdateConfig({"switch": 0.25}))  # live: a new running config
+    assert runner.settings.switch == 0.25 and runner.settings.robots == 14
+    runner.call(Reset())
+    assert runner.settings is runner.sim.config and (runner.settings.robots, runner.settings.switch) == (14, 0.25)
+
+
+def test_a_frame_leaves_out_the_intensities_its_parent_has():
+    """The lights' intensities are 33 of the paper's world's 58 KB a frame, and change once per 100 steps."""
+    from sandbox.app.world.child import FrameSamples
+
+    runner, sender = Runner(SMALL, shape=None), FrameSamples()
+    first = sender.frame(runner, runner.latest)
+    runner.advance(1)
+    same_lights = sender.frame(runner, runner.latest)
+    runner.call(commands.SetLamp((0.0, 0.0), 2.0))  # new lights
+    runner.advance(1)
+    new_lights = sender.frame(runner, runner.latest)
+    assert first.snap.intensities is not None and runner.latest.intensities is not None
+    assert same_lights.snap.lights_key == first.snap.lights_key and same_lights.snap.intensities is None
+    assert new_lights.snap.lights_key != first.snap.lights_key and new_lights.snap.intensities is not None
+
+
+def test_every_frame_heard_has_the_lights_intensities(process_runner):
+    """The parent puts them back from the frame before (same lights)."""
+    seen = []
+    process_runner.subscribe(seen.append)
+    wait_until(lambda: len(seen) >= 12, what="a dozen frames")
+    keys = [snap.lights_key for snap in seen]
+    assert len(set(keys)) < len(keys)  # some frames came without them
+    assert all(snap.intensities is not None and snap.intensities.shape == seen[0].intensities.shape for snap in seen)

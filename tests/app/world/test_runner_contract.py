@@ -1,4 +1,5 @@
-"""Both runners follow one contract, written once (sandbox.app.world.contract), and a chart never joins two worlds."""
+"""The runners (a thread, a child process, a world in a shared host) follow one contract, written once
+(sandbox.app.world.contract), and a chart never joins two worlds."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import pytest
 
 from sandbox.app.world.contract import FramePublisher, SimulationRunner
 from sandbox.app.world.child import ProcessRunner
+from sandbox.app.world.hosted import HostedRunner
 from sandbox.app.world.orders import Reset
 from sandbox.app.world.runner import Runner
 from sandbox.model.config import Config
@@ -19,10 +21,11 @@ MEMBERS = [name for name, value in vars(SimulationRunner).items()
 OWN = {"submit", "start", "stop", "latest", "series", "on_progress", "on_halt", "call"}
 #: All the contract holds beside: asking with callbacks, and reading the controls back. No command has a
 #: method of its own (sandbox.app.world.orders: a command is its dataclass, and says what it does).
+RUNNERS = [Runner, ProcessRunner, HostedRunner]
 WRITTEN_ONCE = {"ask", "playing", "steps_per_frame", "followed", "hold_at", "want_field", "steps_per_second"}
 
 
-@pytest.mark.parametrize("kind", [Runner, ProcessRunner])
+@pytest.mark.parametrize("kind", RUNNERS)
 @pytest.mark.parametrize("name", MEMBERS)
 def test_each_runner_has_the_contracts_methods_with_its_signatures(kind, name):
     promised, offered = getattr(SimulationRunner, name), getattr(kind, name, None)
@@ -35,12 +38,18 @@ def test_each_runner_has_the_contracts_methods_with_its_signatures(kind, name):
     assert got == want, f"{kind.__name__}.{name}{inspect.signature(offered)} differs from the contract"
 
 
-@pytest.mark.parametrize("kind", [Runner, ProcessRunner])
+@pytest.mark.parametrize("kind", RUNNERS)
 def test_the_commands_are_written_once_for_both_runners(kind):
     """A new command is one dataclass: no runner repeats anything of the contract's."""
-    again = sorted(name for name in MEMBERS if name not in OWN and name in vars(kind))
+    again = sorted(name for name in MEMBERS if name not in OWN and name in written_by(kind))
     assert not again, f"{kind.__name__} writes {again} again"
-    assert OWN - {"call"} <= set(vars(kind))  # what it must do itself (call: the Runner runs inline unstarted)
+    assert OWN - {"call"} <= written_by(kind)  # what it must do itself (call: the Runner runs inline unstarted)
+
+
+def written_by(kind: type) -> set[str]:
+    """What ``kind`` and the runners it is made from write (a hosted runner is a process runner)."""
+    below = kind.__mro__[:kind.__mro__.index(SimulationRunner)]
+    return set().union(*(vars(c) for c in below))
 
 
 def test_the_contract_has_no_method_per_command():
@@ -48,7 +57,7 @@ def test_the_contract_has_no_method_per_command():
 
 
 def test_both_runners_publish_through_the_same_publisher():
-    assert issubclass(Runner, FramePublisher) and issubclass(ProcessRunner, FramePublisher)
+    assert all(issubclass(kind, FramePublisher) for kind in RUNNERS)
     runner = Runner(SMALL, shape=None)
     assert isinstance(runner, SimulationRunner)
 
