@@ -12,6 +12,7 @@ its world; the page that comes back to the seat (a reload) finds it again.
 
 from __future__ import annotations
 
+import functools
 import logging
 import threading
 from dataclasses import dataclass
@@ -20,8 +21,9 @@ from typing import Any, Callable
 from sandbox.app.lesson.desk import Desk
 from sandbox.app.lesson.seats import Seats
 from sandbox.app.lesson.wall import Wall
+from sandbox.app.world.hosted import CLASS_FPS, CLASS_STEPS_PER_FRAME, HostedRunner
 from sandbox.app.world.lockstep import Lockstep, partner_config
-from sandbox.app.world.runner import Runner
+from sandbox.app.world.pool import HostPool
 from sandbox.app.world.snapshot import Snapshot
 
 log = logging.getLogger("sandbox.app.lesson")
@@ -59,9 +61,16 @@ class Classroom:
     (its server, gate, event queue and the teacher's runner), then ``start()``; ``stop()`` after the
     event queue stopped."""
 
-    def __init__(self, seats: Seats | None = None, *, make_runner: Callable[..., Any] = Runner,
+    def __init__(self, seats: Seats | None = None, *, make_runner: Callable[..., Any] | None = None,
                  round_steps: int | None = None):
+        """``make_runner``: a student's world (any runner of the contract); by default a world in one of
+        this class's world hosts (:mod:`sandbox.app.world.pool`: many worlds a process, a process a core)."""
         self.seats = seats or Seats()
+        #: The class's world hosts, started with its first world (None: worlds come from ``make_runner``).
+        self.pool: HostPool | None = None
+        if make_runner is None:
+            self.pool = HostPool()
+            make_runner = functools.partial(HostedRunner, pool=self.pool)
         self.make_runner = make_runner
         #: World steps of a class challenge's round (None: the Challenge folder's own).
         self.round_steps = round_steps
@@ -78,6 +87,8 @@ class Classroom:
         self.app, self.events, self.gate, self.server = app, app.events, app.gate, app.server
         self.teacher = app.runner
         self.fps, self.steps_per_frame = app.runner.fps, app.runner.steps_per_frame
+        if self.pool is not None:  # hosted worlds start at a class's pace, 3x real time (a student may speed up)
+            self.fps, self.steps_per_frame = CLASS_FPS, CLASS_STEPS_PER_FRAME
         self.wall = Wall(self.server.gui, self, scenes=(TEACHERS_WORLD, *partner_cases()))
 
     def start(self) -> None:
@@ -90,6 +101,8 @@ class Classroom:
             desk.close()
         for world in list(self.worlds.values()):
             world.runner.stop()
+        if self.pool is not None:
+            self.pool.stop()
 
     def seated(self, client_id: int) -> bool:
         """Whether the page ``client_id`` holds a seat (its world is its own, not the teacher's)."""
