@@ -4,8 +4,8 @@ Runs on the app's event thread; a world is built in a worker thread of its own, 
 
 Each seat (:mod:`sandbox.app.lesson.seats`) gets a world of its own, started from the scene the teacher
 set (the teacher's running world's settings and goal), by ``make_runner`` (any runner of the contract,
-:mod:`sandbox.app.world.contract`: by default the thread :class:`~sandbox.app.world.runner.Runner`;
-the world host of issue 58's item 3 goes in here, in one line). The student's page gets a
+:mod:`sandbox.app.world.contract`: by default a :class:`~sandbox.app.world.hosted.HostedRunner`, a
+world in one of the class's world hosts, many worlds a process). The student's page gets a
 :class:`~sandbox.app.lesson.desk.Desk`: the panel and the floor, its own. A page that leaves pauses
 its world; the page that comes back to the seat (a reload) finds it again.
 """

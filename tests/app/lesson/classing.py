@@ -17,7 +17,7 @@ TOKEN = "classroom-secret-42"
 def class_app(*, seats=None, round_steps: int | None = None, trust_proxy: bool = False, fps: float = 30,
               steps_per_frame: int = 2, **kwargs):
     """A class server on loopback (the token needed for the teacher's page, as ``serve --class`` makes
-    one), its worlds threads of the server process, small; started."""
+    one), its worlds in world hosts, small; started."""
     from sandbox.commands.serve import App, free_port
 
     lesson = Classroom(seats, round_steps=round_steps)
