@@ -30,6 +30,7 @@ import threading
 import time
 from typing import Any
 
+from sandbox.app.world.hosted import CLASS_FPS, CLASS_STEPS_PER_FRAME
 from sandbox.cli import UserError
 from sandbox.commands.hosted_bench import cpu_seconds, memory_mb
 from sandbox.model.config import Config
@@ -329,6 +330,7 @@ def measure(app: Any, crowds: list[Crowd], identities: list[str], wall: WallCloc
     """Over ``seconds``: each world's steps, each page's bytes and messages, the wall, the server's CPU."""
     pids = server_pids(app)
     cpu0 = {name: sum(cpu_seconds(pid) for pid in group) for name, group in pids.items()}
+    students_cpu0 = sum(cpu_seconds(c.process.pid) for c in crowds)
     steps0 = steps_now(app, identities)
     counts0 = merged(crowds)
     if page is not None:
@@ -340,12 +342,17 @@ def measure(app: Any, crowds: list[Crowd], identities: list[str], wall: WallCloc
     steps1 = steps_now(app, identities)
     counts1, calm = merged(crowds, calm=True)
     cpu1 = {name: sum(cpu_seconds(pid) for pid in group) for name, group in server_pids(app).items()}
+    students_cpu = sum(cpu_seconds(c.process.pid) for c in crowds) - students_cpu0
     browser_pictures = page.evaluate("() => window.__wallPictures") if page is not None else None
     step_rates = [(steps1.get(i, 0) - steps0.get(i, 0)) / wall_seconds for i in identities]
     frame_rates = [(counts1[i][1] - counts0[i][1]) / wall_seconds for i in identities]
     byte_rates = [(counts1[i][0] - counts0[i][0]) / wall_seconds for i in identities]
     sent = wall.sent[wall_from:]
     shown = [t / 1000.0 for t in browser_pictures] if browser_pictures is not None else None
+    spent = {name: cpu1.get(name, 0.0) - cpu0.get(name, 0.0) for name in cpu0}
+    steps_done = max(sum(step_rates) * wall_seconds, 1.0)
+    frames_got = max(sum(frame_rates) * wall_seconds, 1.0)
+    target = len(identities) * CLASS_FPS * CLASS_STEPS_PER_FRAME
     return {
         "real_time_factor": summary([rate * app.config.dt for rate in step_rates], 2),
         "steps_per_second": summary(step_rates, 1),
@@ -361,7 +368,15 @@ def measure(app: Any, crowds: list[Crowd], identities: list[str], wall: WallCloc
         "wall_refresh_seconds_in_browser": None if shown is None else {
             "median": _median(intervals(shown)), "max": _max(intervals(shown)), "pictures": len(shown)},
         "cpu_seconds": {name: round(cpu1.get(name, 0.0) - cpu0.get(name, 0.0), 2) for name in cpu0},
-        "cpu_cores_used": round((sum(cpu1.values()) - sum(cpu0.values())) / wall_seconds, 2),
+        "cpu_cores_used": round(sum(spent.values()) / wall_seconds, 2),
+        # What a loaded machine changes little: the CPU a step costs in the hosts, a page's frame in the
+        # server, and so the cores the class would need at its pace (the teacher's world as measured).
+        "hosts_cpu_us_per_step": round(spent["hosts"] / steps_done * 1e6, 1),
+        "server_cpu_ms_per_page_frame": round(spent["server"] / frames_got * 1e3, 2),
+        "cores_needed_at_3x_and_10_fps": round((spent["hosts"] / steps_done * target + spent["server"]
+                                                / frames_got * len(identities) * CLASS_FPS
+                                                + spent["teachers_world"] / wall_seconds), 2),
+        "students_process_cpu_cores": round(students_cpu / wall_seconds, 2),
         "load_average": [round(x, 2) for x in os.getloadavg()],
         "cores": os.cpu_count(),
     }
