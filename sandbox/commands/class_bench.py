@@ -317,7 +317,8 @@ def run(config: Config, students: int, seconds: float = 20.0, *, teacher_browser
         "robots": config.robots, "boxes": config.boxes, "teacher_browser": teacher_browser,
         "hosts": len(pids["hosts"]),
         "rss_mb": {name: round(value, 1) for name, value in memory.items()} | {"total": round(total, 1)},
-        "first_world_rss_mb_total": round(first_total, 1),
+        "first_world_rss_mb": {name: round(value, 1) for name, value in first_memory.items()}
+        | {"total": round(first_total, 1)},
         "rss_per_student_world_beyond_first_mb": round((total - first_total) / beyond, 1) if beyond else None,
         "pss_mb_total": round(pss, 1), "first_world_pss_mb_total": round(first_pss, 1),
         "pss_per_student_world_beyond_first_mb": round((pss - first_pss) / beyond, 1) if beyond else None,
