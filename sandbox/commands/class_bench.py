@@ -222,6 +222,28 @@ class WallClock:
         wall.refresh = counted
 
 
+class DeskFrames:
+    """How many frames each student's desk drew for its page (wraps the classroom's frame handler, on
+    the event thread): between the world's frames and the page's messages."""
+
+    def __init__(self, lesson: Any):
+        self.drawn: dict[str, int] = {}
+        on_frame = lesson._on_frame
+
+        def counted(world: Any, snap: Any) -> None:
+            on_frame(world, snap)
+            self.drawn[world.identity] = self.drawn.get(world.identity, 0) + 1
+
+        lesson._on_frame = counted
+
+
+def published_now(app: Any, identities: list[str]) -> dict[str, int]:
+    """The frames each student's world has sent the server so far."""
+    worlds = dict(app.lesson.worlds)
+    return {identity: getattr(worlds[identity].runner, "frames_published", 0) for identity in identities
+            if identity in worlds}
+
+
 def steps_now(app: Any, identities: list[str]) -> dict[str, int]:
     worlds = dict(app.lesson.worlds)  # (read from this thread: a copy of the event thread's dict)
     return {identity: worlds[identity].runner.latest.step for identity in identities if identity in worlds}
@@ -280,6 +302,7 @@ def run(config: Config, students: int, seconds: float = 20.0, *, teacher_browser
         app = App(config, port=free_port(), fps=fps, steps_per_frame=steps_per_frame, access=access,
                   lesson=lesson)
         wall = WallClock(app.lesson.wall)  # before start(): the refresh it schedules is the counted one
+        desks = DeskFrames(app.lesson)
         app.start()
         stack.callback(app.stop)
         if page is not None:
@@ -306,7 +329,7 @@ def run(config: Config, students: int, seconds: float = 20.0, *, teacher_browser
                  and len(steps_now(app, identities)) == students, SEATING_SECONDS, "every student's world")
         seated_after = time.monotonic() - started
         time.sleep(warm_up)
-        result = measure(app, crowds, identities, wall, seconds, page)
+        result = measure(app, crowds, identities, wall, desks, seconds, page)
         pids = server_pids(app)
         memory = {name: rss_of(group) for name, group in pids.items()}
         pss = sum(pss_of(group) for group in pids.values())
@@ -326,13 +349,13 @@ def run(config: Config, students: int, seconds: float = 20.0, *, teacher_browser
     return result
 
 
-def measure(app: Any, crowds: list[Crowd], identities: list[str], wall: WallClock, seconds: float,
-            page: Any) -> dict[str, Any]:
+def measure(app: Any, crowds: list[Crowd], identities: list[str], wall: WallClock, desks: DeskFrames,
+            seconds: float, page: Any) -> dict[str, Any]:
     """Over ``seconds``: each world's steps, each page's bytes and messages, the wall, the server's CPU."""
     pids = server_pids(app)
     cpu0 = {name: sum(cpu_seconds(pid) for pid in group) for name, group in pids.items()}
     students_cpu0 = sum(cpu_seconds(c.process.pid) for c in crowds)
-    steps0 = steps_now(app, identities)
+    steps0, published0, drawn0 = steps_now(app, identities), published_now(app, identities), dict(desks.drawn)
     counts0 = merged(crowds)
     if page is not None:
         page.evaluate("() => { window.__wallPictures = []; }")
@@ -340,13 +363,15 @@ def measure(app: Any, crowds: list[Crowd], identities: list[str], wall: WallCloc
     t0 = time.perf_counter()
     time.sleep(seconds)
     wall_seconds = time.perf_counter() - t0
-    steps1 = steps_now(app, identities)
+    steps1, published1, drawn1 = steps_now(app, identities), published_now(app, identities), dict(desks.drawn)
     counts1, calm = merged(crowds, calm=True)
     cpu1 = {name: sum(cpu_seconds(pid) for pid in group) for name, group in server_pids(app).items()}
     students_cpu = sum(cpu_seconds(c.process.pid) for c in crowds) - students_cpu0
     browser_pictures = page.evaluate("() => window.__wallPictures") if page is not None else None
     step_rates = [(steps1.get(i, 0) - steps0.get(i, 0)) / wall_seconds for i in identities]
     frame_rates = [(counts1[i][1] - counts0[i][1]) / wall_seconds for i in identities]
+    published_rates = [(published1.get(i, 0) - published0.get(i, 0)) / wall_seconds for i in identities]
+    drawn_rates = [(drawn1.get(i, 0) - drawn0.get(i, 0)) / wall_seconds for i in identities]
     byte_rates = [(counts1[i][0] - counts0[i][0]) / wall_seconds for i in identities]
     sent = wall.sent[wall_from:]
     shown = [t / 1000.0 for t in browser_pictures] if browser_pictures is not None else None
@@ -357,7 +382,10 @@ def measure(app: Any, crowds: list[Crowd], identities: list[str], wall: WallCloc
     return {
         "real_time_factor": summary([rate * app.config.dt for rate in step_rates], 2),
         "steps_per_second": summary(step_rates, 1),
-        "frames_per_second": summary(frame_rates, 1),
+        "frames_per_second": summary(frame_rates, 1),  # websocket messages each page received
+        # on their way: the frames each world sent the server, and those the server drew on its desk
+        "world_frames_per_second": summary(published_rates, 1),
+        "desk_frames_per_second": summary(drawn_rates, 1),
         "kb_per_second_per_student": {"max": round(max(byte_rates) / 1000, 1),
                                       "median": round(statistics.median(byte_rates) / 1000, 1)},
         "students_below_3x": sum(rate * app.config.dt < 2.95 for rate in step_rates),

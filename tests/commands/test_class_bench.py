@@ -70,7 +70,8 @@ def test_it_reports_each_student_and_the_server(monkeypatch):
     result = class_bench.run(SMALL, 2, 2.0, steps_per_frame=2)
     assert result["students"] == 2 and result["page_errors"] == [] and result["pages_calm"] == 2
     assert result["steps_per_second"]["min"] > 0 and result["real_time_factor"]["min"] > 0
-    assert result["frames_per_second"]["min"] > 0
+    assert result["frames_per_second"]["min"] > 0 and result["desk_frames_per_second"]["min"] > 0
+    assert result["world_frames_per_second"]["min"] > 0
     assert result["kb_per_second_per_student"]["median"] > 0
     assert result["kb_per_second_per_student"]["max"] >= result["kb_per_second_per_student"]["median"]
     assert result["cpu_seconds"]["server"] > 0 and result["hosts"] >= 1
