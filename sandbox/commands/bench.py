@@ -54,6 +54,13 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                    help="K worlds in world hosts (a class's worlds, headless, no web server) at 3x real time on "
                         "hosts up to the core count, for --seconds: steps and frames per second of each world, "
                         "CPU and memory of each host")
+    p.add_argument("--class", dest="class_students", type=int, default=None, metavar="K",
+                   help="a class server (serve --class) with K students' pages over websockets (they receive "
+                        "frames as a page that keeps up does), for --seconds after a warm-up: each student "
+                        "world's real-time factor and frames a second to its page, bytes a second per student, "
+                        "the wall's refresh, the server's CPU and memory")
+    p.add_argument("--teacher-browser", action="store_true",
+                   help="with --class: the teacher's page (the wall) in a headless Chromium too")
     p.add_argument("--hosts", type=int, default=None, metavar="N",
                    help="with --hosted: at most N host processes (default: the number of cores)")
     p.add_argument("--skip", type=int, default=0, metavar="STEPS",
@@ -229,6 +236,15 @@ def bench_command(args: argparse.Namespace) -> int:
     config = scaled(config_from_args(args), args.scale)
     if args.compare_reference:
         result = compare_reference(args.compare_reference, args.rounds, config)
+    elif args.class_students is not None:
+        from sandbox.commands import class_bench
+
+        if not 1 <= args.class_students <= 40:
+            raise UserError(f"--class takes 1 to 40 students (the class's seats), got {args.class_students}")
+        if not 1 <= args.steps_per_frame <= 100:
+            raise UserError(f"--steps-per-frame must be between 1 and 100, got {args.steps_per_frame}")
+        result = class_bench.run(config, args.class_students, args.seconds, teacher_browser=args.teacher_browser,
+                                 steps_per_frame=args.steps_per_frame)
     elif args.hosted is not None:
         from sandbox.commands import hosted_bench
 
