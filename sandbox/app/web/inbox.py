@@ -110,24 +110,21 @@ class Inbox:
         """True when viser may act on ``message``; uploads are handled here (False). A seat's page
         (``serve --class``) reaches none of the shared handlers (the teacher's GUI and floor): its
         messages go to its own page's handlers only, checked there (:meth:`admit_local`)."""
-        try:
-            if grant is not None and grant.seat and not isinstance(message, _UPLOADS):
-                return False
-            if isinstance(message, _UPLOADS):
-                self._check_sender(client_id, grant, message)
-                self._upload(client_id, message)
-                return False
-            self._check(client_id, grant, message)
-            return True
-        except BadValue as why:
-            text, handle = why.args
-            self._tell(client_id, "Value not used", text)
-            self._send(client_id, messages.GuiUpdateMessage(viser_seam.handle_uuid(handle), {"value": handle.value}))
-            self._refused(client_id, message, text)
+        if isinstance(message, _UPLOADS):
+            return self._admit_checked(client_id, grant, message, self._take_upload)
+        if grant is not None and grant.seat:
             return False
-        except Refused as why:
-            self._refused(client_id, message, str(why))
-            return False
+        return self._admit_checked(client_id, grant, message)
+
+    def _take_upload(self, client_id: int, grant: Grant | None, message: Any) -> bool:
+        """An upload's part, from a page that may send it, kept here (viser never acts on one)."""
+        self._check_sender(client_id, grant, message)
+        self._upload(client_id, message)
+        return False
+
+    def _accept(self, client_id: int, grant: Grant | None, message: Any) -> bool:
+        self._check(client_id, grant, message)
+        return True
 
     def admit_local(self, client_id: int, grant: Grant | None, message: Any) -> bool:
         """The same message, on its way to the connection's own handlers (its camera, and the controls
@@ -143,10 +140,12 @@ class Inbox:
         except Refused:
             return False
 
-    def _admit_checked(self, client_id: int, grant: Grant, message: Any) -> bool:
+    def _admit_checked(self, client_id: int, grant: Grant | None, message: Any,
+                       take: Callable[[int, Grant | None, Any], bool] | None = None) -> bool:
+        """``take`` (by default: check the message, then let viser act on it), and a refusal said once:
+        a value not used is set back on the page, and every refusal is counted."""
         try:
-            self._check(client_id, grant, message)
-            return True
+            return (take or self._accept)(client_id, grant, message)
         except BadValue as why:
             text, handle = why.args
             self._tell(client_id, "Value not used", text)
