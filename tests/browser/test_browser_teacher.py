@@ -8,7 +8,6 @@ Screenshots go to $ROOM_SHOTS when it is set (kept small: docs/browser.md's were
 from __future__ import annotations
 
 import io
-import os
 import re
 import time
 
@@ -16,7 +15,7 @@ import numpy as np
 import pytest
 
 from tests.browsing import BROWSER_MARKS
-from tests.browser.test_browser_room import floor_to_page, within
+from tests.browser.test_browser_room import floor_to_page, shot, within
 from tests.waiting import wait_until
 
 pytestmark = BROWSER_MARKS
@@ -57,10 +56,6 @@ def open_page(browser, app, size=PROJECTOR, touch=False):
     return context, page, app.server.get_clients()[client_id]
 
 
-def shot(page, name: str) -> None:
-    folder = os.environ.get("ROOM_SHOTS")
-    if folder:
-        page.screenshot(path=os.path.join(folder, name))
 
 
 def scene_canvas(page) -> dict:
