@@ -62,10 +62,13 @@ class Classroom:
     event queue stopped."""
 
     def __init__(self, seats: Seats | None = None, *, make_runner: Callable[..., Any] | None = None,
-                 round_steps: int | None = None):
+                 round_steps: int | None = None, pace: tuple[float, int] | None = None):
         """``make_runner``: a student's world (any runner of the contract); by default a world in one of
-        this class's world hosts (:mod:`sandbox.app.world.pool`: many worlds a process, a process a core)."""
+        this class's world hosts (:mod:`sandbox.app.world.pool`: many worlds a process, a process a core).
+        ``pace``: a student world's frames a second and steps a frame (None: a class's 3x real time for
+        hosted worlds, the teacher's world's pace for others)."""
         self.seats = seats or Seats()
+        self.pace = pace
         #: The class's world hosts, started with its first world (None: worlds come from ``make_runner``).
         self.pool: HostPool | None = None
         if make_runner is None:
@@ -89,6 +92,8 @@ class Classroom:
         self.fps, self.steps_per_frame = app.runner.fps, app.runner.steps_per_frame
         if self.pool is not None:  # hosted worlds start at a class's pace, 3x real time (a student may speed up)
             self.fps, self.steps_per_frame = CLASS_FPS, CLASS_STEPS_PER_FRAME
+        if self.pace is not None:
+            self.fps, self.steps_per_frame = self.pace
         self.wall = Wall(self.server.gui, self, scenes=(TEACHERS_WORLD, *partner_cases()))
 
     def start(self) -> None:

@@ -20,7 +20,7 @@ def class_app(*, seats=None, round_steps: int | None = None, trust_proxy: bool =
     one), its worlds in world hosts, small; started."""
     from sandbox.commands.serve import App, free_port
 
-    lesson = Classroom(seats, round_steps=round_steps)
+    lesson = Classroom(seats, round_steps=round_steps, pace=(fps, steps_per_frame))  # the students' as the teacher's
     access = Access.for_server("127.0.0.1", token=TOKEN, trust_proxy=trust_proxy)
     access.seats = lesson.seats
     return App(SMALL, port=free_port(), fps=fps, steps_per_frame=steps_per_frame, process=False, access=access, lesson=lesson,
