@@ -89,12 +89,17 @@ class Classroom:
         """Join the app (on the main thread, before its event queue opens): the wall goes in its panel."""
         self.app, self.events, self.gate, self.server = app, app.events, app.gate, app.server
         self.teacher = app.runner
-        self.fps, self.steps_per_frame = app.runner.fps, app.runner.steps_per_frame
-        if self.pool is not None:  # hosted worlds start at a class's pace, 3x real time (a student may speed up)
-            self.fps, self.steps_per_frame = CLASS_FPS, CLASS_STEPS_PER_FRAME
-        if self.pace is not None:
-            self.fps, self.steps_per_frame = self.pace
+        self.fps, self.steps_per_frame = self._students_pace(app.runner)
         self.wall = Wall(self.server.gui, self, scenes=(TEACHERS_WORLD, *partner_cases()))
+
+    def _students_pace(self, teachers: Any) -> tuple[float, int]:
+        """A new student world's frames a second and steps a frame: as given, else a class's 3x real time
+        for hosted worlds (a student may speed theirs up), else the teacher's world's."""
+        if self.pace is not None:
+            return self.pace
+        if self.pool is not None:
+            return CLASS_FPS, CLASS_STEPS_PER_FRAME
+        return teachers.fps, teachers.steps_per_frame
 
     def start(self) -> None:
         self.events.every(WALL_SECONDS, self.wall.refresh)
