@@ -6,11 +6,10 @@ import http.client
 
 from sandbox.app.lesson.classroom import Classroom
 from sandbox.app.web.access import Access
-from sandbox.model.config import Config
+from tests.app.world.test_host import SMALL
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until
 
-SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 TOKEN = "classroom-secret-42"
 
 

@@ -18,6 +18,7 @@ from sandbox.app.web.rates import CONTROLS
 from tests.app.lesson.classing import (TOKEN, class_app, join, new_student, own_page, refusals, seat_of, student,
                                        uuid_of)
 from tests.app.web.test_security import notification
+from tests.app.world.test_host import steps_per_second
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until, wait_until_steady
 
@@ -198,9 +199,7 @@ def test_a_student_uploads_a_goal_to_their_own_world_and_not_to_the_teachers(app
 
 
 def steps_a_second(runner, seconds: float) -> float:
-    start, began = runner.latest.step, time.monotonic()
-    time.sleep(seconds)  # (a measuring window, not a wait for a condition)
-    return (runner.latest.step - start) / (time.monotonic() - began)
+    return steps_per_second([runner], seconds)[0]
 
 
 @pytest.mark.slow

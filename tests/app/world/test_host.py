@@ -19,6 +19,7 @@ from sandbox.app.world.pool import HostPool
 from sandbox.model.config import Config
 from tests.waiting import wait_until
 
+#: A small world, quick to build and step: the hosts', the pool's and the class's tests share it.
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 
 

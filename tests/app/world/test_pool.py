@@ -11,10 +11,8 @@ import pytest
 
 from sandbox.app.world.hosted import HostedRunner
 from sandbox.app.world.pool import HostPool, HostProcess, Slot
-from sandbox.model.config import Config
+from tests.app.world.test_host import SMALL
 from tests.waiting import wait_until
-
-SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
 
 
 @pytest.fixture
