@@ -96,15 +96,15 @@ class Timed:
                     if guess is not None and actual < NEAR_THE_END), default=math.nan)
 
 
-def timed_advice(shape: str, config: Config, *, workers: int,
+def timed_advice(shape: str, config: Config, *, workers: int, steps: int = advice.STEPS,
                  clock: Callable[[], float] = time.monotonic) -> Timed:
-    """The default advice on ``shape`` (the config's other settings), timed."""
+    """The default advice on ``shape`` (the config's other settings), timed; ``steps`` per trial."""
     from sandbox.shapes import shape_vertices
 
     config, vertices = config.replace(shape=shape), shape_vertices(shape)
     heard: list[tuple[float, float | None]] = []
     started = clock()
-    ranking = advice.advise(config, vertices, workers=workers,
+    ranking = advice.advise(config, vertices, workers=workers, steps=steps,
                             progress=lambda done, total, left: heard.append((clock() - started, left)))
     seconds = clock() - started
     return Timed(shape, ranking, advice.verdict(ranking, advice.default_candidate(config, vertices)), seconds,

@@ -1,5 +1,6 @@
-"""The designer's first minutes in the real page (issue 56, items 1, 2, 3 and 7), at 1280 x 800 and on a
-phone (390 x 844), in a world with the default 500 boxes (where the goal is moved inside the wall):
+"""The designer's first minutes in the real page (issue 56, items 1, 2, 3 and 7), at 1280 x 800 (and the
+notice, whose room is what a phone changes, at 390 x 844), in a world with the default 500 boxes (where the
+goal is moved inside the wall):
 
 - an F from its template, *Close and use*: the "Goal changed" notice is whole (it was cut to 200 px of
   its 242), in the window;
@@ -134,6 +135,9 @@ def test_the_designers_first_minutes(app, browser, design_path, width, height):
         print(f"\n{size}: the Goal changed notice is {box['height']:.0f} px tall, its text {box['scrollHeight']} px")
         assert box["scrollHeight"] <= box["clientHeight"] + 1 or box["overflow"] in ("auto", "scroll"), box
         assert box["top"] >= 0 and box["bottom"] <= box["window"], box  # in the window, nothing cut off
+        if narrow:
+            return  # on a phone only the notice's room differs: the rest is the same server's work, asked the same way
+
 
         # Item 3: the drawing gives way to the goal built, and comes back with Edit this goal.
         wait_until(lambda: app.runner.latest.goal_key != key and draw.given_way, what="the F in use")

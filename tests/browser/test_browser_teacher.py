@@ -272,13 +272,13 @@ def test_the_first_page_joins_nothing_and_an_offer_names_no_stale_step(browser, 
     from sandbox.app.panel import presenter
     from sandbox.commands.serve import App, free_port
 
-    monkeypatch.setattr(presenter, "OFFER_FROM_STEP", 200, raising=False)  # far along, soon (60 steps a second)
+    monkeypatch.setattr(presenter, "OFFER_FROM_STEP", 100, raising=False)  # far along, soon (60 steps a second)
     monkeypatch.setattr(presenter, "OFFER_SECONDS", 900.0)  # no expiry on a loaded machine
     app = App(small_config(), port=free_port(), steps_per_frame=4, fps=15)  # `phototaxis`: playing at once
     app.start()
     contexts = []
     try:
-        wait_until(lambda: app.runner.latest.step >= 400, what="a run far along")
+        wait_until(lambda: app.runner.latest.step >= 200, what="a run far along")
         context, page, client = open_page(browser, app)
         contexts.append(context)
         page.get_by_text("Goal shape", exact=True).wait_for(state="attached")
@@ -289,7 +289,7 @@ def test_the_first_page_joins_nothing_and_an_offer_names_no_stale_step(browser, 
         contexts.append(context)
         second.get_by_role("button", name="Start over", exact=True).wait_for()
         offered_at = app.runner.latest.step
-        wait_until(lambda: app.runner.latest.step > offered_at + 200, what="the run to go on")
+        wait_until(lambda: app.runner.latest.step > offered_at + 100, what="the run to go on")
         said = second.get_by_text("See it from the start?").first.inner_text()
         shot(second, "teacher-joining.png")
         stale = [n for n in re.findall(r"\d[\d,]*", said) if int(n.replace(",", "")) != app.runner.latest.step]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
@@ -239,16 +240,16 @@ def test_the_first_choice_is_right_within_a_point_of_the_best_at_100k():
 
 
 @pytest.mark.slow
-def test_the_default_advice_on_the_arrow_is_right_and_says_its_time_left():
-    """The arrow, where only one candidate (offset + chase) is within a point of the best at 100,000 steps
-    (scaled + chase 1.5 points below, offset 3.5): the default advice as ``bench --advice`` times it."""
-    from sandbox.commands.generated import ADVICE_EVALUATIONS
-    from sandbox.experiments.advice_check import judge, read_evaluations, timed_advice
+def test_the_advice_on_the_arrow_says_a_verdict_and_its_time_left():
+    """The advice as ``bench --advice`` times it, on a tiny world (the full advice takes a minute of both
+    cores: whether its first choice is right at 100,000 steps is what ``bench --advice`` measures on every
+    shape, and ``judge`` is pinned above): one line in percentages, and the time left said once a trial of
+    each kind (chase, an open loop) is done, and from then on always."""
+    from sandbox.experiments.advice_check import timed_advice
 
-    run = timed_advice("shapes/arrow.txt", Config(), workers=2)
-    assert judge(run.shape, run.ranking, read_evaluations(ADVICE_EVALUATIONS)).status == "right"
-    assert run.verdict.startswith("Use offset + chase: ") and run.verdict.endswith(" %)")  # auto takes offset
-    # The time left is said once a trial of each kind (chase, an open loop) is done, and from then on always.
+    run = timed_advice("shapes/arrow.txt", TINY, workers=2, steps=1_000)
+    # 1,000 steps rank at random; the line is what is pinned: the first choice, then what auto would get
+    assert re.fullmatch(r"Use [a-z +]+: \d+ % \((the default|[a-z +]+ \d+ %)\)", run.verdict), run.verdict
     said = [left is not None for _, left, _ in run.estimates]
     assert len(said) == 15 and said.index(True) <= 8 and all(said[said.index(True):])
 
