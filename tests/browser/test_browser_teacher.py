@@ -168,7 +168,7 @@ def test_opening_the_panel_in_the_presenter_layout_reframes_the_floor(classroom,
                     if not within(floor_to_page(client, canvas, box), canvas)]
 
         try:
-            wait_until(lambda: not outside(), timeout=20, what="the floor framed beside the open panel")
+            wait_until(lambda: not outside(), what="the floor framed beside the open panel")
         finally:
             shot(page, "teacher-panel-open.png")
         canvas = scene_canvas(page)
@@ -213,7 +213,7 @@ def test_a_phones_open_drawer_leaves_the_lamp_in_view(classroom, browser):
             return shown if 0 <= middle < drawer_top(page) and within(shown, scene_canvas(page)) else None
 
         try:
-            wait_until(lamp_on_screen, timeout=20, what="the lamp above the open drawer")
+            wait_until(lamp_on_screen, what="the lamp above the open drawer")
         finally:
             shot(page, "teacher-phone-drawer-open.png")
         print(f"\nphone, drawer open at {drawer_top(page):.0f} px: the lamp at {lamp_on_screen()}")
