@@ -2,10 +2,11 @@
 headless Chromium context of their own, against one ``serve --class`` server with small worlds.
 
 Each student opens the students' link, gets a world of their own and picks a different goal, which
-their page alone shows (the first one's window, narrowed to 1024 x 768 once laid out, framed again, its
-caption whole); the teacher's wall shows the three; one goes on the projector (the teacher's floor shows
-that world, in the presenter layout, the student named in its caption); a paper case goes to everyone; a class challenge plays the same round on
-every desk and the wall ranks the results. ``PHOTOTAXIS_SCREENSHOTS=DIR`` keeps the teacher's wall
+their page alone shows; the teacher's wall shows the three; one goes on the projector (the teacher's
+floor shows that world, in the presenter layout, the student named in its caption); the first student's
+window, narrowed to 1024 x 768 long after it was laid out, is framed again, its caption whole; a paper
+case goes to everyone; a class challenge plays the same round on every desk (one reference run for the
+three) and the wall ranks the results. ``PHOTOTAXIS_SCREENSHOTS=DIR`` keeps the teacher's wall
 (1600x1000) and a student's page (390x844) as pictures there."""
 
 from __future__ import annotations
@@ -142,6 +143,10 @@ def test_a_lab_lesson_with_three_students_and_the_teacher(app, browser):
     print(f"scored at {time.monotonic() - started:.1f} s")
     ranked = teacher.get_by_text(re.compile(r"^Student \d: \d+ box"))
     wait_until(lambda: ranked.count() == 3, what="the ranking on the wall")
+    # the paper's score beside each: three rounds in the same world (the case sent), one reference run
+    wait_until(lambda: all(lesson.desks[i].panel.challenge.round.paper is not None for i in identities),
+               timeout=120, what="the paper's score beside every round")
+    assert lesson.references.runs == 1
     rows = lesson.challenge_results()
     assert [row[2] for row in rows] == ["done"] * 3
     scores = [row[1].brought for row in rows]

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from sandbox.app.lesson.desk import Desk
+from sandbox.app.lesson.references import References
 from sandbox.app.lesson.seats import Seats
 from sandbox.app.lesson.wall import Wall
 from sandbox.app.panel.framing import PRESENTER
@@ -112,6 +113,8 @@ class Classroom:
         self.teacher = app.runner
         self.fps, self.steps_per_frame = self._students_pace(app.runner)
         self.wall = Wall(self.server.gui, self, scenes=(TEACHERS_WORLD, *partner_cases()))
+        #: The class challenge's reference runs, one a world for the class (not a process pool a student).
+        self.references = References(self.events)
 
     def _students_pace(self, teachers: Any) -> tuple[float, int]:
         """A new student world's frames a second and steps a frame: as given, else a class's 3x real time
@@ -135,6 +138,8 @@ class Classroom:
             world.runner.stop()
         if self.pool is not None:
             self.pool.stop()
+        if hasattr(self, "references"):  # (attached)
+            self.references.stop()
 
     def seated(self, client_id: int) -> bool:
         """Whether the page ``client_id`` holds a seat (its world is its own, not the teacher's)."""
@@ -345,6 +350,7 @@ class Classroom:
         for identity, desk in self.desks.items():
             seat = self.seats.get(identity)
             challenge = desk.panel.challenge
+            challenge.reference = self.references.ask  # one reference run a world, for the class
             if self.round_steps is not None:
                 challenge.round_steps = int(self.round_steps)
             challenge.start(seat.label if seat else "student", desk.client)
