@@ -17,6 +17,7 @@ def held(pool, key: str) -> bool:
     return any(key in host.kept for host in pool.hosts)
 
 
+@pytest.mark.slow  # (5 s: the host's housekeeping frees it within a second, the world is built twice)
 def test_a_world_left_alone_is_freed_and_its_student_comes_back_to_a_new_one(monkeypatch):
     monkeypatch.setattr(classroom, "FREE_AWAY_SECONDS", 0.3)
     app = class_app()
