@@ -59,6 +59,10 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                         "frames as a page that keeps up does), for --seconds after a warm-up: each student "
                         "world's real-time factor and frames a second to its page, bytes a second per student, "
                         "the wall's refresh, the server's CPU and memory")
+    p.add_argument("--class-challenge", type=int, default=None, metavar="STEPS",
+                   help="with --class: then a class challenge of STEPS steps for every student, measured to the "
+                        "end of its reference runs (the paper's controller in each round's world): peak memory "
+                        "and processes")
     p.add_argument("--teacher-browser", action="store_true",
                    help="with --class: the teacher's page (the wall) in a headless Chromium too")
     p.add_argument("--hosts", type=int, default=None, metavar="N",
@@ -244,7 +248,7 @@ def bench_command(args: argparse.Namespace) -> int:
         if not 1 <= args.steps_per_frame <= 100:
             raise UserError(f"--steps-per-frame must be between 1 and 100, got {args.steps_per_frame}")
         result = class_bench.run(config, args.class_students, args.seconds, teacher_browser=args.teacher_browser,
-                                 steps_per_frame=args.steps_per_frame)
+                                 steps_per_frame=args.steps_per_frame, challenge_steps=args.class_challenge)
     elif args.hosted is not None:
         from sandbox.commands import hosted_bench
 

@@ -279,11 +279,70 @@ def wait_for(condition: Any, seconds: float, what: str) -> None:
         time.sleep(0.1)
 
 
+def descendants(pid: int) -> list[int]:
+    """Every process started under ``pid`` (the fork server, and what it forked: the hosts, the teacher's
+    world, the challenge's reference pools), read from /proc."""
+    children: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as fh:
+                    ppid = int(fh.read().rsplit(")", 1)[1].split()[1])
+            except (OSError, ValueError, IndexError):
+                continue
+            children.setdefault(ppid, []).append(int(entry))
+    found, todo = [], [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+def class_challenge(app: Any, round_steps: int, timeout: float = 600.0) -> dict[str, Any]:
+    """A class challenge of ``round_steps`` steps for every seated student, to the end of the last
+    reference run: the peak memory (PSS) of the server and every process under it while it runs, and the
+    most processes, against before it started."""
+    lesson = app.lesson
+    lesson.round_steps = round_steps
+
+    def tree() -> tuple[float, int]:
+        pids = [os.getpid(), *descendants(os.getpid())]
+        total = 0.0
+        for pid in pids:
+            with contextlib.suppress(OSError):
+                total += memory_mb(pid)[1]
+        return total, len(pids)
+
+    def referenced() -> bool:  # every round scored, beside the paper's score or why there is none
+        folders = [desk.panel.challenge for desk in list(lesson.desks.values())]
+        return all(f.round is not None and f.round.score is not None
+                   and (f.round.paper is not None or "no reference" in f.status.content) for f in folders)
+
+    before, processes_before = tree()
+    entrants = app.events.call(lesson.start_challenge)
+    peak, most = before, processes_before
+    started = time.monotonic()
+    while not referenced():
+        if time.monotonic() - started > timeout:
+            raise UserError(f"the class challenge's references did not end within {timeout:.0f} s")
+        total, count = tree()
+        peak, most = max(peak, total), max(most, count)
+        time.sleep(0.2)
+    return {"students": len(entrants), "round_steps": round_steps, "seconds": round(time.monotonic() - started, 1),
+            "pss_mb_before": round(before, 1), "pss_mb_peak": round(peak, 1),
+            "pss_mb_peak_beyond_before": round(peak - before, 1),
+            "processes_before": processes_before, "processes_peak": most,
+            "reference_runs": getattr(getattr(lesson, "references", None), "runs", None)}
+
+
 def run(config: Config, students: int, seconds: float = 20.0, *, teacher_browser: bool = False,
-        fps: float = 30.0, steps_per_frame: int = 25, warm_up: float | None = None) -> dict[str, Any]:
+        fps: float = 30.0, steps_per_frame: int = 25, warm_up: float | None = None,
+        challenge_steps: int | None = None) -> dict[str, Any]:
     """A class server with ``students`` students' pages (and the teacher's in Chromium if
     ``teacher_browser``), measured over ``seconds`` after the warm-up; ``fps`` and ``steps_per_frame``:
-    the teacher's world's (the students' run at a class's pace)."""
+    the teacher's world's (the students' run at a class's pace); ``challenge_steps``: then a class
+    challenge of that many steps, its memory to the end of its reference runs (:func:`class_challenge`)."""
     from sandbox.app.lesson.classroom import Classroom
     from sandbox.app.web.access import Access
     from sandbox.commands.live_bench import _browser_page
@@ -333,6 +392,8 @@ def run(config: Config, students: int, seconds: float = 20.0, *, teacher_browser
         pids = server_pids(app)
         memory = {name: rss_of(group) for name, group in pids.items()}
         pss = sum(pss_of(group) for group in pids.values())
+        if challenge_steps:
+            result["class_challenge"] = class_challenge(app, challenge_steps)
     beyond = students - 1
     total, first_total = sum(memory.values()), sum(first_memory.values())
     result.update({

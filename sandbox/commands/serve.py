@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from sandbox.app.lesson.classroom import Classroom
+from sandbox.app.lesson.classroom import TEACHER_AWAY_SECONDS, Classroom
 from sandbox.app.lesson.pages import TeacherPages
 from sandbox.app.web.access import WATCH, Access, is_loopback_host, is_shared, new_token, well_formed_token
 from sandbox.app.view.partner import Comparison
@@ -186,11 +186,14 @@ class App:
         self.panel.on_frame_drawn()
         self.frames_drawn += 1
 
-    def project(self, snap: Snapshot | None) -> None:
-        """The floor shows ``snap`` (a student's world, class mode's projector), or this world again (None)."""
+    def project(self, snap: Snapshot | None, label: str | None = None) -> None:
+        """The floor shows ``snap`` (a student's world, class mode's projector; ``label``: whose, before its
+        caption), or this world again (None)."""
         self.on_projector = snap
+        shown = snap if snap is not None else self.runner.latest
         with self.server.atomic():
-            self.view.update(snap if snap is not None else self.runner.latest)
+            self.view.set_label(label if snap is not None else None, shown)
+            self.view.update(shown)
 
     def _on_disconnect(self, client: Any) -> None:
         self._last_viewer = time.monotonic()
@@ -244,11 +247,13 @@ class App:
         self._fitting[client.client_id] = (until, aspect)
 
     def _check_viewers(self) -> None:
-        """Every second: with no viewer for a while, pause (unless --keep-running)."""
-        if self.server.get_clients():
+        """Every second: with no viewer for a while, pause (unless --keep-running). In class mode the
+        viewers are the teacher's pages (students watch worlds of their own), gone for a few seconds."""
+        idle = self.idle_pause_seconds if self.lesson is None else min(self.idle_pause_seconds, TEACHER_AWAY_SECONDS)
+        if self.pages.get_clients():
             self._last_viewer = time.monotonic()
         elif (not self.keep_running and self.runner.playing
-              and time.monotonic() - self._last_viewer >= self.idle_pause_seconds):
+              and time.monotonic() - self._last_viewer >= idle):
             self.auto_paused = True
             self.lockstep.set_playing(False)
 

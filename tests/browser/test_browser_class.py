@@ -3,8 +3,10 @@ headless Chromium context of their own, against one ``serve --class`` server wit
 
 Each student opens the students' link, gets a world of their own and picks a different goal, which
 their page alone shows; the teacher's wall shows the three; one goes on the projector (the teacher's
-floor shows that world); a paper case goes to everyone; a class challenge plays the same round on
-every desk and the wall ranks the results. ``PHOTOTAXIS_SCREENSHOTS=DIR`` keeps the teacher's wall
+floor shows that world, in the presenter layout, the student named in its caption); the first student's
+window, narrowed to 1024 x 768 long after it was laid out, is framed again, its caption whole; a paper
+case goes to everyone; a class challenge plays the same round on every desk (one reference run for the
+three) and the wall ranks the results. ``PHOTOTAXIS_SCREENSHOTS=DIR`` keeps the teacher's wall
 (1600x1000) and a student's page (390x844) as pictures there."""
 
 from __future__ import annotations
@@ -16,8 +18,12 @@ from pathlib import Path
 
 import pytest
 
+from sandbox.app.panel.framing import PRESENTER
+from sandbox.app.view.scene import CHAR_EM
 from tests.app.lesson.classing import class_app
 from tests.browser.test_browser_app import choose, click_button
+from tests.browser.test_browser_room import floor_to_page
+from tests.browser.test_browser_teacher import SCREEN_LABEL_PX, scene_canvas
 from tests.browsing import BROWSER_MARKS
 from tests.waiting import wait_until
 
@@ -33,10 +39,11 @@ def app():
     a.stop()
 
 
-def open_seats(app, browser, viewport: dict, count: int = 1) -> list[tuple]:
-    """Students' browsers open the students' link, all at once: each one's context, page and seat."""
+def open_seats(app, browser, *viewports: dict) -> list[tuple]:
+    """Students' browsers open the students' link, all at once, one a viewport: each one's context, page
+    and seat."""
     opened = []
-    for _ in range(count):
+    for viewport in viewports:
         context = browser.new_context(viewport=viewport)
         page = context.new_page()
         page.goto(f"http://127.0.0.1:{app.port}/join")
@@ -48,11 +55,26 @@ def open_seats(app, browser, viewport: dict, count: int = 1) -> list[tuple]:
     return opened
 
 
+def caption_outside(lesson, identity: str, page) -> str | None:
+    """Where a student's caption (one line, sized in screen pixels, hung from the arena's top-right corner)
+    leaves their page's canvas, or None: it is whole in it."""
+    client, caption = lesson.page_of[identity], lesson.desks[identity].view.handles["caption"]
+    canvas = scene_canvas(page)
+    x, y = caption.position[:2]
+    corner = floor_to_page(client, canvas, (x, x, y, y))  # its bottom-right corner, on the page
+    width = len(caption.text) * CHAR_EM * SCREEN_LABEL_PX * float(caption.font_screen_scale) * canvas["height"] / 800
+    right, left, edge = corner["x"], corner["x"] - width, canvas["x"] + canvas["width"]
+    if left < canvas["x"] - 1 or right > edge + 1 or corner["y"] < canvas["y"]:
+        return f"caption from x={left:.0f} to {right:.0f} px at y={corner['y']:.0f}, canvas {canvas}"
+    return None
+
+
 def test_a_lab_lesson_with_three_students_and_the_teacher(app, browser):
     shots = os.environ.get("PHOTOTAXIS_SCREENSHOTS")
     started = time.monotonic()
     lesson = app.lesson
-    students = open_seats(app, browser, {"width": 900, "height": 700}, 3)
+    # the first student's window is wider at first: it narrows to 1024 x 768 later (below)
+    students = open_seats(app, browser, {"width": 1440, "height": 768}, *[{"width": 900, "height": 700}] * 2)
     identities = [identity for _, _, identity in students]
     assert len(set(identities)) == 3 and set(lesson.worlds) == set(identities)
     options = [o for o in lesson.desks[identities[0]].panel.shape.shape.options if o != app.runner.latest.shape_name]
@@ -79,9 +101,13 @@ def test_a_lab_lesson_with_three_students_and_the_teacher(app, browser):
     choose(teacher, "Student", "Student 2")
     click_button(teacher, "Show on the projector")
     wait_until(lambda: lesson.projected == identities[1] and app.on_projector is not None, what="the projector")
-    teacher.get_by_text("On the projector: Student 2").wait_for()
     projected = app.on_projector
     assert projected.shape_name == goals[1]  # that student's world, on the teacher's floor
+    # in the presenter layout (the panel folded), named in its caption
+    assert app.panel.framing.of(next(iter(app.pages.get_clients()))) == PRESENTER
+    assert app.view.handles["caption"].text.startswith(f"Student 2: {goals[1]}")
+    teacher.get_by_text("Phototaxis sandbox").first.click()  # the presenter's folded panel: it opens
+    teacher.get_by_text("On the projector: Student 2").wait_for()
     wait_until(lambda: app.on_projector.step > projected.step + 10, what="the projected world, live")
     print(f"projector at {time.monotonic() - started:.1f} s")
     if shots:
@@ -89,6 +115,14 @@ def test_a_lab_lesson_with_three_students_and_the_teacher(app, browser):
         teacher.screenshot(path=str(Path(shots) / "class-wall-1600x1000.png"))
     click_button(teacher, "Back to my world")
     wait_until(lambda: lesson.projected is None and app.on_projector is None, what="the teacher's world again")
+
+    # A student's window that narrows long after it was laid out (as a page whose docked panel comes late;
+    # a desk's camera was fitted for 30 s only) is framed again: at 1024 x 768 the caption ran under the
+    # open panel ("... 33 % in" cut off).
+    _, first_page, first = students[0]
+    first_page.set_viewport_size({"width": 1024, "height": 768})
+    wait_until(lambda: caption_outside(lesson, first, first_page) is None, timeout=30,
+               what=f"the caption in the canvas at 1024 x 768 ({caption_outside(lesson, first, first_page)})")
 
     # a paper case to everyone: three new worlds on its goal, each page showing it
     before = {identity: lesson.worlds[identity] for identity in identities}
@@ -109,6 +143,10 @@ def test_a_lab_lesson_with_three_students_and_the_teacher(app, browser):
     print(f"scored at {time.monotonic() - started:.1f} s")
     ranked = teacher.get_by_text(re.compile(r"^Student \d: \d+ box"))
     wait_until(lambda: ranked.count() == 3, what="the ranking on the wall")
+    # the paper's score beside each: three rounds in the same world (the case sent), one reference run
+    wait_until(lambda: all(lesson.desks[i].panel.challenge.round.paper is not None for i in identities),
+               timeout=120, what="the paper's score beside every round")
+    assert lesson.references.runs == 1
     rows = lesson.challenge_results()
     assert [row[2] for row in rows] == ["done"] * 3
     scores = [row[1].brought for row in rows]

@@ -20,6 +20,11 @@ def test_the_flags_reach_the_benchmark():
     assert (args.class_students, args.seconds, args.teacher_browser) == (30, 5.0, True)
 
 
+def test_the_class_challenges_steps_reach_the_benchmark():
+    args = build_parser("bench").parse_args(["bench", "--class", "10", "--class-challenge", "450"])
+    assert (args.class_students, args.class_challenge) == (10, 450)
+
+
 def test_a_class_without_students_is_refused_in_a_line():
     with pytest.raises(UserError, match="at least one student"):
         class_bench.run(SMALL, 0, 1.0)
@@ -67,7 +72,7 @@ def test_it_reports_each_student_and_the_server(monkeypatch):
     """A class server, two students' pages over websockets, two seconds of measurement: tens of seconds on a
     loaded machine (the fast tests above are its neighbours)."""
     monkeypatch.setattr(class_bench, "WARM_UP", 0.5)
-    result = class_bench.run(SMALL, 2, 2.0, steps_per_frame=2)
+    result = class_bench.run(SMALL, 2, 2.0, steps_per_frame=2, challenge_steps=27)
     assert result["students"] == 2 and result["page_errors"] == [] and result["pages_calm"] == 2
     assert result["steps_per_second"]["min"] > 0 and result["real_time_factor"]["min"] > 0
     assert result["frames_per_second"]["min"] > 0 and result["desk_frames_per_second"]["min"] > 0
@@ -78,3 +83,6 @@ def test_it_reports_each_student_and_the_server(monkeypatch):
     assert result["rss_mb"]["server"] > 0 and result["rss_mb"]["hosts"] > 0
     assert result["rss_per_student_world_beyond_first_mb"] is not None
     assert result["wall_refresh_seconds"]["pictures"] >= 1
+    challenge = result["class_challenge"]  # two rounds in the same world (the teacher's scene): one reference
+    assert challenge["students"] == 2 and challenge["reference_runs"] == 1
+    assert challenge["pss_mb_peak"] >= challenge["pss_mb_before"] > 0

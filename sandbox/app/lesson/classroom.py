@@ -7,7 +7,9 @@ set (the teacher's running world's settings and goal), by ``make_runner`` (any r
 :mod:`sandbox.app.world.contract`: by default a :class:`~sandbox.app.world.hosted.HostedRunner`, a
 world in one of the class's world hosts, many worlds a process). The student's page gets a
 :class:`~sandbox.app.lesson.desk.Desk`: the panel and the floor, its own. A page that leaves pauses
-its world; the page that comes back to the seat (a reload) finds it again.
+its world; the page that comes back to the seat (a reload) finds it again within
+:data:`FREE_AWAY_SECONDS`. After that the world is freed (its memory goes back), and a page that comes
+back gets a new one, from the scene the teacher set (and is told so).
 """
 
 from __future__ import annotations
@@ -15,12 +17,15 @@ from __future__ import annotations
 import functools
 import logging
 import threading
+import time
 from dataclasses import dataclass
 from typing import Any, Callable
 
 from sandbox.app.lesson.desk import Desk
+from sandbox.app.lesson.references import References
 from sandbox.app.lesson.seats import Seats
 from sandbox.app.lesson.wall import Wall
+from sandbox.app.panel.framing import PRESENTER
 from sandbox.app.world.hosted import CLASS_FPS, CLASS_STEPS_PER_FRAME, HostedRunner
 from sandbox.app.world.lockstep import Lockstep, partner_config
 from sandbox.app.world.pool import HostPool
@@ -30,6 +35,15 @@ log = logging.getLogger("sandbox.app.lesson")
 
 #: How often (s) the teacher's wall shows every student's world afresh.
 WALL_SECONDS = 1.0
+#: A seat's world whose page has been gone this long (s) is freed: a reload or a lost connection comes
+#: back well within it; a student who closed the page for the lesson gives the class its memory back.
+FREE_AWAY_SECONDS = 300.0
+#: The teacher's world pauses when no teacher's page has been open this long (s): students watch worlds
+#: of their own, and a world at 25x real time for nobody took about 18 % of a core. A teacher's page that
+#: opens again plays it on, if it was playing.
+TEACHER_AWAY_SECONDS = 3.0
+#: What a student who comes back after their world was freed reads (one line).
+FREED_NOTICE = "Your world was closed while you were away: a new one starts from your teacher's scene."
 #: The scene the teacher's running world sets (the wall's first choice of a scene to send).
 TEACHERS_WORLD = "the teacher's world"
 
@@ -82,6 +96,14 @@ class Classroom:
         self.page_of: dict[str, Any] = {}  # seat -> its page (client), while one is open
         self.projected: str | None = None
         self.entrants: list[str] = []  # the seats in the class challenge
+        #: Since when (time.monotonic()) each seat's world has had no page open.
+        self.away_since: dict[str, float] = {}
+        #: The scene the teacher last sent each seat (a freed world comes back on it).
+        self.scene_of: dict[str, Scene] = {}
+        #: The seats whose world was freed and whose page has not come back yet.
+        self.freed: set[str] = set()
+        #: The views the teacher's pages had before a student's world went on the projector.
+        self._views_before: dict[int, str] = {}
         self._stopping = False
 
     # ------------------------------------------------------------ set-up
@@ -91,6 +113,8 @@ class Classroom:
         self.teacher = app.runner
         self.fps, self.steps_per_frame = self._students_pace(app.runner)
         self.wall = Wall(self.server.gui, self, scenes=(TEACHERS_WORLD, *partner_cases()))
+        #: The class challenge's reference runs, one a world for the class (not a process pool a student).
+        self.references = References(self.events)
 
     def _students_pace(self, teachers: Any) -> tuple[float, int]:
         """A new student world's frames a second and steps a frame: as given, else a class's 3x real time
@@ -103,6 +127,7 @@ class Classroom:
 
     def start(self) -> None:
         self.events.every(WALL_SECONDS, self.wall.refresh)
+        self.events.every(WALL_SECONDS, self.free_left_alone)
 
     def stop(self) -> None:
         """After the event queue stopped: the desks' workers and the worlds end."""
@@ -113,6 +138,8 @@ class Classroom:
             world.runner.stop()
         if self.pool is not None:
             self.pool.stop()
+        if hasattr(self, "references"):  # (attached)
+            self.references.stop()
 
     def seated(self, client_id: int) -> bool:
         """Whether the page ``client_id`` holds a seat (its world is its own, not the teacher's)."""
@@ -131,9 +158,10 @@ class Classroom:
         identity = grant.seat
         self.seats.claim(identity)
         self.page_of[identity] = client
+        self.away_since.pop(identity, None)
         world = self.worlds.get(identity)
         if world is None:
-            self._build(identity, self.teachers_scene())
+            self._build(identity, self.scene_of.get(identity) or self.teachers_scene())
             return
         if world.paused_by_leaving:
             world.paused_by_leaving = False
@@ -146,6 +174,7 @@ class Classroom:
             if client.client_id != client_id:
                 continue
             del self.page_of[identity]
+            self.away_since[identity] = time.monotonic()
             desk = self.desks.pop(identity, None)
             if desk is not None:
                 desk.close()
@@ -173,8 +202,33 @@ class Classroom:
         targets = [seat.identity for seat in self.seats.all() if seat.identity in self.worlds] \
             if identities is None else [i for i in identities if i in self.worlds]
         for identity in targets:
+            self.scene_of[identity] = scene
             self._build(identity, scene)
         return targets
+
+    def free_left_alone(self, now: float | None = None) -> list[str]:
+        """Free the worlds whose page has been gone :data:`FREE_AWAY_SECONDS` (every second); returns
+        their seats. A world built while its page left counts from when it is first seen alone."""
+        now = time.monotonic() if now is None else now
+        freed = []
+        for identity in list(self.worlds):
+            if identity in self.page_of:
+                continue
+            since = self.away_since.setdefault(identity, now)
+            if now - since >= FREE_AWAY_SECONDS:
+                self._free(identity)
+                freed.append(identity)
+        return freed
+
+    def _free(self, identity: str) -> None:
+        """The seat's world goes (its host frees it at once); the seat stays, for the student to come back."""
+        world = self.worlds.pop(identity)
+        self.away_since.pop(identity, None)
+        self.freed.add(identity)
+        if self.projected == identity:
+            self.project(None)
+        end = getattr(world.runner, "free", None) or world.runner.stop  # a hosted world: freed, not kept
+        threading.Thread(target=end, name="phototaxis-seat-free", daemon=True).start()
 
     def _build(self, identity: str, scene: Scene) -> None:
         """Build a world for the seat in a worker thread (it blocks for a while); it is adopted on the
@@ -221,7 +275,11 @@ class Classroom:
             self._sit(identity)
         finally:
             runner.start()
-        if scene is not None and old is not None and identity in self.page_of:
+        if identity in self.freed and identity in self.page_of:
+            self.freed.discard(identity)
+            self.page_of[identity].add_notification("Welcome back", FREED_NOTICE, color="blue",
+                                                    auto_close_seconds=10.0)
+        elif scene is not None and old is not None and identity in self.page_of:
             self.page_of[identity].add_notification("A new scene from your teacher", f"Your world starts "
                                                     f"again: {scene.name}.", color="blue",
                                                     auto_close_seconds=8.0)
@@ -254,15 +312,35 @@ class Classroom:
         if desk is not None and desk.world is world and desk.client.client_id in self.server.get_clients():
             desk.draw(snap)  # (a page that left is forgotten at its own event, which may come after this)
         if self.projected == world.identity:
-            self.app.project(snap)
+            self.app.project(snap, self.projected_label)
 
     # ------------------------------------------------------------ the projector
+    @property
+    def projected_label(self) -> str | None:
+        seat = self.seats.get(self.projected) if self.projected else None
+        return seat.label if seat is not None else None
+
     def project(self, identity: str | None) -> None:
-        """The teacher's floor shows this student's world (None: the teacher's own again)."""
+        """The teacher's floor shows this student's world, named in its caption, and the teacher's pages
+        switch to the presenter layout (the room sees it full size); None: the teacher's own world again,
+        each page back in the view it had."""
         self.projected = identity if identity in self.worlds else None
         world = self.worlds.get(self.projected) if self.projected else None
-        self.app.project(world.runner.latest if world is not None else None)
+        self.app.project(world.runner.latest if world is not None else None, self.projected_label)
+        self._teachers_pages_present(world is not None)
         self.wall.refresh()
+
+    def _teachers_pages_present(self, on: bool) -> None:
+        """The teacher's pages in the presenter layout (``on``), or back in the views they had before."""
+        framing = self.app.panel.framing
+        for client in list(self.app.pages.get_clients().values()):
+            if on:
+                self._views_before.setdefault(client.client_id, framing.of(client.client_id))
+                framing.choose(client, PRESENTER)
+            elif client.client_id in self._views_before:
+                framing.choose(client, self._views_before[client.client_id])
+        if not on:
+            self._views_before.clear()
 
     # ------------------------------------------------------------ the class challenge
     def start_challenge(self) -> list[str]:
@@ -272,6 +350,7 @@ class Classroom:
         for identity, desk in self.desks.items():
             seat = self.seats.get(identity)
             challenge = desk.panel.challenge
+            challenge.reference = self.references.ask  # one reference run a world, for the class
             if self.round_steps is not None:
                 challenge.round_steps = int(self.round_steps)
             challenge.start(seat.label if seat else "student", desk.client)

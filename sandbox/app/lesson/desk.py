@@ -9,7 +9,6 @@ the same world; a desk ends with its page.
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 from sandbox.app.lesson.pages import OnePage
@@ -20,8 +19,6 @@ from sandbox.app.view.partner import Comparison
 from sandbox.app.view.scene import SceneView, aim_camera, top_down_camera
 from sandbox.app.world.snapshot import Snapshot
 
-#: For this long after the page arrives, each change of its window's shape fits its camera again (s).
-FIT_SECONDS = 30.0
 
 
 def configure_page(page: Any, config: Any) -> None:
@@ -63,7 +60,7 @@ class Desk:
         self.panel.record.button.disabled = True
         self.panel.record.status.content = "Recording is on your teacher's page."
         self.panel.welcome(client, controls=True)
-        self._fit_until, self._fitted = time.monotonic() + FIT_SECONDS, None
+        self._fitted: float | None = None  # the window's shape (width / height) the camera was framed for
         client.camera.on_update(lambda camera: self._fit())
         self._fit()
 
@@ -90,9 +87,11 @@ class Desk:
         self.client.scene.reset()
 
     def _fit(self) -> None:
-        """While the page lays itself out, frame the arena for its window's shape."""
-        if time.monotonic() > self._fit_until:
-            return
+        """Frame the arena for the page's window whenever its shape changes, not only while it lays itself
+        out (as a presenter's page is reframed, sandbox.commands.serve): the desk's docked panel comes in
+        the page's own messages, after its first layout, and a page whose canvas narrowed for it after the
+        first 30 s kept a camera framed for the whole width, the arena's right side and the caption's end
+        under the panel ("... 33 % in" cut off at 1024 x 768). A camera the student moved stays until then."""
         aspect = self.client.camera.aspect
         if aspect and aspect != self._fitted and self.client.client_id not in self.panel.inspector.followers:
             self.panel.framing.apply(self.client)

@@ -102,6 +102,10 @@ class ChallengeFolder:
         #: The threads starting a pool: the app waits for them as it stops (:meth:`stop`).
         self._starters: list[threading.Thread] = []
         self._hint_timer: Any = None
+        #: Who runs the paper's controller for the score: None, a process pool of this folder's own; or
+        #: ``reference(spec, steps, on_done(gain), on_error(why))``, on this thread (a class's, shared by its
+        #: students: :mod:`sandbox.app.lesson.references`).
+        self.reference: Callable[..., None] | None = None
 
     def build(self, snap: Snapshot) -> None:
         gui = self.gui
@@ -265,6 +269,10 @@ class ChallengeFolder:
         (the pool's callbacks only post it here) and ends it."""
         if self._stopped:
             return
+        if self.reference is not None:
+            self.reference(spec, r.at_step, lambda paper: self._shared_scored(r, paper, ""),
+                           lambda why: self._shared_scored(r, None, f"no reference: {why}"))
+            return
         starter = threading.Thread(target=self._start_pool, args=(r, spec), daemon=True, name="challenge-reference")
         self._starters = [thread for thread in self._starters if thread.is_alive()] + [starter]
         starter.start()
@@ -300,6 +308,10 @@ class ChallengeFolder:
             return  # ended by stop()
         pool.close()  # its one task is done: its process ends by itself, nothing waits for it here
         self._show(r, paper, problem)
+
+    def _shared_scored(self, r: Round, paper: Gain | None, problem: str) -> None:
+        if not self._stopped:  # (a folder stopped with its page says nothing more)
+            self._show(r, paper, problem)
 
     def stop(self) -> list[threading.Thread]:
         """The app is stopping (on the event thread): a reference run still going ends now, not when it

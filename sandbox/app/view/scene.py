@@ -414,6 +414,9 @@ class SceneView:
         #: Where the caption sits: above the arena's top-right corner, or (classroom, whose pages frame
         #: the construction area) above the construction wall's, where both framings show it.
         self.caption_over_construction = caption_over_construction
+        self._own_caption_place = caption_over_construction
+        #: Whose world it shows, before the caption (class mode's projector: a student's label), or None.
+        self.label: str | None = None
         #: Compare mode: the caption's anchor over the construction wall (it is in two lines), the share
         #: in the goal under the wall in large figures (:meth:`set_compared`); None: not compared.
         self.compared: str | None = None
@@ -509,7 +512,7 @@ class SceneView:
     def _caption(self, snap: Snapshot) -> str:
         """The caption's text: one line, or in compare mode two (the case's name, then its step and what
         lights it; the share in the goal is the readout's, large)."""
-        text = caption(snap)
+        text = caption(snap) if self.label is None else f"{self.label}: {caption(snap)}"
         if self.caption_over_construction and not self.compared:  # a classroom's: case and step, then the rest
             name, step, *rest = text.split(" | ")
             return f"{name} | {step}\n" + " | ".join(rest)
@@ -537,6 +540,18 @@ class SceneView:
             self.handles["caption"] = self._add_caption(snap)
             self._sent.remember(self.handles["caption"], "text", self._caption(snap))
             self.handles["readout"].visible = anchor is not None
+
+    def set_label(self, label: str | None, snap: Snapshot) -> None:
+        """Show whose world it is (class mode's projector: a student's label before the caption, the caption
+        over the construction area, which the presenter layout frames), or (None) its own again."""
+        if label == self.label:
+            return
+        self.label = label
+        self.caption_over_construction = self._own_caption_place or label is not None
+        if "caption" in self.handles:
+            self.handles["caption"].remove()
+            self.handles["caption"] = self._add_caption(snap)
+            self._sent.remember(self.handles["caption"], "text", self._caption(snap))
 
     def _remove_nodes(self) -> None:
         for h in [*([self.hexagons] if self.hexagons else []), *reversed(self.handles.values())]:  # the root last

@@ -25,7 +25,7 @@ from tests.waiting import wait_until, wait_until_steady
 
 @pytest.fixture
 def app():
-    a = class_app()
+    a = class_app(keep_running=True)  # the teacher's world plays throughout, as with the teacher's page open
     yield a
     a.stop()
 
