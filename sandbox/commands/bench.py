@@ -81,6 +81,20 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                         "drawing templates, and check each first choice against the best at 100,000 steps in the "
                         "committed evaluations (static/shapes; from the repository's root): a table, or --json; "
                         "exit 1 if one is more than a point below the best. About 10 CPU-minutes")
+    p.add_argument("--generated", type=int, default=None, metavar="N",
+                   help="with --advice: the advice on the N shapes of a draw of the shape generator instead "
+                        "(--families, --generator-seed as in sweep), judged against --truth; prints the share of "
+                        "shapes whose first choice is within a point of the best and the wrong ones; exit 1 below "
+                        "90 %%. --steps sets the advice's trials' steps (default its own, 10,000)")
+    p.add_argument("--families", default="all", metavar="all|FAMILY,...",
+                   help="with --advice --generated: the families of the draw [default: all]")
+    p.add_argument("--generator-seed", type=int, default=0, metavar="S",
+                   help="with --advice --generated: the draw [default: 0]")
+    p.add_argument("--truth", action="append", default=None, metavar="DIR",
+                   help="with --advice --generated: the report folder of the draw's candidates sweep (sweep "
+                        "--generated N --candidates, then report), or a final.csv; repeatable")
+    p.add_argument("--truth-steps", type=int, default=100_000, metavar="K",
+                   help="with --advice --generated: the truth's trials are read at K steps [default: 100000]")
     add_config_arguments(p)
     p.set_defaults(func=bench_command)
     return p
@@ -234,7 +248,9 @@ def bench_command(args: argparse.Namespace) -> int:
     if not (args.scale > 0 and math.isfinite(args.scale)):
         raise UserError(f"--scale must be a positive number, got {args.scale}")
     if args.advice:
-        return advice_bench(args)
+        return advice_bench(args) if args.generated is None else draw_advice_bench(args)
+    if args.generated is not None:
+        raise UserError("--generated goes with --advice: bench --advice --generated N --truth DIR")
     if args.steps is None:
         args.steps = 20_000  # a benchmark default: two full cycles, not a whole trial
     config = scaled(config_from_args(args), args.scale)
@@ -302,3 +318,44 @@ def advice_bench(args: argparse.Namespace) -> int:
     else:
         print(advice_check.table(runs, truth, workers))
     return 1 if any(v.status == "wrong" for v in verdicts) else 0
+
+
+def draw_advice_bench(args: argparse.Namespace) -> int:
+    """``bench --advice --generated N``: the advice on a draw of generated shapes, each first choice judged
+    against the draw's candidates sweep (``--truth``): the share right, the wrong ones
+    (:class:`sandbox.experiments.advice_check.DrawCheck`); exit 1 below the share wanted."""
+    from sandbox.experiments import advice_check
+    from sandbox.experiments.advise import STEPS, default_workers
+    from sandbox.experiments.draws import Draw
+    from sandbox.experiments.trials import SweepError
+    from sandbox.shapes import ShapeError
+    from sandbox.shapes.generator import draw
+
+    if not args.truth:
+        raise UserError("bench --advice --generated needs --truth DIR: the report of the draw's candidates sweep "
+                        "(phototaxis sweep --generated N --candidates --steps 100000, then phototaxis report)")
+    try:
+        wanted = Draw.from_flags(args.generated, args.families, args.generator_seed)
+        shapes = draw(wanted.count, wanted.families, wanted.generator_seed)
+        truth = advice_check.read_evaluations(advice_check.truth_files(args.truth), args.truth_steps)
+    except (SweepError, ShapeError, ValueError) as exc:
+        raise UserError(str(exc)) from None
+    config, workers = config_from_args(args), default_workers()
+    steps = config.steps if args.steps is not None else STEPS
+    runs, refused = advice_check.advise_draw(
+        config, shapes, workers=workers, steps=steps,
+        heard=None if args.no_progress else lambda name: print(f"bench --advice: {name}", file=sys.stderr,
+                                                                flush=True))
+    check = advice_check.DrawCheck([advice_check.judge(r.shape, r.ranking, truth) for r in runs], refused)
+    if args.json:
+        json.dump({"share_right": check.share_right, "passes": check.passes, "refused": refused,
+                   "shapes": [{"shape": v.shape, "verdict": run.verdict, "first": v.first,
+                               "first_at_truth": v.at_100k, "best": v.best, "best_at_truth": v.best_at_100k,
+                               "status": v.status, "cpu_seconds": round(run.cpu_seconds, 1)}
+                              for v, run in zip(check.verdicts, runs)]}, sys.stdout)
+        sys.stdout.write("\n")
+    else:
+        print(advice_check.table(runs, truth, workers, steps, args.truth_steps))
+        print()
+        print("\n".join(check.summary(args.truth_steps)))
+    return 0 if check.passes else 1

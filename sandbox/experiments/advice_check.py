@@ -50,23 +50,23 @@ def label_of(row: dict) -> str:
     return Candidate(family, on).label
 
 
-def measured(rows: Iterable[dict]) -> dict[tuple[str, str], list[float]]:
-    """{(shape, candidate label): fractions in the goal at 100,000 steps, seeds 0-3}."""
+def measured(rows: Iterable[dict], steps: int = STEPS) -> dict[tuple[str, str], list[float]]:
+    """{(shape, candidate label): fractions in the goal at 100,000 steps (``steps``), seeds 0-3}."""
     out: dict[tuple[str, str], list[float]] = {}
     for row in rows:
-        if int(row["seed"]) < SEEDS and int(row["final_step"]) == STEPS and row.get("notches", "lit") == "lit":
+        if int(row["seed"]) < SEEDS and int(row["final_step"]) == steps and row.get("notches", "lit") == "lit":
             out.setdefault((shape_name(row["shape"]), label_of(row)), []).append(float(row["fraction_in_goal"]))
     return out
 
 
-def read_evaluations(files: Iterable[str]) -> dict[tuple[str, str], list[float]]:
+def read_evaluations(files: Iterable[str], steps: int = STEPS) -> dict[tuple[str, str], list[float]]:
     """The trials of the evaluations' final.csv ``files`` (those missing skipped), as :func:`measured`."""
     rows = []
     for file in files:
         if Path(file).exists():
             with open(file, newline="") as f:
                 rows += list(csv.DictReader(f))
-    return measured(rows)
+    return measured(rows, steps)
 
 
 @dataclass
@@ -149,10 +149,12 @@ def shapes_checked(patterns: Iterable[str]) -> list[str]:
     return [found for pattern in patterns for found in (sorted(glob.glob(pattern)) if "*" in pattern else [pattern])]
 
 
-def table(runs: list[Timed], truth: dict[tuple[str, str], list[float]], cores: int) -> str:
-    """A Markdown table: each shape's verdict and check, then what the advice took."""
-    rows = [f"| shape | the advice's first ({advice.STEPS:,} steps) | the first at 100,000 steps | the best at "
-            f"100,000 steps | within {100 * TOLERANCE:.0f} point? | seconds | CPU seconds (/ {cores} cores) | "
+def table(runs: list[Timed], truth: dict[tuple[str, str], list[float]], cores: int, steps: int = advice.STEPS,
+          truth_steps: int = STEPS) -> str:
+    """A Markdown table: each shape's verdict and check, then what the advice took (``steps`` a trial; the
+    truth at ``truth_steps``)."""
+    rows = [f"| shape | the advice's first ({steps:,} steps) | the first at {truth_steps:,} steps | the best at "
+            f"{truth_steps:,} steps | within {100 * TOLERANCE:.0f} point? | seconds | CPU seconds (/ {cores} cores) | "
             f"time left: worst error (the last {NEAR_THE_END:.0f} s) |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for run in runs:
         worst = "none" if math.isnan(run.worst_estimate) else f"{100 * run.worst_estimate:.0f} %"
@@ -161,3 +163,75 @@ def table(runs: list[Timed], truth: dict[tuple[str, str], list[float]], cores: i
         rows.append(f"{judge(run.shape, run.ranking, truth).row()} {run.seconds:.1f} | {run.cpu_seconds:.1f} "
                     f"({run.cpu_seconds / cores:.1f}) | {worst} |")
     return "\n".join(rows)
+
+
+# ------------------------------------------------------- on a draw of generated shapes
+#: On a draw, the share of the shapes advised whose first choice must be right (issue 57).
+DRAW_SHARE = 0.9
+
+
+@dataclass(frozen=True)
+class DrawCheck:
+    """The advice on a draw (``bench --advice --generated N``): each shape advised's verdict, and the shapes
+    the model refuses (not advised: the advice has nothing to run)."""
+
+    verdicts: list[Verdict]
+    refused: list[str]
+
+    def count(self, status: str) -> int:
+        return sum(1 for v in self.verdicts if v.status == status)
+
+    @property
+    def share_right(self) -> float:
+        """Right over every shape advised: one never measured counts against the advice, it is not known right."""
+        return self.count("right") / len(self.verdicts) if self.verdicts else math.nan
+
+    @property
+    def passes(self) -> bool:
+        return bool(self.verdicts) and self.share_right >= DRAW_SHARE
+
+    def summary(self, steps: int = STEPS) -> list[str]:
+        """In lines: the share right against :data:`DRAW_SHARE`, then every wrong and unmeasured shape."""
+        share = "no shape advised" if not self.verdicts else f"{100 * self.share_right:.1f} %"
+        out = [f"First choice within {100 * TOLERANCE:.0f} point of the best at {steps:,} steps: "
+               f"{self.count('right')} of {len(self.verdicts)} shapes advised ({share}; at least "
+               f"{100 * DRAW_SHARE:.0f} % wanted): {'passes' if self.passes else 'FAILS'}. Wrong: "
+               f"{self.count('wrong')}, not measured: {self.count('not measured')}, refused by the model (not "
+               f"advised): {len(self.refused)}."]
+        out += [f"wrong: {v.shape}: first {v.first} {_pct(v.at_100k)}, best {v.best} {_pct(v.best_at_100k)}"
+                for v in self.verdicts if v.status == "wrong"]
+        out += [f"not measured: {v.shape}: first {v.first} (no trial of it at {steps:,} steps in the truth)"
+                for v in self.verdicts if v.status == "not measured"]
+        return out
+
+
+def _pct(fraction: float) -> str:
+    return "–" if math.isnan(fraction) else f"{100 * fraction:.1f} %"
+
+
+def advise_draw(config: Config, shapes: Iterable, *, workers: int, steps: int = advice.STEPS,
+                heard: Callable[[str], None] | None = None) -> tuple[list[Timed], list[str]]:
+    """The default advice on every generated shape (``shapes``: :class:`GeneratedShape`) the model builds under
+    ``config``, timed; and the names of those it refuses (:func:`sandbox.experiments.draws.refusal`)."""
+    from sandbox.experiments.draws import refusal
+
+    runs, refused = [], []
+    for shape in shapes:
+        if refusal(config.replace(shape=shape.name), shape.vertices):
+            refused.append(shape.name)
+            continue
+        if heard:
+            heard(shape.name)
+        runs.append(timed_advice(shape.name, config, workers=workers, steps=steps))
+    return runs, refused
+
+
+def truth_files(folders: Iterable[str]) -> list[str]:
+    """The ``final.csv`` of each folder a candidates sweep's report wrote (a file is taken as it is); a
+    ValueError naming the first missing one."""
+    files = [str(Path(f) / "final.csv") if Path(f).is_dir() else str(f) for f in folders]
+    missing = [f for f in files if not Path(f).is_file()]
+    if missing:
+        raise ValueError(f"no {missing[0]}: run 'phototaxis report {Path(missing[0]).parent} --no-figures' on the "
+                         f"candidates sweep first (phototaxis sweep --generated N --candidates)")
+    return files

@@ -2,7 +2,13 @@
 it. The unit is a shape: its value is the mean, over its trials (seeds), of the fraction of boxes in the
 goal at the final step. Per family: how many shapes, how many the model refused (counted, never run),
 the median, the 10th percentile and the mean ± standard error of the shapes' values; over all shapes the
-percentiles; and the ten worst shapes, with a picture of their final layouts."""
+percentiles; and the ten worst shapes, with a picture of their final layouts.
+
+A sweep of every advice candidate of each shape (``sweep --generated N --candidates``,
+:mod:`.draw_candidates`) gives each shape its candidates' values too: a shape's value is then its default
+candidate's (what it gets without advice), and each refused shape says the best any strategy reached, so
+the refusal rule can be read off the report: a refused shape no strategy builds
+:data:`BUILDS` or more."""
 
 from __future__ import annotations
 
@@ -15,12 +21,15 @@ from pathlib import Path
 import numpy as np
 
 from sandbox.experiments import stats
+from sandbox.experiments.draw_candidates import SEPARATOR, split_label
 
 #: The percentiles of the whole draw (numpy's linear interpolation between the shapes' values).
 PERCENTILES = (10, 25, 50, 75, 90)
 #: How many of the worst shapes are listed and drawn.
 WORST = 10
 METRIC = "fraction_in_goal"
+#: A shape some strategy builds this well (its mean over seeds) must not be refused (issue 57's bar).
+BUILDS = 0.75
 
 
 @dataclass(frozen=True)
@@ -31,6 +40,10 @@ class ShapeResult:
     record: dict
     values: tuple[float, ...]
     outline: str = ""
+    #: The case whose trials gave ``values``: the shape's own, or its default candidate's.
+    case: str = ""
+    #: Each candidate run on it (candidate label, its trials' final values), in the sweep's order.
+    candidates: tuple[tuple[str, tuple[float, ...]], ...] = ()
 
     @property
     def name(self) -> str:
@@ -48,6 +61,17 @@ class ShapeResult:
     def value(self) -> float:
         return float(np.mean(self.values)) if self.values else math.nan
 
+    @property
+    def best(self) -> tuple[str, float] | None:
+        """The candidate that built it best (label, mean over its trials); None when none ran."""
+        means = [(label, float(np.mean(values))) for label, values in self.candidates if values]
+        return max(means, key=lambda m: m[1]) if means else None
+
+    @property
+    def candidates_planned(self) -> bool:
+        """Whether a candidates sweep planned this shape (its record lists the candidates, maybe none)."""
+        return "candidates" in self.record
+
 
 @dataclass(frozen=True)
 class FamilyRow:
@@ -62,14 +86,27 @@ class FamilyRow:
 
 
 def shape_results(generated: dict, by_case: dict[str, list[dict]]) -> list[ShapeResult]:
-    """Every shape of the draw's record, in its order, with its trials' final values."""
+    """Every shape of the draw's record, in its order, with its trials' final values (its own case's, else
+    its default candidate's) and its candidates'."""
+    tried: dict[str, list[tuple[str, tuple[float, ...]]]] = {}
+    for case, trials in by_case.items():
+        split = split_label(case)
+        if split is not None:
+            tried.setdefault(split[0], []).append((split[1], _finals(trials)))
     results = []
     for record in generated.get("shapes", []):
-        trials = by_case.get(record["name"], [])
-        values = tuple(float(v) for v in stats.final_values(trials, METRIC)) if trials else ()
+        case = record["name"]
+        if case not in by_case and record.get("default"):
+            case = f"{record['name']}{SEPARATOR}{record['default']}"
+        trials = by_case.get(case, [])
         outline = trials[0].get("outline", "") if trials else ""
-        results.append(ShapeResult(record, values, outline))
+        results.append(ShapeResult(record, _finals(trials), outline, case if trials else "",
+                                   tuple(tried.get(record["name"], ()))))
     return results
+
+
+def _finals(trials: list[dict]) -> tuple[float, ...]:
+    return tuple(float(v) for v in stats.final_values(trials, METRIC)) if trials else ()
 
 
 def _spread(values: list[float]) -> tuple[float, float, float, float]:
@@ -111,12 +148,16 @@ def write_csv(results: list[ShapeResult], path: Path) -> None:
     with path.open("w", newline="") as fh:
         writer = csv.writer(fh)
         writer.writerow(["shape", "family", "kind", "shape_seed", "refused", "trials", "mean_fraction_in_goal",
-                         "min", "max", "outline_family", "params"])
+                         "min", "max", "outline_family", "candidates_run", "best_candidate",
+                         "best_fraction_in_goal", "params"])
         for r in results:
+            best = r.best
             writer.writerow([r.name, r.family, r.record.get("kind", ""), r.record.get("seed", ""), r.refused,
                              len(r.values), stats.fmt(r.value, 4) if r.values else "",
                              stats.fmt(min(r.values), 4) if r.values else "",
                              stats.fmt(max(r.values), 4) if r.values else "", r.outline,
+                             sum(1 for _, values in r.candidates if values), best[0] if best else "",
+                             stats.fmt(best[1], 4) if best else "",
                              json.dumps(r.record.get("params", {}), separators=(",", ":"))])
 
 
@@ -124,7 +165,7 @@ def draw_worst(results: list[ShapeResult], by_case: dict[str, list[dict]], path:
     """The final layouts of the worst shapes (each trial nearest its shape's median)."""
     from sandbox.experiments import figures  # matplotlib: only when a report is drawn
 
-    shown = {r.name: by_case[r.name] for r in worst(results)}
+    shown = {r.name: by_case[r.case] for r in worst(results)}
     return figures.plot_layouts(shown, path) if shown else None
 
 
@@ -132,7 +173,7 @@ def by_family(results: list[ShapeResult], by_case: dict[str, list[dict]]) -> dic
     """Every trial of the draw, by its shape's family (for the metrics over time, a line per family)."""
     grouped: dict[str, list[dict]] = {}
     for r in results:
-        grouped.setdefault(r.family, []).extend(by_case.get(r.name, []))
+        grouped.setdefault(r.family, []).extend(by_case.get(r.case, []))
     return {family: trials for family, trials in grouped.items() if trials}
 
 
@@ -144,12 +185,13 @@ def _table(header: list[str], rows: list[list[str]]) -> str:
 def section(generated: dict, results: list[ShapeResult], figure: str | None) -> list[str]:
     """The report's section on the draw, in markdown lines; ``figure`` the worst shapes' picture (relative)."""
     draws = "; ".join(f"{d['count']} shapes of {', '.join(d['families'])}, generator seed {d['generator_seed']}"
+                      f"{', every advice candidate of each' if d.get('candidates') else ''}"
                       for d in generated.get("draws", []))
     out = ["", "## The distribution over generated shapes", "",
            f"The draw: {draws}. Each shape is one case, named after its family and seed "
            f"(`phototaxis run --shape NAME` builds it again; docs/shapes.md). A shape's value is the mean over its "
            f"trials of the fraction of boxes in the goal at the final step; the statistics below are over "
-           f"shapes. Shapes the model refuses are counted and never run.", "",
+           f"shapes. Shapes the model refuses are counted and never run." + _candidates_said(results), "",
            _table(["family", "shapes", "refused", "run", "median", "10th percentile", "mean ± s.e."],
                   [[f"**{r.family}**" if r.family == "all" else r.family, str(r.shapes), str(r.refused),
                     str(r.built), stats.fmt(r.median), stats.fmt(r.p10),
@@ -161,9 +203,11 @@ def section(generated: dict, results: list[ShapeResult], figure: str | None) -> 
     out += _worst_lines(results, figure)
     refused = [r for r in results if r.refused]
     if refused:
-        out += ["", f"Refused ({len(refused)}):", ""]
-        out += [f"- `{r.name}` ({r.family}{', ' + r.record['kind'] if r.record.get('kind') else ''}): {r.refused}"
-                for r in refused]
+        out += ["", f"Refused ({len(refused)}), each with the model's reason"
+                f"{' and the best any strategy reached' if any(r.candidates_planned for r in refused) else ''}:", ""]
+        out += [f"- `{r.name}` ({r.family}{', ' + r.record['kind'] if r.record.get('kind') else ''}): "
+                f"{r.refused}{_best_said(r)}" for r in refused]
+    out += _refusal_check(results)
     out += ["", "`generated.csv`: every shape's family, kind, seed, refusal, value and parameters."]
     return out
 
@@ -180,3 +224,44 @@ def _worst_lines(results: list[ShapeResult], figure: str | None) -> list[str]:
         out += ["", "Their final layouts (the trial nearest each shape's median; green boxes in the goal, orange "
                 "outside, the dashed square the construction area):", "", f"![worst shapes]({figure})"]
     return out
+
+
+def _best_said(result: ShapeResult) -> str:
+    """What the candidates sweep found on a refused shape ('' when none was planned for it)."""
+    if not result.candidates_planned:
+        return ""
+    planned = len(result.record["candidates"])
+    if not planned:
+        return ". No strategy's settings build it: none of the advice's candidates ran"
+    best = result.best
+    if best is None:
+        return f". Its {planned} candidate(s) that build it have not run yet"
+    ran = sum(1 for _, values in result.candidates if values)
+    return f". The best any strategy reached: {best[0]} {stats.fmt(best[1])} ({ran} of {planned} candidates run)"
+
+
+def _refusal_check(results: list[ShapeResult]) -> list[str]:
+    """The refusal rule read off the candidates: every refused shape some strategy builds :data:`BUILDS` or
+    more (none, when the rule is right). Only for a sweep that ran the candidates."""
+    if not any(r.candidates_planned for r in results):
+        return []
+    refused = [r for r in results if r.refused]
+    wrong = [r for r in refused if r.best is not None and r.best[1] >= BUILDS]
+    unknown = [r for r in refused if r.candidates_planned and r.record["candidates"] and r.best is None]
+    out = ["", f"The refusal rule against the candidates: {len(refused)} of {len(results)} shapes refused "
+           f"({stats.fmt(100 * len(refused) / len(results), 1)} %); refused although some strategy builds them "
+           f"{stats.fmt(BUILDS, 2)} or more: "
+           + (", ".join(f"`{r.name}` ({r.best[0]} {stats.fmt(r.best[1])})" for r in wrong) if wrong else "none")
+           + "."]
+    if unknown:
+        out[-1] += f" Not yet run: {', '.join(f'`{r.name}`' for r in unknown)}."
+    return out
+
+
+def _candidates_said(results: list[ShapeResult]) -> str:
+    """What a candidates sweep changes in how the section reads ('' for a plain draw)."""
+    if not any(r.candidates_planned for r in results):
+        return ""
+    return (" Here every candidate of the advice ran on each shape (`sweep --candidates`): a shape's value is its "
+            "default candidate's (the outline `auto` takes, no strategy), and a refused shape runs the candidates "
+            "whose own settings build it, so its line below says the best any strategy reached.")

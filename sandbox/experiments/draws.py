@@ -60,18 +60,25 @@ def refusal(config: Config, vertices: np.ndarray) -> str:
 def generated_cases(wanted: Draw, base: dict, typed: dict) -> tuple[list[Case], dict]:
     """The cases of a draw (the shapes the model builds) and the record ``sweep.json`` keeps of it
     (:data:`META_KEY`): the draw asked for and every shape, refused ones with why."""
-    try:
-        shapes = draw(wanted.count, wanted.families, wanted.generator_seed)
-    except ShapeError as exc:
-        raise SweepError(f"--generated: {exc}") from None
     cases, records = [], []
-    for shape in shapes:
-        case = make_case(shape.name, {"shape": shape.name}, base, typed)
-        why = refusal(case.config, shape.vertices)
+    for shape, case, why in planned(wanted, base, typed):
         records.append(shape_record(shape, why))
         if not why:
             cases.append(case)
     return cases, {"draws": [wanted.record()], "shapes": records}
+
+
+def planned(wanted: Draw, base: dict, typed: dict) -> list[tuple[GeneratedShape, Case, str]]:
+    """Every shape of the draw, its case (named after it) and why the model refuses it ('' when it builds it)."""
+    try:
+        shapes = draw(wanted.count, wanted.families, wanted.generator_seed)
+    except ShapeError as exc:
+        raise SweepError(f"--generated: {exc}") from None
+    out = []
+    for shape in shapes:
+        case = make_case(shape.name, {"shape": shape.name}, base, typed)
+        out.append((shape, case, refusal(case.config, shape.vertices)))
+    return out
 
 
 def shape_record(shape: GeneratedShape, refused: str = "") -> dict:

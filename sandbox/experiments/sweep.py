@@ -75,6 +75,7 @@ def _command_line(args: argparse.Namespace) -> str:
     if getattr(args, "generated", None) is not None:
         parts += ["--generated", str(args.generated), "--families", args.families,
                   "--generator-seed", str(args.generator_seed)]
+        parts += ["--candidates"] if getattr(args, "candidates", False) else []
     else:
         parts += ["--grid", _portable(args.grid)] if args.grid else ["--cases", args.cases]
     parts += ["--trials", str(args.trials)]
@@ -138,8 +139,15 @@ def sweep_plan(args: argparse.Namespace) -> tuple[list[Case], list, dict]:
     base, typed = _base(args), _typed_flags(args)
     if getattr(args, "generated", None) is not None:
         wanted = draws.Draw.from_flags(args.generated, args.families, args.generator_seed)
-        cases, generated = draws.generated_cases(wanted, base, typed)
+        if getattr(args, "candidates", False):
+            from sandbox.experiments.draw_candidates import candidate_cases  # the advice's candidates
+
+            cases, generated = candidate_cases(wanted, base, typed)
+        else:
+            cases, generated = draws.generated_cases(wanted, base, typed)
         return cases, [], generated
+    if getattr(args, "candidates", False):
+        raise SweepError("--candidates runs the advice's candidates of a draw: it goes with --generated N")
     if args.grid:
         return (*grid_cases(args.grid, base, typed), {})
     return paper_cases(args.cases or "paper", base, typed), [], {}
@@ -181,9 +189,14 @@ def _sweep(args: argparse.Namespace) -> int:
         where = f"{workers} local worker process(es)"
     steps = sorted({t.config["steps"] for t in trials})
     if generated:
-        refused = sum(1 for s in generated["shapes"] if s["refused"])
-        print(f"sweep: {len(generated['shapes'])} generated shape(s), {refused} refused by the model (counted, "
-              f"not run)", file=sys.stderr)
+        refused = [s for s in generated["shapes"] if s["refused"]]
+        if getattr(args, "candidates", False):
+            print(f"sweep: {len(generated['shapes'])} generated shape(s), {len(refused)} refused by the model "
+                  f"(counted; {sum(len(s['candidates']) for s in refused)} of their candidates build them and run); "
+                  f"every advice candidate of each", file=sys.stderr)
+        else:
+            print(f"sweep: {len(generated['shapes'])} generated shape(s), {len(refused)} refused by the model "
+                  f"(counted, not run)", file=sys.stderr)
     print(f"sweep: {len(cases)} case(s) x {args.trials} trial(s) of {', '.join(map(str, steps))} steps "
           f"(seeds {seed_start}..{seed_start + args.trials - 1}) on {where}; results in {out}", file=sys.stderr)
     try:
@@ -219,7 +232,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "optional: [cases.NAME] tables of values, a [grid] key case = [NAME, ...] (also the\n"
         "paper's case names), and compare = [[CASE, CASE], ...] for extra KS tests.\n\n"
         "generated shapes: --generated N draws N shapes of --families (the families in turn), one case\n"
-        "each, named gen-FAMILY-SEED; the report adds their distribution and the ten worst.\n\n"
+        "each, named gen-FAMILY-SEED; the report adds their distribution and the ten worst.\n"
+        "--candidates: every advice candidate of each shape instead (bench --advice --generated).\n\n"
         "examples:\n"
         "  phototaxis sweep --cases paper --trials 20 --out runs/paper\n"
         "  phototaxis sweep --generated 100 --trials 2 --steps 100000 --out runs/generated\n"
@@ -237,6 +251,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--generator-seed", type=int, default=0, metavar="S",
                    help=f"with --generated: the draw; draw S takes each family's shapes from seed "
                    f"S x {SEEDS_PER_DRAW:,} on, so two draws share none [default: 0]")
+    p.add_argument("--candidates", action="store_true",
+                   help="with --generated: every candidate the advice tries (phototaxis advise) on each shape, one "
+                   "case a shape and candidate, named 'gen-star-0003 / offset + chase'; the truth bench --advice "
+                   "--generated checks the advice against, and what a refused shape builds with any strategy")
     p.add_argument("--trials", type=int, default=10, help="trials (seeds) per case [default: 10]")
     p.add_argument("--seeds", type=int, default=None, metavar="START",
                    help="first seed; trial i of every case uses seed START+i [default: the base seed, 0]")
