@@ -232,7 +232,7 @@ def _best_said(result: ShapeResult) -> str:
         return ""
     planned = len(result.record["candidates"])
     if not planned:
-        return ". No strategy's settings build it: none of the advice's candidates ran"
+        return ". No strategy's settings build it: none of the advice's candidates ran."
     best = result.best
     if best is None:
         return f". Its {planned} candidate(s) that build it have not run yet"
