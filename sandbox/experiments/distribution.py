@@ -191,7 +191,7 @@ def section(generated: dict, results: list[ShapeResult], figure: str | None) -> 
            f"The draw: {draws}. Each shape is one case, named after its family and seed "
            f"(`phototaxis run --shape NAME` builds it again; docs/shapes.md). A shape's value is the mean over its "
            f"trials of the fraction of boxes in the goal at the final step; the statistics below are over "
-           f"shapes. Shapes the model refuses are counted and never run." + _candidates_said(results), "",
+           f"shapes. {_refused_said(results)}", "",
            _table(["family", "shapes", "refused", "run", "median", "10th percentile", "mean ± s.e."],
                   [[f"**{r.family}**" if r.family == "all" else r.family, str(r.shapes), str(r.refused),
                     str(r.built), stats.fmt(r.median), stats.fmt(r.p10),
@@ -258,10 +258,11 @@ def _refusal_check(results: list[ShapeResult]) -> list[str]:
     return out
 
 
-def _candidates_said(results: list[ShapeResult]) -> str:
-    """What a candidates sweep changes in how the section reads ('' for a plain draw)."""
+def _refused_said(results: list[ShapeResult]) -> str:
+    """What the section's values and refusals are: a plain draw's, or a candidates sweep's."""
     if not any(r.candidates_planned for r in results):
-        return ""
-    return (" Here every candidate of the advice ran on each shape (`sweep --candidates`): a shape's value is its "
-            "default candidate's (the outline `auto` takes, no strategy), and a refused shape runs the candidates "
-            "whose own settings build it, so its line below says the best any strategy reached.")
+        return "Shapes the model refuses are counted and never run."
+    return ("Here every candidate of the advice ran on each shape (`sweep --candidates`): a shape's value is its "
+            "default candidate's (the outline `auto` takes, no strategy). A shape the model refuses with these "
+            "settings is counted and runs only the candidates whose own settings build it, so its line below says "
+            "the best any strategy reached.")

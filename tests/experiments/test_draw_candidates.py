@@ -217,21 +217,30 @@ def test_bench_advice_on_a_draw_needs_its_truth(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_a_tiny_candidates_sweep_its_report_and_the_advice_judged_on_it(tmp_path, capsys):
-    """One rectilinear shape (an offset goal: two candidates) of 60 boxes, one seed, 1,000 steps: the candidates sweep runs every candidate and
-    resumes; its report's final.csv is the truth ``bench --advice --generated`` judges the advice against."""
-    out, small = tmp_path / "candidates", ["--robots", "30", "--boxes", "60", "--no-progress"]
-    sweep = ["sweep", "--generated", "1", "--families", "rectilinear", "--generator-seed", "1", "--candidates",
-             "--trials", "1", "--steps", "1000", "--workers", "2", "--no-figures", "--out", str(out), *small]
+    """Two rectilinear shapes of 60 boxes in a 4.5 m construction area, one seed, 1,000 steps: the comb
+    (5.1 m long at that area) is refused by the model, in its words, and no candidate builds it; the letter
+    runs its eight candidates, and the sweep resumes. Its report's final.csv is the truth ``bench --advice
+    --generated`` judges the advice against."""
+    out = tmp_path / "candidates"
+    small = ["--robots", "30", "--boxes", "60", "--construction-size", "4.5", "--no-progress"]
+    sweep = ["sweep", "--generated", "2", "--families", "rectilinear", "--candidates", "--trials", "1", "--steps",
+             "1000", "--workers", "2", "--no-figures", "--out", str(out), *small]
     assert commands.main(sweep) == 0
-    assert "2 trial(s) run, 0 already done" in capsys.readouterr().err
+    assert "8 trial(s) run, 0 already done" in capsys.readouterr().err
     assert commands.main(sweep) == 0
-    assert "0 trial(s) run, 2 already done" in capsys.readouterr().err
+    assert "0 trial(s) run, 8 already done" in capsys.readouterr().err
     with (out / "generated.csv").open(newline="") as fh:
-        row = next(csv.DictReader(fh))
-    assert (row["shape"], row["candidates_run"]) == ("gen-rectilinear-1000", "2")
+        rows = {row["shape"]: row for row in csv.DictReader(fh)}
+    assert rows["gen-rectilinear-0000"]["candidates_run"] == "8" and not rows["gen-rectilinear-0000"]["refused"]
+    report = (out / "report.md").read_text()
+    assert ("- `gen-rectilinear-0001` (rectilinear, comb): at the boxes' total area (60 boxes, 10 m²) the goal is "
+            "5.1 x 2.5 m, larger than the 4.5 m construction area") in report
+    assert "No strategy's settings build it: none of the advice's candidates ran." in report
+    assert "runs only the candidates whose own settings build it" in report
 
-    code = commands.main(["bench", "--advice", "--generated", "1", "--families", "rectilinear", "--generator-seed",
-                          "1", "--truth", str(out), "--truth-steps", "1000", "--steps", "500", *small])
+    code = commands.main(["bench", "--advice", "--generated", "2", "--families", "rectilinear", "--truth", str(out),
+                          "--truth-steps", "1000", "--steps", "500", *small])
     printed = capsys.readouterr().out
-    assert "| gen-rectilinear-1000 |" in printed and "of 1 shapes advised" in printed
-    assert code == (0 if "passes" in printed else 1)
+    assert "| gen-rectilinear-0000 |" in printed and "gen-rectilinear-0001 |" not in printed
+    assert "of 1 shapes advised" in printed and "refused by the model (not advised): 1." in printed
+    assert code == (0 if ": passes." in printed else 1)
