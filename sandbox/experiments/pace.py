@@ -2,7 +2,7 @@
 processes take in order, from what the trials done so far cost, and :func:`in_words`.
 
 Each trial belongs to a *group* (the advice: a candidate, whose seeds cost about the same) and a
-*kind* (the advice: chase or an open loop), and has a *weight*, its steps times what a step of its
+*kind* (the advice: an outline family with chase or with an open loop), and has a *weight*, its steps times what a step of its
 kind costs relative to the other (the advice's chase trials cost about twice an open loop's step for
 step: ``advise.CHASE_COST``). A trial is expected to take what the trials of its group done so far
 took; one of a group not yet seen, its weight at the seconds per unit of weight of the trials of its

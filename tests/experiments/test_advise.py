@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from sandbox.experiments.advise import (Candidate, Ranked, candidates, default_candidate, rank, table, trial_order,
-                                        verdict)
+from sandbox.experiments.advise import (Candidate, Ranked, candidates, default_candidate, rank, table, trial_kind,
+                                        trial_order, verdict)
 from sandbox.experiments.pace import Pace, in_words
 from sandbox.model.config import Config
 from sandbox.shapes import shape_vertices
@@ -160,6 +160,10 @@ def test_the_costliest_trials_go_first():
     # every candidate's first seed, then the second; in each round chase (the costlier) first
     assert trial_order([(plain, 0), (plain, 1), (chase, 0), (chase, 1)], 1000) == [(chase, 0), (plain, 0),
                                                                                    (chase, 1), (plain, 1)]
+    # of the same cost, the offset outline first: each kind (outline, chase or not) has a trial done early
+    scaled = Candidate("scaled")
+    assert trial_order([(scaled, 0), (plain, 0)], 1000) == [(plain, 0), (scaled, 0)]
+    assert trial_kind(scaled) == ("scaled", False) and trial_kind(chase) == ("offset", True)
 
 
 def test_the_pages_advice_says_the_time_left_while_it_runs():
