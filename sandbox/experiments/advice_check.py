@@ -24,6 +24,7 @@ import numpy as np
 
 from sandbox.experiments import advise as advice
 from sandbox.experiments.advise import Candidate, Ranked
+from sandbox.experiments.pace import A_FEW_SECONDS
 from sandbox.model.config import STRATEGY_NAMES, Config
 
 #: How far below the best at 100,000 steps the first choice may build the shape (a fraction of the boxes).
@@ -31,10 +32,6 @@ TOLERANCE = 0.01
 
 SEEDS = 4
 STEPS = 100_000
-
-#: The time-left estimate is judged relative to what is left until this many seconds before the end, in
-#: seconds after.
-NEAR_THE_END = 5.0
 
 
 def shape_name(shape: str) -> str:
@@ -83,17 +80,17 @@ class Timed:
 
     @property
     def worst_estimate(self) -> float:
-        """The estimate's largest relative error (0.3: 30 % off) while at least :data:`NEAR_THE_END` seconds
-        were left (nan: no such estimate); in the last seconds a second off is most of what is left."""
+        """The largest relative error (0.3: 30 % off) of a time left said as a figure, at least
+        :data:`~sandbox.experiments.pace.A_FEW_SECONDS` (nan: none was)."""
         errors = [abs(guess - actual) / actual for _, guess, actual in self.estimates
-                  if guess is not None and actual >= NEAR_THE_END]
+                  if guess is not None and guess >= A_FEW_SECONDS]
         return max(errors, default=math.nan)
 
     @property
-    def worst_at_the_end(self) -> float:
-        """The estimate's largest error in seconds in the last :data:`NEAR_THE_END` seconds."""
-        return max((abs(guess - actual) for _, guess, actual in self.estimates
-                    if guess is not None and actual < NEAR_THE_END), default=math.nan)
+    def a_few_seconds_at_most(self) -> float:
+        """The most seconds in fact left when "a few seconds left" was said (nan: it never was)."""
+        return max((actual for _, guess, actual in self.estimates if guess is not None and guess < A_FEW_SECONDS),
+                   default=math.nan)
 
 
 def timed_advice(shape: str, config: Config, *, workers: int, steps: int = advice.STEPS,
@@ -155,11 +152,11 @@ def table(runs: list[Timed], truth: dict[tuple[str, str], list[float]], cores: i
     truth at ``truth_steps``)."""
     rows = [f"| shape | the advice's first ({steps:,} steps) | the first at {truth_steps:,} steps | the best at "
             f"{truth_steps:,} steps | within {100 * TOLERANCE:.0f} point? | seconds | CPU seconds (/ {cores} cores) | "
-            f"time left: worst error (the last {NEAR_THE_END:.0f} s) |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+            "time left: worst error (a few seconds said with at most) |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for run in runs:
         worst = "none" if math.isnan(run.worst_estimate) else f"{100 * run.worst_estimate:.0f} %"
-        if not math.isnan(run.worst_at_the_end):
-            worst += f" ({run.worst_at_the_end:.1f} s)"
+        if not math.isnan(run.a_few_seconds_at_most):
+            worst += f" ({run.a_few_seconds_at_most:.1f} s)"
         rows.append(f"{judge(run.shape, run.ranking, truth).row()} {run.seconds:.1f} | {run.cpu_seconds:.1f} "
                     f"({run.cpu_seconds / cores:.1f}) | {worst} |")
     return "\n".join(rows)

@@ -2,22 +2,34 @@
 processes take in order, from what the trials done so far cost, and :func:`in_words`.
 
 Each trial belongs to a *group* (the advice: a candidate, whose seeds cost about the same) and a
-*kind* (the advice: chase or an open loop), and has a *weight*, its steps times what a step of its
+*kind* (the advice: an outline family with chase or with an open loop), and has a *weight*, its steps times what a step of its
 kind costs relative to the other (the advice's chase trials cost about twice an open loop's step for
 step: ``advise.CHASE_COST``). A trial is expected to take what the trials of its group done so far
-took; one of a group not yet seen, its weight at the seconds per unit of weight of all the trials done
-so far. There is no estimate until a trial of each kind is done: before, one kind's cost would be
-guessed from the other's (on the letter E a first estimate from chase alone ran 42 % short; 31 % once
-one of each was done). The trials still to run are laid out on the workers as the pool takes them (in
+took; one of a group not yet seen, its weight at the seconds per unit of weight of the trials of its
+kind done so far (a chase trial's cost is not guessed from an open loop's). There is no estimate until
+a trial of each kind is done: before, one kind's cost would be guessed from the other's (on the letter E
+a first estimate from chase alone ran 42 % short; 31 % once one of each was done, both kinds at one
+pace). The trials still to run are laid out on the workers as the pool takes them (in
 order, each to the first worker free), each running trial counted for the time it has run. So the
 estimate follows the *steps* left, not the count of trials, and a batch whose last trials are long
 (or short) is not misjudged.
+
+The machine's speed changes while the trials run (the page's live simulation needs from a third of a
+core to a whole one as its boxes pack; other work comes and goes): a trial whose group ran before tells
+how fast trials run *now* against then, its seconds over its group's earlier ones, and every trial not
+yet done is expected to take that much of what it would have (the mean of the :data:`RECENT` latest such
+ratios). On the page's advisor for the L the second seeds took half their first's as the machine's load
+fell, and the time left ran up to twice what was left without it.
 """
 
 from __future__ import annotations
 
 import heapq
 from typing import Sequence
+
+#: How many of the latest trials whose group ran before set the speed now (a few: one seed's cost differs
+#: from another's by a third or more).
+RECENT = 4
 
 
 class Pace:
@@ -35,50 +47,79 @@ class Pace:
         #: When each trial began (None: not yet): the first ``workers`` at once, then one at each finish.
         self.began: list[float | None] = [None] * len(self.weights)
         self.finished: dict[int, float] = {}  # trial -> the seconds it took
+        #: Each trial whose group ran before, in the order they finished: its seconds over its group's before.
+        self.ratios: list[float] = []
         for index in range(min(self.workers, len(self.weights))):
             self.began[index] = started
 
     def done(self, index: int, seconds: float, now: float) -> None:
         """Trial ``index`` finished at ``now`` after ``seconds`` of running; its worker takes the next."""
+        before = self._group_seconds(index)
+        if before:
+            self.ratios.append(float(seconds) / before)
         self.finished[index] = float(seconds)
         waiting = next((i for i, began in enumerate(self.began) if began is None), None)
         if waiting is not None:
             self.began[waiting] = now
 
-    @property
-    def seconds_per_weight(self) -> float | None:
-        """What a unit of weight took, over the trials done (None before the first)."""
-        weight = sum(self.weights[i] for i in self.finished)
-        return sum(self.finished.values()) / weight if weight > 0 else None
+    def seconds_per_weight(self, kind: object = None) -> float | None:
+        """What a unit of weight took, over the trials of ``kind`` done (None before the first)."""
+        done = [i for i in self.finished if self.kinds[i] == kind]
+        weight = sum(self.weights[i] for i in done)
+        return sum(self.finished[i] for i in done) / weight if weight > 0 else None
 
-    def expected(self, index: int, pace: float) -> float:
-        """The seconds trial ``index`` should take: as its group's done so far, else by its weight."""
+    def _group_seconds(self, index: int) -> float | None:
+        """What the trials done of ``index``'s group took, on average (None: none done)."""
         seen = [seconds for i, seconds in self.finished.items() if self.groups[i] == self.groups[index]]
-        return sum(seen) / len(seen) if seen else pace * self.weights[index]
+        return sum(seen) / len(seen) if seen else None
+
+    @property
+    def speed(self) -> float:
+        """How long trials take now against before: the mean of the :data:`RECENT` latest ratios (1: none)."""
+        recent = self.ratios[-RECENT:]
+        return sum(recent) / len(recent) if recent else 1.0
+
+    def expected(self, index: int) -> float:
+        """The seconds trial ``index`` should take: as its group's done so far, else by its weight at its
+        kind's pace; at the speed now."""
+        seen = self._group_seconds(index)
+        base = seen if seen is not None else self.seconds_per_weight(self.kinds[index]) * self.weights[index]
+        return base * self.speed
 
     def seconds_left(self, now: float) -> float | None:
         """Until the last trial is done (None until a trial of each kind is done: no pace to go by)."""
-        pace = self.seconds_per_weight
-        if pace is None or {self.kinds[i] for i in self.finished} != set(self.kinds):
+        if {self.kinds[i] for i in self.finished} != set(self.kinds):
             return None
         free = []  # when each worker is free: running trials end when expected, at the least now
         for index, began in enumerate(self.began):
             if began is not None and index not in self.finished:
-                free.append(now + max(self.expected(index, pace) - (now - began), 0.0))
+                free.append(now + max(self.expected(index) - (now - began), 0.0))
         free += [now] * (self.workers - len(free))
         heapq.heapify(free)
         for index, began in enumerate(self.began):
             if began is None:
-                heapq.heapreplace(free, free[0] + self.expected(index, pace))
+                heapq.heapreplace(free, free[0] + self.expected(index))
         return max(free) - now
 
 
+#: Under this many seconds (estimated) no figure is said, only "a few seconds left": the last trials end a
+#: few seconds either side of their estimate (the page's advisor on the L: 2 s, beside a live simulation
+#: whose share of the cores changes as its boxes pack), most of what is left then, and a figure would be off
+#: by more than the 30 % it may be (issue 56).
+A_FEW_SECONDS = 10.0
+
+
 def in_words(seconds: float | None) -> str:
-    """'about 2 min 10 s left'; None: no pace yet."""
+    """The time left as a figure no finer than the estimate can back: 'a few seconds left' under
+    :data:`A_FEW_SECONDS`, whole seconds under half a minute, then to 5 s, from a minute to 10 s
+    ('about 2 min 10 s left'), from 10 minutes whole minutes; None: no pace yet."""
     if seconds is None:
         return "time left: known once the first trials are done"
-    seconds = round(seconds)
+    if seconds < A_FEW_SECONDS:
+        return "a few seconds left"
+    step = 1 if seconds < 30 else 5 if seconds < 60 else 10 if seconds < 600 else 60
+    seconds = int((seconds + step / 2) // step * step)  # to the nearest step, halves up
     if seconds >= 60:
         minutes, seconds = divmod(seconds, 60)
         return f"about {minutes} min {seconds} s left" if minutes < 10 else f"about {minutes} min left"
-    return f"about {max(seconds, 1)} s left"
+    return f"about {seconds} s left"

@@ -1,5 +1,5 @@
 """Names arrive as text in a real page (issue 54, attack A): a design file whose goal is named with
-markup, opened with ``serve --design``; an uploaded file so named; a light program's file so named;
+markup, opened with ``serve --design`` and with the page's *Open design*; an uploaded file so named; a light program's file so named;
 a challenge player so named. Each shows its characters on the page, and none becomes an element, a
 style, a picture, a link or a dialog. One server, one page, in this order.
 
@@ -25,6 +25,9 @@ SCRIPT_NAME = '<iframe srcdoc="<img src=x onerror=alert(document.domain)>">.txt'
 #: The design's goal: script, a picture from elsewhere and a link, if it were markdown.
 #: (At most 80 characters: a design's names are bounded, sandbox/model/design.py.)
 DESIGN_NAME = '<iframe srcdoc="<img src=x onerror=alert(1)>"> ![](//evil/beacon) [go](//evil)'
+#: The goal of a design opened with the page's *Open design* (Result folder), and its file's name.
+OPENED_NAME = '<img src=x onerror=alert(2)> <style>*{display:none} **b** [go](//evil/2)'
+OPENED_FILE = '<img src=x onerror=alert(3)> [go](javascript:alert(3)).npz'  # no slash: a file's name holds none
 #: A light program's file (a file name holds no slash).
 PROGRAM_FILE = "<img src=x onerror=alert(document.domain)> [go](javascript:alert(1)) `x`.py"
 #: Blanks every page if it is HTML.
@@ -32,11 +35,10 @@ PLAYER = "<style>*{display:none}"
 SQUARE = b"0 0\n4 0\n4 4\n0 4\n"
 
 
-@pytest.fixture(scope="module")
-def hostile_design(tmp_path_factory):
-    """A small recorded design whose ``config.shape`` (and so its header's ``goal.name``) is markup."""
+def design_named(name: str):
+    """A small recorded design whose ``config.shape`` (and so its header's ``goal.name``) is ``name``."""
     from sandbox.model.config import Config
-    from sandbox.model.design import PatternRecorder, save
+    from sandbox.model.design import PatternRecorder
     from sandbox.model.simulation import Simulation
 
     config = Config(robots=40, boxes=80, update_every=20, hold_steps=5, shape="square", steps=40)
@@ -44,9 +46,15 @@ def hostile_design(tmp_path_factory):
     recorder = PatternRecorder().attach(sim)
     sim.step(40)
     design = recorder.design(sim, "the paper's controller")
-    design = dataclasses.replace(design, config=design.config.replace(shape=DESIGN_NAME))
+    return dataclasses.replace(design, config=design.config.replace(shape=name))
+
+
+@pytest.fixture(scope="module")
+def hostile_design(tmp_path_factory):
+    from sandbox.model.design import save
+
     path = tmp_path_factory.mktemp("names") / "hostile-design.npz"
-    save(design, path)
+    save(design_named(DESIGN_NAME), path)
     return path
 
 
@@ -111,6 +119,23 @@ def test_a_designs_goal_name_is_text(app, page):
     page.get_by_role("button", name="Explain the result", exact=True).click()
     wait_until(lambda: "Ran:" in page_text(page), what="the result explained")
     shows_as_text(page, DESIGN_NAME)  # (the explanation names the goal by the part after its last slash)
+
+
+def test_a_design_opened_in_the_page_shows_its_goals_name_as_text(app, page):
+    """The page's *Open design* (Result folder, open since the test above): the *Design opened* notice names
+    the file and the design's goal, and the Run folder the goal; each as its characters."""
+    from sandbox.model.design import file_bytes
+
+    page.locator("input[type=file][accept='.npz']").set_input_files(
+        files=[{"name": OPENED_FILE, "mimeType": "application/octet-stream",
+                "buffer": file_bytes(design_named(OPENED_NAME))}])
+    wait_until(lambda: app.runner.latest.shape_name == OPENED_NAME, what="the opened design's world")
+    notice = page.locator(".mantine-Notification-root").filter(has_text="Design opened")
+    notice.first.wait_for(timeout=60_000)
+    said = re.sub(r"\s+", " ", notice.first.inner_text())
+    assert f"its goal ({OPENED_NAME})" in said and OPENED_FILE in said, said
+    shows_as_text(page, OPENED_NAME)
+    shows_as_text(page, OPENED_FILE)
 
 
 def test_an_uploaded_files_name_is_text(app, page):

@@ -7,8 +7,8 @@ import re
 
 import pytest
 
-from sandbox.experiments.advise import (Candidate, Ranked, candidates, default_candidate, rank, table, trial_order,
-                                        verdict)
+from sandbox.experiments.advise import (Candidate, Ranked, candidates, default_candidate, rank, table, trial_kind,
+                                        trial_order, verdict)
 from sandbox.experiments.pace import Pace, in_words
 from sandbox.model.config import Config
 from sandbox.shapes import shape_vertices
@@ -107,18 +107,52 @@ def test_the_time_left_follows_the_steps_left_at_the_pace_of_the_trials_done():
     pace = Pace([1, 1, 1, 1], workers=1, started=0.0, groups=["cheap", "dear", "cheap", "cheap"])
     pace.done(0, 1.0, now=1.0)
     pace.done(1, 7.0, now=8.0)
-    assert pace.seconds_per_weight == pytest.approx(4.0) and pace.seconds_left(8.0) == pytest.approx(2.0)
+    assert pace.seconds_per_weight() == pytest.approx(4.0) and pace.seconds_left(8.0) == pytest.approx(2.0)
     # No estimate until a trial of each kind is done (chase's cost is not an open loop's); then both.
     pace = Pace([2, 1, 2, 1], workers=1, started=0.0, kinds=["chase", "open", "chase", "open"])
     pace.done(0, 4.0, now=4.0)
     assert pace.seconds_left(4.0) is None
-    pace.done(1, 2.0, now=6.0)  # 6 s for 3 units; the other chase and open loop unseen: 4 s and 2 s
+    pace.done(1, 2.0, now=6.0)  # chase 2 s a unit, the open loop 2 s a unit: the other two 4 s and 2 s
     assert pace.seconds_left(6.0) == pytest.approx(6.0)
 
 
-def test_the_time_left_in_words():
-    assert in_words(90.0) == "about 1 min 30 s left" and in_words(20.2) == "about 20 s left"
-    assert in_words(1200.0) == "about 20 min left" and in_words(0.2) == "about 1 s left"
+def test_a_trial_not_yet_seen_is_reckoned_at_its_own_kinds_pace():
+    # Chase weighs 2 open-loop steps a step (CHASE_COST), but here it cost 3: a chase trial of weight 2 took
+    # 6 s (3 s a unit), an open loop of weight 1 took 1 s. Two open loops unseen, weight 1 each: 1 s each at
+    # the open loop's pace, 2 s on one worker (both kinds at one pace, 7 s for 3 units, said 4.67 s: 133 % over).
+    pace = Pace([2, 1, 1, 1], workers=1, started=0.0, groups=["a", "b", "c", "d"],
+                kinds=["chase", "open", "open", "open"])
+    pace.done(0, 6.0, now=6.0)
+    pace.done(1, 1.0, now=7.0)
+    assert pace.seconds_per_weight("chase") == pytest.approx(3.0) and pace.seconds_per_weight("open") == 1.0
+    assert pace.expected(2) == pytest.approx(1.0) and pace.seconds_left(7.0) == pytest.approx(2.0)
+    assert pace.seconds_left(7.5) == pytest.approx(1.5)  # trial 2 half run: its other half and trial 3
+
+
+def test_the_trials_left_are_reckoned_at_the_speed_the_machine_runs_now():
+    # Two candidates a and b, two seeds each, one worker. The first seeds: a 4 s, b 2 s. Nothing says yet
+    # that the machine changed: a's second 4 s, b's 2 s, 6 s left.
+    pace = Pace([1, 1, 1, 1], workers=1, started=0.0, groups=["a", "b", "a", "b"])
+    pace.done(0, 4.0, now=4.0)
+    pace.done(1, 2.0, now=6.0)
+    assert pace.speed == 1.0 and pace.seconds_left(6.0) == pytest.approx(6.0)
+    # a's second seed took 2 s, half its first: the machine runs twice as fast now (its load fell), so b's
+    # second takes half its first, 1 s (at the old speed, 2 s: twice what is left).
+    pace.done(2, 2.0, now=8.0)
+    assert pace.ratios == [0.5] and pace.speed == 0.5 and pace.seconds_left(8.0) == pytest.approx(1.0)
+    # The speed now is the mean of the RECENT (4) latest ratios: 1/2, 1, 3/2, 1, 2 -> (1 + 1.5 + 1 + 2) / 4.
+    pace.ratios = [0.5, 1.0, 1.5, 1.0, 2.0]
+    assert pace.speed == pytest.approx(1.375)
+
+
+def test_the_time_left_in_words_is_no_finer_than_the_estimate_can_back():
+    # Under 10 s no figure: the last trials end seconds either side of their estimate.
+    assert in_words(0.2) == in_words(9.9) == "a few seconds left"
+    assert in_words(10.0) == "about 10 s left" and in_words(20.4) == "about 20 s left"  # whole seconds
+    assert in_words(32.4) == "about 30 s left" and in_words(32.5) == "about 35 s left"  # to 5 s
+    assert in_words(57.6) == "about 1 min 0 s left"  # 57.6 to 5 s is 60: a minute
+    assert in_words(94.0) == "about 1 min 30 s left" and in_words(95.0) == "about 1 min 40 s left"  # to 10 s
+    assert in_words(1200.0) == "about 20 min left" and in_words(599.0) == "about 10 min left"
     assert in_words(None) == "time left: known once the first trials are done"
 
 
@@ -127,6 +161,10 @@ def test_the_costliest_trials_go_first():
     # every candidate's first seed, then the second; in each round chase (the costlier) first
     assert trial_order([(plain, 0), (plain, 1), (chase, 0), (chase, 1)], 1000) == [(chase, 0), (plain, 0),
                                                                                    (chase, 1), (plain, 1)]
+    # of the same cost, the offset outline first: each kind (outline, chase or not) has a trial done early
+    scaled = Candidate("scaled")
+    assert trial_order([(scaled, 0), (plain, 0)], 1000) == [(plain, 0), (scaled, 0)]
+    assert trial_kind(scaled) == ("scaled", False) and trial_kind(chase) == ("offset", True)
 
 
 def test_the_pages_advice_says_the_time_left_while_it_runs():
@@ -254,10 +292,11 @@ def test_the_advice_on_the_arrow_says_a_verdict_and_its_time_left():
     assert len(said) == 15 and said.index(True) <= 8 and all(said[said.index(True):])
 
 
-def test_the_estimate_is_judged_relative_to_what_is_left_until_the_last_seconds():
+def test_the_estimate_is_judged_as_it_is_said():
     from sandbox.experiments.advice_check import Timed
 
     run = Timed("l-shape", [], "", 20.0, 40.0, estimates=[(2.0, None, 18.0), (4.0, 12.0, 16.0), (10.0, 11.0, 10.0),
-                                                          (17.0, 1.0, 3.0), (19.0, 0.5, 1.0)])
-    assert run.worst_estimate == pytest.approx(0.25)  # 12 s said with 16 s left; none said before the first
-    assert run.worst_at_the_end == pytest.approx(2.0)  # in the last 5 s: seconds, not shares (1 s said, 3 s left)
+                                                          (14.0, 9.0, 6.0), (17.0, 1.0, 3.0), (19.0, 0.5, 1.0)])
+    # A figure is said from 10 s up: 12 s said with 16 s left is the worst, 25 % (none said before the first).
+    assert run.worst_estimate == pytest.approx(0.25)
+    assert run.a_few_seconds_at_most == pytest.approx(6.0)  # under 10 s "a few seconds": said with 6 s left
