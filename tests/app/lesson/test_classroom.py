@@ -63,6 +63,17 @@ def test_only_a_world_whose_page_has_been_gone_long_enough_is_freed(monkeypatch)
     wait_until(lambda: stopped == ["gone"], what="the freed world's runner to end")
 
 
+def test_the_teachers_world_is_shown_at_most_a_few_frames_a_second_while_students_have_worlds():
+    from types import SimpleNamespace
+
+    from sandbox.app.lesson.classroom import TEACHERS_FPS_IN_CLASS
+
+    lesson = classroom.Classroom(make_runner=lambda *a, **k: None)
+    assert lesson.teachers_most_fps() is None  # no class yet: the teacher's world as its pages draw
+    lesson.worlds = {"a": SimpleNamespace()}
+    assert lesson.teachers_most_fps() == TEACHERS_FPS_IN_CLASS == 5.0
+
+
 def test_the_teachers_world_pauses_while_no_teachers_page_is_open_and_goes_on_as_left():
     from tests.app.lesson.classing import TOKEN, own_page
     from tests.viser_wire import RawClient
