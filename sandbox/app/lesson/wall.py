@@ -45,6 +45,7 @@ class Wall:
         #: The labels on the wall, in the order shown (what the teacher sees).
         self.shown: list[str] = []
         self._drawn_key: tuple | None = None
+        self._captions = Captions()
         with gui.add_folder("Class", order=-1.0) as self.folder:
             self.link = gui.add_markdown(self._link_text(0))
             self.sort = gui.add_dropdown("Sort by", SORTS, initial_value=SORTS[0])
@@ -99,17 +100,15 @@ class Wall:
         rows = (len(ordered) + COLUMNS - 1) // COLUMNS
         cell = THUMBNAIL + CAPTION
         wall = Image.new("RGB", (_width(), rows * (cell + GAP) - GAP), pal.BACKGROUND)
-        draw = ImageDraw.Draw(wall)
-        font = ImageFont.load_default(size=12)
         for index, seat in enumerate(ordered):
             snap = snaps[seat.identity]
             x, y = (index % COLUMNS) * (THUMBNAIL + GAP), (index // COLUMNS) * (cell + GAP)
             wall.paste(self._picture_of(seat.identity, snap), (x, y))
             share = 100.0 * float(snap.sample.fraction_in_goal)
             away = "" if seat.identity in self.classroom.page_of else " (away)"
-            draw.text((x + 2, y + THUMBNAIL + 3), f"{seat.label}{away}"[:22], fill=(235, 235, 240), font=font)
-            draw.text((x + 2, y + THUMBNAIL + 18), f"{share:.0f} % in goal, step {snap.step:,}"[:24],
-                      fill=(170, 175, 185), font=font)
+            self._captions.write(wall, (x + 2, y + THUMBNAIL + 3), f"{seat.label}{away}"[:22], (235, 235, 240))
+            self._captions.write(wall, (x + 2, y + THUMBNAIL + 18),
+                                 f"{share:.0f} % in goal, step {snap.step:,}"[:24], (170, 175, 185))
         return wall
 
     def _picture_of(self, identity: str, snap: Any) -> Image.Image:
@@ -141,6 +140,43 @@ class Wall:
         entrants = self.classroom.start_challenge()
         self.ranking.content = ranking_text(self.classroom.challenge_results()) if entrants else \
             "No student has a page open: nobody to play."
+
+
+class Captions:
+    """The wall's lines of text, each written as ``ImageDraw.text`` writes it (the same pixels), but each
+    line's shape rendered once: a student's name comes back every second, and the font is loaded once
+    (loading it and rendering 60 lines afresh took about 60 ms of each refresh: most of the wall's cost
+    on the class server, measured with py-spy)."""
+
+    #: Lines kept (a class's names, with and without "(away)", and the last second's read-outs).
+    KEPT = 256
+
+    def __init__(self, size: int = 12):
+        self.size = size
+        self._font: Any = None
+        self._shapes: dict[str, tuple[Image.Image | None, tuple[int, int]]] = {}
+        self.rendered = 0  # lines rendered (not found kept): for the tests
+
+    def write(self, image: Image.Image, xy: tuple[int, int], text: str, fill: tuple[int, int, int]) -> None:
+        """``text`` in ``fill`` with its origin at ``xy`` (whole pixels), as ``ImageDraw.text`` would."""
+        shape, (dx, dy) = self._shape(text)
+        if shape is not None:
+            x, y = xy[0] + dx, xy[1] + dy
+            image.paste(fill, (x, y, x + shape.size[0], y + shape.size[1]), shape)
+
+    def _shape(self, text: str) -> tuple[Image.Image | None, tuple[int, int]]:
+        kept = self._shapes.pop(text, None)  # (taken out and put back: the dict's order is the most recent)
+        if kept is None:
+            if self._font is None:
+                self._font = ImageFont.load_default(size=self.size)
+            mask, offset = self._font.getmask2(text, "L")
+            shown = mask.size[0] > 0 and mask.size[1] > 0
+            kept = (Image.frombytes("L", mask.size, bytes(mask)) if shown else None, offset)
+            self.rendered += 1
+            if len(self._shapes) >= self.KEPT:
+                del self._shapes[next(iter(self._shapes))]  # the line least recently written
+        self._shapes[text] = kept
+        return kept
 
 
 def sort_seats(seats: list, snaps: dict, how: str) -> list:
