@@ -44,8 +44,9 @@ FREE_AWAY_SECONDS = 300.0
 TEACHER_AWAY_SECONDS = 3.0
 #: The teacher's world's snapshots a second at most while students have worlds: the teacher's page shows
 #: the wall, "a few frames a second" (issue 58), and the floor beside it no more often. Measured with 30
-#: students and the teacher's page in Chromium on the class server's 2 cores: its floor drawn in software
-#: took about half a core at the 8 frames a second it managed of the 30 its world sent.
+#: students and the teacher's page in Chromium on the class server's 2 cores: the teacher's world sent 30
+#: snapshots a second, of which the page, drawing in software, showed 4; each cost the world and the
+#: server all the same (docs/performance.md).
 TEACHERS_FPS_IN_CLASS = 5.0
 #: What a student who comes back after their world was freed reads (one line).
 FREED_NOTICE = "Your world was closed while you were away: a new one starts from your teacher's scene."
