@@ -259,8 +259,12 @@ class App:
 
     def _pace_snapshots(self) -> None:
         """Twice a second: the worlds take a snapshot only as often as the fastest page draws (with
-        headroom; every frame while any page keeps up)."""
-        self.lockstep.show_every(frames_per_snapshot(self.runner.fps, self.gate.pacer.drawing_rates()))
+        headroom; every frame while any page keeps up). In class mode, as the teacher's pages draw (the
+        students' draw worlds of their own), and no more often than the class wants the teacher's world shown."""
+        pages = None if self.lesson is None else list(self.pages.get_clients())
+        most = None if self.lesson is None else self.lesson.teachers_most_fps()
+        self.lockstep.show_every(frames_per_snapshot(self.runner.fps, self.gate.pacer.drawing_rates(pages=pages),
+                                                     most=most))
 
     def _reframe_all(self, offset: tuple[float, float] | None) -> None:
         """Compare mode began or ended: every page frames both worlds, or the one."""

@@ -42,6 +42,12 @@ FREE_AWAY_SECONDS = 300.0
 #: of their own, and a world at 25x real time for nobody took about 18 % of a core. A teacher's page that
 #: opens again plays it on, if it was playing.
 TEACHER_AWAY_SECONDS = 3.0
+#: The teacher's world's snapshots a second at most while students have worlds: the teacher's page shows
+#: the wall, "a few frames a second" (issue 58), and the floor beside it no more often. Measured with 30
+#: students and the teacher's page in Chromium on the class server's 2 cores: the teacher's world sent 30
+#: snapshots a second, of which the page, drawing in software, showed 4; each cost the world and the
+#: server all the same (docs/performance.md).
+TEACHERS_FPS_IN_CLASS = 5.0
 #: What a student who comes back after their world was freed reads (one line).
 FREED_NOTICE = "Your world was closed while you were away: a new one starts from your teacher's scene."
 #: The scene the teacher's running world sets (the wall's first choice of a scene to send).
@@ -128,6 +134,11 @@ class Classroom:
     def start(self) -> None:
         self.events.every(WALL_SECONDS, self.wall.refresh)
         self.events.every(WALL_SECONDS, self.free_left_alone)
+
+    def teachers_most_fps(self) -> float | None:
+        """The most snapshots a second the teacher's world needs (:data:`TEACHERS_FPS_IN_CLASS` while any
+        student has a world; None, as many as its pages draw, before the class arrives)."""
+        return TEACHERS_FPS_IN_CLASS if self.worlds else None
 
     def stop(self) -> None:
         """After the event queue stopped: the desks' workers and the worlds end."""

@@ -42,6 +42,7 @@ its windows), but for :meth:`Pacer.drawing_rates`, which the app's event thread 
 from __future__ import annotations
 
 import asyncio
+import math
 import secrets
 import threading
 import time
@@ -67,18 +68,20 @@ HEADROOM = 1.5
 FEWEST_SHOWN = 10.0
 
 
-def frames_per_snapshot(fps: float, rates: Iterable[float | None]) -> int:
+def frames_per_snapshot(fps: float, rates: Iterable[float | None], most: float | None = None) -> int:
     """Every how many frames (of ``fps`` a second) the worlds need a snapshot, given each page's drawing
     rate (frames a second; None: a page that keeps up, or has not said). A snapshot nobody draws still
     costs its world's process, the app and the pages' decoding: in compare mode, with one page drawing
     6-7 frames a second in software, taking 15 instead of 30 a second ran both worlds about 6 % faster
     (60-s runs, alternating: 21.5 and 20.6x against 20.2 and 19.4x).
-    Every frame while any page keeps up (or there is none, or one has not said)."""
+    Every frame while any page keeps up (or there is none, or one has not said); ``most``: at most that
+    many snapshots a second all the same (a class's teacher's world, :mod:`sandbox.app.lesson.classroom`)."""
     rates = list(rates)
     if not rates or any(rate is None for rate in rates):
-        return 1
-    wanted = max(HEADROOM * max(rates), FEWEST_SHOWN)
-    return max(1, int(fps // wanted))
+        every = 1
+    else:
+        every = max(1, int(fps // max(HEADROOM * max(rates), FEWEST_SHOWN)))
+    return every if most is None else max(every, math.ceil(fps / most - 1e-9))
 
 def report_js(address: str) -> str:
     """The reporting script (``page/report.js``) for a page that reports at ``address``."""
@@ -167,14 +170,17 @@ class Pacer:
         if event is not None:
             event.set()  # a window held for the page goes (and its connection ends)
 
-    def drawing_rates(self, now: float | None = None) -> list[float | None]:
+    def drawing_rates(self, now: float | None = None, pages: Iterable[int] | None = None) -> list[float | None]:
         """Each drawing page's rate (frames a second) over the last :data:`RATE_WINDOW` s, or None for a
         page that keeps up or has not reported enough lately (any thread). A client that never said how
         it draws draws nothing (a websocket client of our own, a page that has not drawn for a second
-        yet): it is not counted."""
+        yet): it is not counted. ``pages``: only these pages' (client ids; None: every page's): a class's
+        students draw worlds of their own, not the one whose snapshots these rates pace."""
         now = time.monotonic() if now is None else now
+        wanted = None if pages is None else set(pages)
         with self._rates_lock:
-            return [drawing_rate(times, now) for times in self._report_times.values()]
+            return [drawing_rate(times, now) for client_id, times in self._report_times.items()
+                    if wanted is None or client_id in wanted]
 
     # ---------------------------------------------------------- windows
     async def hold_windows(self, windows: AsyncGenerator, client_id: int, full: int) -> AsyncGenerator:

@@ -4,6 +4,8 @@ projector shows a student's world named in its caption."""
 
 from __future__ import annotations
 
+import time
+
 import pytest
 
 from sandbox.app.lesson import classroom
@@ -61,6 +63,17 @@ def test_only_a_world_whose_page_has_been_gone_long_enough_is_freed(monkeypatch)
     assert set(lesson.worlds) == {"here", "soon"} and lesson.freed == {"gone"}
     assert projected == [None]
     wait_until(lambda: stopped == ["gone"], what="the freed world's runner to end")
+
+
+def test_the_teachers_world_is_shown_at_most_a_few_frames_a_second_while_students_have_worlds():
+    from types import SimpleNamespace
+
+    from sandbox.app.lesson.classroom import TEACHERS_FPS_IN_CLASS
+
+    lesson = classroom.Classroom(make_runner=lambda *a, **k: None)
+    assert lesson.teachers_most_fps() is None  # no class yet: the teacher's world as its pages draw
+    lesson.worlds = {"a": SimpleNamespace()}
+    assert lesson.teachers_most_fps() == TEACHERS_FPS_IN_CLASS == 5.0
 
 
 def test_the_teachers_world_pauses_while_no_teachers_page_is_open_and_goes_on_as_left():
@@ -151,3 +164,39 @@ def test_a_students_floor_is_framed_again_whenever_their_window_changes_shape():
     desk.client.camera.aspect = 1.0
     desk._fit()
     assert framed == [1.33, 0.79]
+
+
+@pytest.mark.slow  # (5-7 s: a student's world built in a host)
+def test_the_teachers_world_is_paced_by_the_teachers_page_not_by_the_students():
+    """A student's page that keeps up drew every frame of the teacher's world out of it (it draws a world
+    of its own); with students in, the teacher's world is shown 5 times a second at most."""
+    import re
+
+    from sandbox.app.web.pacing import CALM, PATH
+    from tests.app.lesson.classing import TOKEN, own_page
+    from tests.viser_wire import RawClient
+
+    def token_of(page) -> str:
+        script = page.first("RunJavascriptMessage", 30.0)
+        return re.search(re.escape(PATH) + r"([A-Za-z0-9_-]+)", script["source"]).group(1)
+
+    app = class_app()  # 30 frames a second
+    try:
+        teacher = RawClient(app.port, {**own_page(app), "Authorization": f"token {TOKEN}"})
+        teacher.say_hello()
+        wait_until(lambda: app.pages.get_clients(), what="the teacher's page")
+        pacer, now = app.gate.pacer, time.monotonic()
+        teachers = token_of(teacher)
+        for k in range(8):  # the teacher's page draws 7 frames a second
+            assert pacer.drawn(teachers, now=now - 1.0 + k / 7)
+        app.events.call(app._pace_snapshots)
+        assert app.lockstep.shown_every == 2  # 10.5 wanted: 15 a second
+        identity, page, _ = new_student(app)
+        assert pacer.drawn(token_of(page) + CALM)  # the student's page keeps up
+        app.events.call(app._pace_snapshots)
+        assert app.lockstep.shown_every == 6  # 5 a second
+        wait_until(lambda: app.runner.controls.show_every == 6, what="the teacher's world told")
+        teacher.close()
+        page.close()
+    finally:
+        app.stop()

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+import numpy as np
+
 import pytest
 
 from sandbox.app.lesson.seats import Seat
@@ -48,3 +50,55 @@ def test_a_students_picture_is_their_construction_area_at_the_wall_size():
     picture = floor_picture(runner.latest)
     assert picture.size == (THUMBNAIL, THUMBNAIL)
     assert len(set(picture.getdata())) > 4  # the floor, its lights, the wall, the goal, the bodies
+
+
+def test_the_walls_captions_are_written_as_imagedraw_writes_them_each_line_rendered_once():
+    from PIL import Image, ImageDraw, ImageFont
+
+    from sandbox.app.lesson.wall import Captions
+    from sandbox.app.view import palette as pal
+
+    lines = ["Student 12 (away)", "ada", "42 % in goal, step 12,345", "Zoë ü — ñ", " "]
+    font = ImageFont.load_default(size=12)
+    drawn, written = (Image.new("RGB", (300, 20 * len(lines)), pal.BACKGROUND) for _ in range(2))
+    for picture in (drawn, written):
+        picture.paste((200, 30, 30), (0, 0, 40, 60))  # a thumbnail under some of the text: blended over it
+    captions = Captions()
+    for again in range(2):
+        for i, line in enumerate(lines):
+            xy, fill = (2 + 50 * again, 20 * i + 3), (235, 235, 240) if i % 2 else (170, 175, 185)
+            ImageDraw.Draw(drawn).text(xy, line, fill=fill, font=font)
+            captions.write(written, xy, line, fill)
+    assert drawn.tobytes() == written.tobytes()
+    assert captions.rendered == len(lines)  # the second time round, every line was kept
+
+
+def test_the_walls_captions_keep_the_lines_written_last():
+    from PIL import Image
+
+    from sandbox.app.lesson.wall import Captions
+
+    captions, picture = Captions(), Image.new("RGB", (200, 20))
+    captions.KEPT = 2
+    for line in ("a", "b", "a", "c", "a", "b"):  # "b" is the least recent when "c" comes
+        captions.write(picture, (0, 0), line, (255, 255, 255))
+    assert captions.rendered == 4  # a, b, c, then b again
+
+
+def test_a_students_picture_shows_each_light_in_its_colour():
+    from sandbox.app.view import palette as pal
+
+    # a 4 x 4 grid of 1-m lights, the construction area its middle 2 m, seen 1.4 times as wide (2.8 m)
+    cfg = SimpleNamespace(arena_size=4.0, construction_size=2.0, centre=2.0, lights_per_side=4,
+                          light_intensity=2.0, box_circumradius=0.01, robot_radius=0.01, capacity=1.0)
+    intensities = np.zeros((4, 4))
+    intensities[1, 2] = 2.0  # the light at x 1-2 m, y 2-3 m: fully on
+    intensities[2, 1] = 1.0  # x 2-3 m, y 1-2 m: half
+    empty = np.zeros((0, 2))
+    snap = SimpleNamespace(world_config=cfg, intensities=intensities, box_in_goal=np.zeros(0, bool),
+                           box_positions=empty, robot_positions=empty, robot_charges=np.zeros(0),
+                           outline=empty, goal_outline=empty)
+    picture = np.asarray(floor_picture(snap, size=28))  # 10 pixels a metre, from (0.6, 0.6) to (3.4, 3.4)
+    assert tuple(picture[10, 8]) == pal.LIGHT_ON  # x 1.45 m, y 2.35 m (row 10 from the top at 3.4 m)
+    assert tuple(picture[17, 17]) == (156, 136, 54)  # x 2.35, y 1.65: half way, 58 + 0.5 x 197 ...
+    assert tuple(picture[20, 5]) == pal.LIGHT_OFF  # x 1.15, y 1.35: off

@@ -146,6 +146,30 @@ def test_the_worlds_snapshot_rate_follows_the_fastest_page():
     assert frames_per_snapshot(60, [7.0]) == 5  # 60 / 10.5
 
 
+def test_the_snapshot_rate_may_be_held_to_at_most_some_frames_a_second():
+    # a class's teacher's world: at most 5 snapshots a second, however fast its pages draw
+    assert frames_per_snapshot(30, [None], most=5.0) == 6  # a page that keeps up: 5 a second, not 30
+    assert frames_per_snapshot(30, [7.0], most=5.0) == 6  # 15 a second wanted: 5
+    assert frames_per_snapshot(30, [0.5], most=5.0) == 6  # 10 a second at least, but 5 at most
+    assert frames_per_snapshot(30, [0.5], most=20.0) == 3  # a bound above what the pages need changes nothing
+    assert frames_per_snapshot(25, [], most=10.0) == 3  # 25 / 10 = 2.5: 8.3 a second, never above 10
+    assert frames_per_snapshot(30, [], most=10.0) == 3  # exactly 10 a second
+
+
+def test_the_pacer_reads_the_rates_of_the_pages_named_only():
+    # a class's students draw worlds of their own: only the teacher's pages pace the teacher's world
+    pacer = Pacer()
+    tokens = [pacer.script_for(cid).split(PATH)[1].split('"')[0] for cid in (1, 2)]
+    now = 100.0
+    for k in range(8):  # page 1 (the teacher's) draws 7 frames a second
+        assert pacer.drawn(tokens[0], now=now - 1.0 + k / 7)
+    assert pacer.drawn(tokens[1] + CALM, now=now)  # page 2 (a student's) keeps up
+    assert frames_per_snapshot(30, pacer.drawing_rates(now)) == 1  # every page's: every frame
+    assert pacer.drawing_rates(now, pages=[1]) == [pytest.approx(7.0)]
+    assert frames_per_snapshot(30, pacer.drawing_rates(now, pages=[1])) == 2  # the teacher's: 15 a second
+    assert pacer.drawing_rates(now, pages=[]) == []
+
+
 def test_a_pages_drawing_rate_from_its_reports():
     assert drawing_rate([10.0, 10.1, 10.2, 10.3, 10.4], now=10.4) == pytest.approx(10.0)  # 4 gaps in 0.4 s
     assert drawing_rate([5.0, 10.0, 10.25, 10.5], now=10.5) == pytest.approx(4.0)  # the one at 5 s is old
