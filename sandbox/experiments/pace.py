@@ -103,10 +103,10 @@ class Pace:
 
 
 #: Under this many seconds (estimated) no figure is said, only "a few seconds left": the last trials end a
-#: few seconds either side of their estimate (the page's advisor on the L: 2 s, beside a live simulation
-#: whose share of the cores changes as its boxes pack), most of what is left then, and a figure would be off
-#: by more than the 30 % it may be (issue 56).
-A_FEW_SECONDS = 10.0
+#: few seconds either side of their estimate, most of what is left then, and a figure would be off by more
+#: than the 30 % it may be (issue 56). Chosen on the page's advisor on the star on a quiet machine (said
+#: 10-12 s with 7.4-9.8 s left: 25-37 % off; from 15 s up at most 28 %), checked on the arrow and the T.
+A_FEW_SECONDS = 15.0
 
 
 def in_words(seconds: float | None) -> str:

@@ -146,9 +146,9 @@ def test_the_trials_left_are_reckoned_at_the_speed_the_machine_runs_now():
 
 
 def test_the_time_left_in_words_is_no_finer_than_the_estimate_can_back():
-    # Under 10 s no figure: the last trials end seconds either side of their estimate.
-    assert in_words(0.2) == in_words(9.9) == "a few seconds left"
-    assert in_words(10.0) == "about 10 s left" and in_words(20.4) == "about 20 s left"  # whole seconds
+    # Under 15 s no figure: the last trials end seconds either side of their estimate.
+    assert in_words(0.2) == in_words(14.9) == "a few seconds left"
+    assert in_words(15.0) == "about 15 s left" and in_words(20.4) == "about 20 s left"  # whole seconds
     assert in_words(32.4) == "about 30 s left" and in_words(32.5) == "about 35 s left"  # to 5 s
     assert in_words(57.6) == "about 1 min 0 s left"  # 57.6 to 5 s is 60: a minute
     assert in_words(94.0) == "about 1 min 30 s left" and in_words(95.0) == "about 1 min 40 s left"  # to 10 s
@@ -295,8 +295,8 @@ def test_the_advice_on_the_arrow_says_a_verdict_and_its_time_left():
 def test_the_estimate_is_judged_as_it_is_said():
     from sandbox.experiments.advice_check import Timed
 
-    run = Timed("l-shape", [], "", 20.0, 40.0, estimates=[(2.0, None, 18.0), (4.0, 12.0, 16.0), (10.0, 11.0, 10.0),
+    run = Timed("l-shape", [], "", 20.0, 40.0, estimates=[(2.0, None, 28.0), (4.0, 18.0, 24.0), (10.0, 16.0, 16.0),
                                                           (14.0, 9.0, 6.0), (17.0, 1.0, 3.0), (19.0, 0.5, 1.0)])
-    # A figure is said from 10 s up: 12 s said with 16 s left is the worst, 25 % (none said before the first).
+    # A figure is said from 15 s up: 18 s said with 24 s left is the worst, 25 % (none said before the first).
     assert run.worst_estimate == pytest.approx(0.25)
-    assert run.a_few_seconds_at_most == pytest.approx(6.0)  # under 10 s "a few seconds": said with 6 s left
+    assert run.a_few_seconds_at_most == pytest.approx(6.0)  # under 15 s "a few seconds": said with 6 s left
