@@ -16,34 +16,18 @@ from sandbox import commands
 from sandbox.experiments import advice_check, distribution, draw_candidates, draws
 from sandbox.experiments.advise import Candidate, Ranked
 from sandbox.experiments.storage import ResultStore, load_meta
-from sandbox.experiments.sweep import add_parser, sweep_plan, write_meta
+from sandbox.experiments.sweep import sweep_plan, write_meta
 from sandbox.experiments.trials import SweepError
 from sandbox.model.config import STRATEGY_NAMES
 from sandbox.shapes import generator
-
-
-def parsed(*argv: str):
-    import argparse
-
-    parser = argparse.ArgumentParser()
-    add_parser(parser.add_subparsers())
-    return parser.parse_args(["sweep", *argv])
+from tests.experiments.sweeping import parsed, replace_refusal
 
 
 @pytest.fixture
 def refusing(monkeypatch):
-    """The model's refusal with the default settings, replaced: it refuses the shapes named in the returned set
-    (the real check builds the outlines); a candidate's own settings are checked by the same function."""
-    names: set[str] = set()
-
-    def refusal(config, vertices):
-        for name in names:
-            if np.array_equal(vertices, generator.generated_vertices(name)) and config.flare == 0:
-                return f"{name}: too large, say"
-        return ""
-
-    monkeypatch.setattr(draws, "refusal", refusal)
-    return names
+    """The model's refusal with the default settings, replaced: it refuses the shapes named in the returned set;
+    a candidate's own settings are checked by the same function (a flare builds them, say)."""
+    return replace_refusal(monkeypatch, applies=lambda config: config.flare == 0)
 
 
 def final_row(case, fraction: float, seed: int = 0, steps: int = 100_000) -> dict:

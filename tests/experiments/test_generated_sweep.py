@@ -17,34 +17,17 @@ from sandbox import commands
 from sandbox.experiments import distribution, draws
 from sandbox.experiments.plan import grid_cases
 from sandbox.experiments.storage import load_meta
-from sandbox.experiments.sweep import add_parser, sweep_plan, write_meta
+from sandbox.experiments.sweep import sweep_plan, write_meta
 from sandbox.experiments.trials import SweepError
 from sandbox.model.config import Config
 from sandbox.shapes import generator
-
-
-def parsed(*argv: str):
-    import argparse
-
-    parser = argparse.ArgumentParser()
-    add_parser(parser.add_subparsers())
-    return parser.parse_args(["sweep", *argv])
+from tests.experiments.sweeping import parsed, replace_refusal
 
 
 @pytest.fixture
 def refusing(monkeypatch):
-    """The model's refusal, replaced: it refuses the shapes named in the returned set (the real check builds
-    the outlines, a second and more on a cold process)."""
-    names: set[str] = set()
-
-    def refusal(config, vertices):
-        for name in names:
-            if np.array_equal(vertices, generator.generated_vertices(name)):
-                return f"{name}: too large, say"
-        return ""
-
-    monkeypatch.setattr(draws, "refusal", refusal)
-    return names
+    """The model's refusal, replaced: it refuses the shapes named in the returned set."""
+    return replace_refusal(monkeypatch)
 
 
 def test_the_plan_names_a_case_after_each_shape_and_keeps_its_family_and_parameters(tmp_path, refusing):
