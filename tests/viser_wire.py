@@ -13,6 +13,8 @@ import websockets.sync.client
 import zstandard
 
 SUBPROTOCOL = f"viser-v{viser.__version__}"
+#: The bytes of one part of an upload (a page's file, sent in parts).
+UPLOAD_PART = 512 * 1024
 
 
 class RawClient:
@@ -51,6 +53,14 @@ class RawClient:
     def upload_part(self, component: str, transfer: str, index: int, content: bytes) -> None:
         self.send("FileTransferPart", source_component_uuid=component, transfer_uuid=transfer, part_index=index,
                   content=content)
+
+    def upload(self, component: str, name: str, content: bytes) -> None:
+        """``content`` sent to the upload control ``component`` as a page sends a file: in parts of
+        :data:`UPLOAD_PART` bytes."""
+        parts = [content[i:i + UPLOAD_PART] for i in range(0, len(content), UPLOAD_PART)]
+        transfer = self.start_upload(component, size=len(content), parts=len(parts), name=name)
+        for index, part in enumerate(parts):
+            self.upload_part(component, transfer, index, part)
 
     def _messages(self, seconds: float):
         """The messages the server sends within ``seconds``, as they come."""

@@ -17,7 +17,6 @@ from tests.app.web.test_upload_files import notice
 from tests.viser_wire import RawClient
 from tests.waiting import wait_until
 
-PART = 512 * 1024
 #: The design's world: another goal, other counts and another seed than the running one (the tests' SMALL).
 DESIGNED = Config(robots=10, boxes=16, update_every=10, hold_steps=3, shape="star", seed=3)
 DESIGN_STEPS = 120
@@ -35,11 +34,7 @@ def design_file() -> bytes:
 
 
 def upload(app, client: RawClient, name: str, content: bytes) -> None:
-    component = app.panel.result.open_design._impl.uuid
-    parts = [content[i:i + PART] for i in range(0, len(content), PART)]
-    transfer = client.start_upload(component, size=len(content), parts=len(parts), name=name)
-    for index, part in enumerate(parts):
-        client.upload_part(component, transfer, index, part)
+    client.upload(app.panel.result.open_design._impl.uuid, name, content)
 
 
 def own_page(app) -> RawClient:

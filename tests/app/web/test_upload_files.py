@@ -19,7 +19,6 @@ from tests.viser_wire import RawClient
 from tests.waiting import wait_until
 
 SMALL = Config(robots=12, boxes=20, update_every=10, hold_steps=3)
-PART = 512 * 1024
 #: Longest pause in a viewer's scene while an upload is read. The reader is a child process, so the
 #: server only waits on a pipe; measured 0.2-0.4 s gaps on two loaded cores (load average 20), the
 #: same as without an upload. Reading in the server stalled every scene for 5.9 s.
@@ -82,11 +81,7 @@ def page(app) -> RawClient:
 
 
 def upload(app, client: RawClient, name: str, content: bytes) -> None:
-    component = app.panel.shape.upload._impl.uuid
-    parts = [content[i:i + PART] for i in range(0, len(content), PART)]
-    transfer = client.start_upload(component, size=len(content), parts=len(parts), name=name)
-    for index, part in enumerate(parts):
-        client.upload_part(component, transfer, index, part)
+    client.upload(app.panel.shape.upload._impl.uuid, name, content)
 
 
 def notice(client: RawClient, title: str, seconds: float = 60.0) -> str:
