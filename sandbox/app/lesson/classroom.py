@@ -40,6 +40,8 @@ WALL_SECONDS = 0.75
 #: A seat's world whose page has been gone this long (s) is freed: a reload or a lost connection comes
 #: back well within it; a student who closed the page for the lesson gives the class its memory back.
 FREE_AWAY_SECONDS = 300.0
+#: How often (s) the worlds left alone are looked for (and freed after :data:`FREE_AWAY_SECONDS`).
+FREE_CHECK_SECONDS = 1.0
 #: The teacher's world pauses when no teacher's page has been open this long (s): students watch worlds
 #: of their own, and a world at 25x real time for nobody took about 18 % of a core. A teacher's page that
 #: opens again plays it on, if it was playing.
@@ -93,6 +95,8 @@ class Classroom:
         self.pace = pace
         #: The class's world hosts, started with its first world (None: worlds come from ``make_runner``).
         self.pool: HostPool | None = None
+        #: The class challenge's reference runs (made when the classroom is attached to its app).
+        self.references: References | None = None
         if make_runner is None:
             self.pool = HostPool()
             make_runner = functools.partial(HostedRunner, pool=self.pool)
@@ -135,7 +139,7 @@ class Classroom:
 
     def start(self) -> None:
         self.events.every(WALL_SECONDS, self.wall.refresh)
-        self.events.every(1.0, self.free_left_alone)
+        self.events.every(FREE_CHECK_SECONDS, self.free_left_alone)
 
     def teachers_most_fps(self) -> float | None:
         """The most snapshots a second the teacher's world needs (:data:`TEACHERS_FPS_IN_CLASS` while any
@@ -151,7 +155,7 @@ class Classroom:
             world.runner.stop()
         if self.pool is not None:
             self.pool.stop()
-        if hasattr(self, "references"):  # (attached)
+        if self.references is not None:
             self.references.stop()
 
     def seated(self, client_id: int) -> bool:
