@@ -226,7 +226,8 @@ def advise_draw(config: Config, shapes: Iterable, *, workers: int, steps: int = 
 def truth_files(folders: Iterable[str]) -> list[str]:
     """The ``final.csv`` of each folder a candidates sweep's report wrote (a file is taken as it is); a
     ValueError naming the first missing one."""
-    files = [str(Path(f) / "final.csv") if Path(f).is_dir() else str(f) for f in folders]
+    files = [str(f) if Path(f).is_file() or str(f).endswith(".csv") else str(Path(f) / "final.csv")
+             for f in folders]  # a folder, even one not yet written: its report's final.csv
     missing = [f for f in files if not Path(f).is_file()]
     if missing:
         raise ValueError(f"no {missing[0]}: run 'phototaxis report {Path(missing[0]).parent} --no-figures' on the "

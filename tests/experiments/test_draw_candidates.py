@@ -228,3 +228,12 @@ def test_a_tiny_candidates_sweep_its_report_and_the_advice_judged_on_it(tmp_path
     assert "| gen-rectilinear-0000 |" in printed and "gen-rectilinear-0001 |" not in printed
     assert "of 1 shapes advised" in printed and "refused by the model (not advised): 1." in printed
     assert code == (0 if ": passes." in printed else 1)
+
+
+def test_a_truth_folder_not_yet_reported_is_named_with_the_report_to_run(tmp_path):
+    missing = tmp_path / "candidates"
+    with pytest.raises(ValueError, match=rf"no {missing}/final.csv: run 'phototaxis report {missing} --no-figures'"):
+        advice_check.truth_files([str(missing)])
+    (missing / "final.csv").parent.mkdir()
+    (missing / "final.csv").write_text("case,seed\n")
+    assert advice_check.truth_files([str(missing), str(missing / "final.csv")]) == [str(missing / "final.csv")] * 2
