@@ -19,7 +19,9 @@ core to a whole one as its boxes pack; other work comes and goes): a trial whose
 how fast trials run *now* against then, its seconds over its group's earlier ones, and every trial not
 yet done is expected to take that much of what it would have (the mean of the :data:`RECENT` latest such
 ratios). On the page's advisor for the L the second seeds took half their first's as the machine's load
-fell, and the time left ran up to twice what was left without it.
+fell, and the time left ran up to twice what was left without it. One ratio alone is not taken for a
+change of speed (:data:`FEWEST_RATIOS`): a single seed's cost differs from its group's first by a third
+or more on a machine whose speed did not change.
 """
 
 from __future__ import annotations
@@ -30,6 +32,13 @@ from typing import Sequence
 #: How many of the latest trials whose group ran before set the speed now (a few: one seed's cost differs
 #: from another's by a third or more).
 RECENT = 4
+
+#: How many such ratios it takes before the speed now is believed. On a quiet machine the arrow's first
+#: ratio was one seed's noise (1.36: its second chase seed took 6.1 s after 4.5 s; the next ratios were
+#: 0.92 and 0.71), and scaling everything left by it put the time left 57-66 % over with 10 s left; with
+#: two, 16 %. On 8 runs recorded under a changing load (the L and the star, 25-450 s), where no rule kept
+#: within 30 %, the share of the time shown more than 30 % off grew by 0 (5 runs) to 5 and 13 points.
+FEWEST_RATIOS = 2
 
 
 class Pace:
@@ -75,9 +84,10 @@ class Pace:
 
     @property
     def speed(self) -> float:
-        """How long trials take now against before: the mean of the :data:`RECENT` latest ratios (1: none)."""
+        """How long trials take now against before: the mean of the :data:`RECENT` latest ratios (1: fewer
+        than :data:`FEWEST_RATIOS`)."""
         recent = self.ratios[-RECENT:]
-        return sum(recent) / len(recent) if recent else 1.0
+        return sum(recent) / len(recent) if len(recent) >= FEWEST_RATIOS else 1.0
 
     def expected(self, index: int) -> float:
         """The seconds trial ``index`` should take: as its group's done so far, else by its weight at its

@@ -136,10 +136,14 @@ def test_the_trials_left_are_reckoned_at_the_speed_the_machine_runs_now():
     pace.done(0, 4.0, now=4.0)
     pace.done(1, 2.0, now=6.0)
     assert pace.speed == 1.0 and pace.seconds_left(6.0) == pytest.approx(6.0)
-    # a's second seed took 2 s, half its first: the machine runs twice as fast now (its load fell), so b's
-    # second takes half its first, 1 s (at the old speed, 2 s: twice what is left).
+    # a's second seed took 2 s, half its first: one seed's cost alone, which may be noise, so b's second is
+    # still expected to take its first's 2 s.
     pace.done(2, 2.0, now=8.0)
-    assert pace.ratios == [0.5] and pace.speed == 0.5 and pace.seconds_left(8.0) == pytest.approx(1.0)
+    assert pace.ratios == [0.5] and pace.speed == 1.0 and pace.seconds_left(8.0) == pytest.approx(2.0)
+    # A second ratio that agrees: the machine runs faster now. Mean of 1/2 and 1/2 (b's second, 1 s after
+    # 2 s): a 2 s trial left would take 1 s.
+    pace.ratios.append(0.5)
+    assert pace.speed == 0.5 and pace.expected(3) == pytest.approx(1.0)
     # The speed now is the mean of the RECENT (4) latest ratios: 1/2, 1, 3/2, 1, 2 -> (1 + 1.5 + 1 + 2) / 4.
     pace.ratios = [0.5, 1.0, 1.5, 1.0, 2.0]
     assert pace.speed == pytest.approx(1.375)
