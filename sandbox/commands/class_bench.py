@@ -39,6 +39,10 @@ from sandbox.model.config import Config
 WARM_UP = 5.0
 #: Longest wait (s) for the class to be seated: K worlds built in the hosts' queues.
 SEATING_SECONDS = 600.0
+#: The measurement is also told in windows of this many seconds (``by_window``): a world's step costs
+#: several times more while its robots push the boxes (issue 58: 590 us against 60-150 us, steps
+#: 4,000-7,000 of the paper's world), and a mean over the whole measurement hides when.
+WINDOW = 10.0
 #: A page that keeps up says so after its first second of drawing (page/report.js).
 CALM_AFTER = 1.0
 TOKEN = "class-bench-token"
@@ -257,6 +261,17 @@ def server_pids(app: Any) -> dict[str, list[int]]:
     return {"server": [os.getpid()], "teachers_world": [teacher] if teacher else [], "hosts": hosts}
 
 
+def browser_pids() -> list[int]:
+    """The teacher's Chromium: every Chromium process under this one (Playwright's driver starts it)."""
+    found = []
+    for pid in descendants(os.getpid()):
+        with contextlib.suppress(OSError):
+            with open(f"/proc/{pid}/comm") as fh:
+                if "chrom" in fh.read():
+                    found.append(pid)
+    return found
+
+
 def rss_of(pids: list[int]) -> float:
     return sum(memory_mb(pid)[0] for pid in pids)
 
@@ -421,9 +436,12 @@ def measure(app: Any, crowds: list[Crowd], identities: list[str], wall: WallCloc
     if page is not None:
         page.evaluate("() => { window.__wallPictures = []; }")
     wall_from = len(wall.sent)
+    browser = browser_pids() if page is not None else []
+    browser_cpu0 = sum(cpu_seconds(pid) for pid in browser)
     t0 = time.perf_counter()
-    time.sleep(seconds)
+    windows = by_window(app, identities, seconds, t0)
     wall_seconds = time.perf_counter() - t0
+    browser_cpu = sum(cpu_seconds(pid) for pid in browser) - browser_cpu0
     steps1, published1, drawn1 = steps_now(app, identities), published_now(app, identities), dict(desks.drawn)
     counts1, calm = merged(crowds, calm=True)
     cpu1 = {name: sum(cpu_seconds(pid) for pid in group) for name, group in server_pids(app).items()}
@@ -467,9 +485,26 @@ def measure(app: Any, crowds: list[Crowd], identities: list[str], wall: WallCloc
                                                 / frames_got * len(identities) * CLASS_FPS
                                                 + spent["teachers_world"] / wall_seconds), 2),
         "students_process_cpu_cores": round(students_cpu / wall_seconds, 2),
+        "browser_cpu_cores": round(browser_cpu / wall_seconds, 2) if page is not None else None,
+        # each window of WINDOW seconds: the least and the median real-time factor of the worlds in it
+        "real_time_factor_by_window": windows,
         "load_average": [round(x, 2) for x in os.getloadavg()],
         "cores": os.cpu_count(),
     }
+
+
+def by_window(app: Any, identities: list[str], seconds: float, t0: float) -> list[tuple[float, float]]:
+    """Sleep until ``seconds`` after ``t0``, reading each world's steps every :data:`WINDOW` seconds: each
+    window's least and median real-time factor (a last window shorter than half of one is not told)."""
+    windows, before, began = [], steps_now(app, identities), t0
+    while (left := t0 + seconds - time.perf_counter()) > 0:
+        time.sleep(min(WINDOW, left))
+        now, steps = time.perf_counter(), steps_now(app, identities)
+        if now - began >= WINDOW / 2:
+            factors = [(steps.get(i, 0) - before.get(i, 0)) / (now - began) * app.config.dt for i in identities]
+            windows.append((round(min(factors), 2), round(statistics.median(factors), 2)))
+        before, began = steps, now
+    return windows
 
 
 def merged(crowds: list[Crowd], calm: bool = False) -> Any:

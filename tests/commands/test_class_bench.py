@@ -86,3 +86,34 @@ def test_it_reports_each_student_and_the_server(monkeypatch):
     challenge = result["class_challenge"]  # two rounds in the same world (the teacher's scene): one reference
     assert challenge["students"] == 2 and challenge["reference_runs"] == 1
     assert challenge["pss_mb_peak"] >= challenge["pss_mb_before"] > 0
+
+
+def test_the_measurement_is_told_window_by_window(monkeypatch):
+    # Two worlds, dt 1/30, 25 s in windows of 10 s. World a: 90 steps/s throughout (3x); world b: 90, then
+    # 45 (1.5x), then 90. The last window (5 s) is half a window: told.
+    clock = {"now": 0.0}
+    rates = {"a": [90, 90, 90], "b": [90, 45, 90]}
+
+    class FakeTime:
+        @staticmethod
+        def perf_counter():
+            return clock["now"]
+
+        @staticmethod
+        def sleep(seconds):
+            window = min(int(clock["now"] // 10), 2)
+            for key in steps:
+                steps[key] += rates[key][window] * seconds
+            clock["now"] += seconds
+
+    class App:
+        config = Config()
+
+    steps = {"a": 0.0, "b": 0.0}
+    monkeypatch.setattr(class_bench, "time", FakeTime)
+    monkeypatch.setattr(class_bench, "steps_now", lambda app, identities: dict(steps))
+    windows = class_bench.by_window(App(), ["a", "b"], 25.0, 0.0)
+    assert windows == [(3.0, 3.0), (1.5, 2.25), (3.0, 3.0)]
+    # A last window under half of one (2 s of 10) is not told: too few frames to count steps by.
+    clock["now"], steps["a"], steps["b"] = 0.0, 0.0, 0.0
+    assert class_bench.by_window(App(), ["a", "b"], 22.0, 0.0) == [(3.0, 3.0), (1.5, 2.25)]

@@ -23,6 +23,7 @@ a real browser.
 
 from __future__ import annotations
 
+import functools
 import re
 import string
 
@@ -50,5 +51,12 @@ def plain(text: object) -> str:
     and runs of white space as one space, a word joiner where an autolink would start. Use it on
     each piece from outside, never on markdown we wrote (its ``**`` would show), and never inside a
     code span (escapes are literal there)."""
-    one_line = _BREAKS.sub(" ", str(text))
+    return _plain(str(text))
+
+
+@functools.lru_cache(maxsize=1024)
+def _plain(text: str) -> str:
+    """:func:`plain` of a string, remembered: a panel writes the same names every frame (a class's
+    desks, 30 pages at 10 frames a second)."""
+    one_line = _BREAKS.sub(" ", text)
     return _PUNCTUATION.sub(r"\\\1", _AUTOLINK.sub(r"\1" + WORD_JOINER, one_line))

@@ -6,6 +6,7 @@ read them. Made on the simulation thread, immutable, read on any thread."""
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -103,13 +104,20 @@ def case_name(shape: str, strategies: dict) -> str:
 def running_case(shape: str, strategies: dict, family: str = "scaled") -> str | None:
     """The paper's case that runs: its goal, exactly its strategies (the others off) and the paper's
     scaled outline; None when what runs is not one of the seven."""
-    from sandbox.model.config import CASES, STRATEGY_NAMES
-
     if family != "scaled":
         return None
-    active = {name: float(strategies.get(name, 0.0)) for name in STRATEGY_NAMES if strategies.get(name, 0.0) > 0}
+    return _case_of(shape, tuple(sorted((k, float(v)) for k, v in strategies.items() if v > 0)))
+
+
+@functools.lru_cache(maxsize=256)
+def _case_of(shape: str, active: tuple) -> str | None:
+    """:func:`running_case` of the strategies on (``active``: sorted (name, amount) pairs), remembered: the
+    panel asks every frame (a class's desks: 30 pages at 10 frames a second)."""
+    from sandbox.model.config import CASES, STRATEGY_NAMES
+
+    on = {name: amount for name, amount in active if name in STRATEGY_NAMES}
     for name, case in CASES.items():
-        if case["shape"] == shape and active == {k: float(v) for k, v in case.items() if k != "shape"}:
+        if case["shape"] == shape and on == {k: float(v) for k, v in case.items() if k != "shape"}:
             return name
     return None
 
