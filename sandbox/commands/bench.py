@@ -68,8 +68,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--hosts", type=int, default=None, metavar="N",
                    help="with --hosted: at most N host processes (default: the number of cores)")
     p.add_argument("--skip", type=int, default=0, metavar="STEPS",
-                   help="with --hosted: first run world i of K to step STEPS x i / K (spread over a run and its "
-                        "denser phases, as a class's worlds are), through the hosts' queues of builds")
+                   help="with --hosted or --class: first run world i of K to step STEPS x i / K (spread over a "
+                        "run and its denser phases, as a class's worlds are when students start at different "
+                        "times), through the hosts' queues of builds")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.add_argument("--compare-reference", metavar="PATH",
                    help="also time a locally built binary of the authors' program (github AdamBignell/push) on "
@@ -264,7 +265,8 @@ def bench_command(args: argparse.Namespace) -> int:
         if not 1 <= args.steps_per_frame <= 100:
             raise UserError(f"--steps-per-frame must be between 1 and 100, got {args.steps_per_frame}")
         result = class_bench.run(config, args.class_students, args.seconds, teacher_browser=args.teacher_browser,
-                                 steps_per_frame=args.steps_per_frame, challenge_steps=args.class_challenge)
+                                 steps_per_frame=args.steps_per_frame, challenge_steps=args.class_challenge,
+                                 spread=args.skip)
     elif args.hosted is not None:
         from sandbox.commands import hosted_bench
 

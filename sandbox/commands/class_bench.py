@@ -314,6 +314,21 @@ def descendants(pid: int) -> list[int]:
     return found
 
 
+def spread_out(app: Any, identities: list[str], steps: int) -> None:
+    """Run student i of K's world to step ``steps`` x i / K (each a *Run to the end* in its host's queue of
+    builds), as a class's worlds are when its students started at different times: the worlds then pass
+    through the dense phases, where a step costs several times more, at different times, not all at once."""
+    from sandbox.app.world.orders import SkipAhead
+
+    def submit() -> list:
+        worlds = app.lesson.worlds
+        return [worlds[identity].runner.submit(SkipAhead(steps * i // len(identities)))
+                for i, identity in enumerate(identities, 1)]
+
+    for future in app.events.call(submit):
+        future.result(timeout=SEATING_SECONDS)
+
+
 def class_challenge(app: Any, round_steps: int, timeout: float = 600.0) -> dict[str, Any]:
     """A class challenge of ``round_steps`` steps for every seated student, to the end of the last
     reference run: the peak memory (PSS) of the server and every process under it while it runs, and the
@@ -353,11 +368,12 @@ def class_challenge(app: Any, round_steps: int, timeout: float = 600.0) -> dict[
 
 def run(config: Config, students: int, seconds: float = 20.0, *, teacher_browser: bool = False,
         fps: float = 30.0, steps_per_frame: int = 25, warm_up: float | None = None,
-        challenge_steps: int | None = None) -> dict[str, Any]:
+        challenge_steps: int | None = None, spread: int = 0) -> dict[str, Any]:
     """A class server with ``students`` students' pages (and the teacher's in Chromium if
     ``teacher_browser``), measured over ``seconds`` after the warm-up; ``fps`` and ``steps_per_frame``:
     the teacher's world's (the students' run at a class's pace); ``challenge_steps``: then a class
-    challenge of that many steps, its memory to the end of its reference runs (:func:`class_challenge`)."""
+    challenge of that many steps, its memory to the end of its reference runs (:func:`class_challenge`);
+    ``spread``: student i of K's world first run to step ``spread`` x i / K (:func:`spread_out`)."""
     from sandbox.app.lesson.classroom import Classroom
     from sandbox.app.web.access import Access
     from sandbox.commands.live_bench import _browser_page
@@ -402,6 +418,8 @@ def run(config: Config, students: int, seconds: float = 20.0, *, teacher_browser
                  and all(s > 0 for s in steps_now(app, identities).values())
                  and len(steps_now(app, identities)) == students, SEATING_SECONDS, "every student's world")
         seated_after = time.monotonic() - started
+        if spread > 0:
+            spread_out(app, identities, spread)
         time.sleep(warm_up)
         result = measure(app, crowds, identities, wall, desks, seconds, page)
         pids = server_pids(app)
@@ -409,6 +427,7 @@ def run(config: Config, students: int, seconds: float = 20.0, *, teacher_browser
         pss = sum(pss_of(group) for group in pids.values())
         if challenge_steps:
             result["class_challenge"] = class_challenge(app, challenge_steps)
+    result["spread_over_steps"] = spread
     beyond = students - 1
     total, first_total = sum(memory.values()), sum(first_memory.values())
     result.update({

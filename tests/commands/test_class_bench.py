@@ -117,3 +117,38 @@ def test_the_measurement_is_told_window_by_window(monkeypatch):
     # A last window under half of one (2 s of 10) is not told: too few frames to count steps by.
     clock["now"], steps["a"], steps["b"] = 0.0, 0.0, 0.0
     assert class_bench.by_window(App(), ["a", "b"], 22.0, 0.0) == [(3.0, 3.0), (1.5, 2.25)]
+
+
+def test_a_spread_class_runs_student_i_of_k_to_step_steps_i_over_k():
+    from concurrent.futures import Future
+
+    from sandbox.app.world.orders import SkipAhead
+
+    asked: dict[str, list] = {}
+
+    class Runner:
+        def __init__(self, name):
+            self.name = name
+
+        def submit(self, order):
+            asked.setdefault(self.name, []).append(order)
+            done = Future()
+            done.set_result(None)
+            return done
+
+    class World:
+        def __init__(self, name):
+            self.runner = Runner(name)
+
+    class Events:
+        @staticmethod
+        def call(fn):
+            return fn()
+
+    class App:
+        events = Events()
+
+    App.lesson = type("Lesson", (), {"worlds": {name: World(name) for name in "abc"}})()
+    class_bench.spread_out(App(), ["a", "b", "c"], 20_000)  # 20,000 x 1/3, 2/3, 3/3
+    assert {name: [(type(order), order.step) for order in orders] for name, orders in asked.items()} == {
+        "a": [(SkipAhead, 6_666)], "b": [(SkipAhead, 13_333)], "c": [(SkipAhead, 20_000)]}
