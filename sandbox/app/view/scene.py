@@ -468,7 +468,7 @@ class SceneView:
         self.handles["headings"] = sc.add_point_cloud(
             f"{r0}/swarm/headings", self._points(max(n, 1)), pal.HEADING_MARK, point_size=0.3 * r,
             point_shape="circle", point_shading="flat", position=(c, c, Z_MARKS), visible=n > 0)
-        self.hexagons = Hexagons(sc, f"{r0}/swarm/boxes", m, cfg.box_circumradius, (c, c, Z_BOXES), self._sent)
+        self.hexagons = Hexagons(sc, f"{r0}/swarm/boxes", m, cfg.box_circumradius, (c, c, Z_BOXES))
         self.handles["caption"] = self._add_caption(snap)
         self.handles["readout"] = self._add_readout(snap)
         empty = np.zeros((1, 2, 3), np.float32)

@@ -186,7 +186,7 @@ def test_boxes_are_chunked_by_distance_and_resting_chunks_send_nothing():
     angles = rng.uniform(0, 2 * np.pi, m)
     colours = np.zeros((m, 3), np.uint8)
     scene = FakeScene()
-    boxes = Hexagons(scene, "/swarm/boxes", m, 0.25, (32, 32, 0.02), CompactSender())
+    boxes = Hexagons(scene, "/swarm/boxes", m, 0.25, (32, 32, 0.02))
     boxes.update(points, angles, colours, np.zeros(2))  # built; the first regroup by distance
     boxes.update(points, angles, colours, np.zeros(2))
     shown = np.concatenate([idx for _, idx, _ in boxes.chunks])
@@ -213,6 +213,39 @@ def test_boxes_are_chunked_by_distance_and_resting_chunks_send_nothing():
     assert (boxes.chunks[2][0]._path, "batched_positions") in sent
     assert (boxes.chunks[1][0]._path, "batched_wxyzs") in sent
     assert REGROUP > 4  # no regrouping in between
+
+
+def test_a_recoloured_box_and_a_regrouping_send_only_their_chunks():
+    from sandbox.app.view.hexagons import CHUNK, REGROUP, Hexagons
+
+    m = 3 * CHUNK
+    points = np.zeros((m, 3), np.float32)
+    points[:, 0] = np.arange(m) / 4.0  # box i at i/4 m from the centre: chunk k holds boxes 25k..25k+24
+    angles, colours = np.zeros(m), np.zeros((m, 3), np.uint8)
+    scene = FakeScene()
+    boxes = Hexagons(scene, "/swarm/boxes", m, 0.25, (32, 32, 0.02))
+    boxes.update(points, angles, colours, np.zeros(2))
+    assert [list(idx) for _, idx, _ in boxes.chunks] == [list(range(k * CHUNK, (k + 1) * CHUNK)) for k in range(3)]
+    scene.sent.clear()
+    colours[CHUNK + 3] = (255, 0, 0)  # a box of the middle chunk enters the goal
+    boxes.update(points, angles, colours, np.zeros(2))
+    assert scene.sent == [(boxes.chunks[1][0]._path, "batched_colors")]
+    for _ in range(REGROUP - 2):
+        boxes.update(points, angles, colours, np.zeros(2))
+    scene.sent.clear()
+    # The first chunk's last box and the middle chunk's first swap places, and so chunks. Each node
+    # still shows the same positions and colours in the same order (the boxes are alike): only their
+    # rotations are sent again, as other boxes' are. Then one box of the first chunk moves: its
+    # positions alone.
+    points[[CHUNK - 1, CHUNK], 0] = points[[CHUNK, CHUNK - 1], 0]
+    boxes.update(points, angles, colours, np.zeros(2))
+    first, middle = boxes.chunks[0][0]._path, boxes.chunks[1][0]._path
+    assert list(boxes.chunks[0][1])[-1] == CHUNK and list(boxes.chunks[1][1])[0] == CHUNK - 1
+    assert sorted(scene.sent) == [(first, "batched_wxyzs"), (middle, "batched_wxyzs")], scene.sent
+    scene.sent.clear()
+    points[0, 1] += 0.5
+    boxes.update(points, angles, colours, np.zeros(2))
+    assert scene.sent == [(first, "batched_positions")]
 
 
 def test_a_portrait_view_frames_the_arena_at_its_top_above_the_panel():
