@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 
-from tests.browsing import BROWSER_MARKS
+from tests.browsing import BROWSER_MARKS, largest_canvas
 from tests.browser.test_browser_room import floor_to_page, shot, within
 from tests.waiting import wait_until
 
@@ -59,8 +59,7 @@ def open_page(browser, app, size=PROJECTOR, touch=False):
 
 
 def scene_canvas(page) -> dict:
-    boxes = [c.bounding_box() for c in page.locator("canvas").all()]
-    return max((b for b in boxes if b), key=lambda b: b["width"] * b["height"])
+    return largest_canvas(page)[1]
 
 
 def close_card(app, page, tap=False) -> None:
