@@ -7,13 +7,14 @@ Set PHOTOTAXIS_SHOTS=DIR to keep a screenshot of every step there.
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from pathlib import Path
 
 import numpy as np
 
-from tests.browsing import playwright_api, small_app
+from tests.browsing import largest_canvas, playwright_api, small_app
 from tests.waiting import wait_until, wait_until_steady
 
 
@@ -23,8 +24,14 @@ SHOTS = os.environ.get("PHOTOTAXIS_SHOTS")
 #: browsers) the page answers each action later and the C took 70 s, which measures the load, not
 #: the tools. The test prints each drawing's time at the end.
 DESIGN_LIMIT = 60.0
-#: Steps the swarm must run on a new goal before it counts as built "a bit".
-BUILD_STEPS = 400
+#: Steps the swarm must run on a new goal before it counts as built "a bit": enough for the screenshot
+#: of the build (PHOTOTAXIS_SHOTS) to show one; without screenshots, enough to show the world runs on it
+#: (400 steps were 6.7 s a drawing at the small world's 60 steps a second, 20 s of the module).
+BUILD_STEPS = 400 if SHOTS else 60
+#: Pointer moves in a drag of the drawing tests (each waits for a frame of the test browser's software
+#: drawing, 0.5-2 s on a loaded machine); that a dragged point follows every move is
+#: tests/browser/test_browser_editing.py's, with its own 12.
+DRAG_STEPS = 4
 
 L_ARMS = [(29, 29), (35, 29), (35, 31), (31, 31), (31, 35), (29, 35)]  # 6 m arms, 2 m wide
 PLUS = "29,31; 31,31; 31,29; 33,29; 33,31; 35,31; 35,33; 33,33; 33,35; 31,35; 31,33; 29,33"
@@ -91,9 +98,7 @@ def shot(page, name: str) -> None:
 
 
 def canvas_box(page) -> dict:
-    canvases = page.locator("canvas").all()
-    boxes = [c.bounding_box() or {"x": 0, "y": 0, "width": 0, "height": 0} for c in canvases]
-    return max(boxes, key=lambda b: b["width"] * b["height"])
+    return largest_canvas(page)[1]
 
 
 def camera_settled(client, config) -> bool:
@@ -111,21 +116,31 @@ ZOOMED_HEIGHT = 28.0
 
 def zoom_in(page, client, height: float) -> None:
     """Roll the mouse wheel over the middle of the floor, as a designer does, until the camera is
-    this low and at rest (it eases in, reporting as it goes)."""
+    this low and at rest (it eases in, reporting as it goes). Each notch of the wheel takes the camera
+    the same share nearer (viser dollies by a factor per wheel event): the first notch, once at rest,
+    says how many more reach ``height``, and those are rolled at once (a rest after each notch, five of
+    them, took 5-6 s of each drawing module's set-up); notches one at a time finish, if need be."""
     box = page.canvas
     page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
-    last = [None]
 
-    def low_and_resting() -> bool:
-        z = round(float(client.camera.position[2]), 3)
-        resting, last[0] = z == last[0], z
-        if resting and z > height:
+    def at_rest() -> float:  # a camera that has not moved for 0.25 s is at rest
+        return wait_until_steady(lambda: round(float(client.camera.position[2]), 3), quiet=0.25, timeout=60)
+
+    start = at_rest()
+    if start <= height:
+        return
+
+    def roll(notches: int, z: float) -> float:
+        """The camera's height at rest after ``notches`` more, once it has moved from ``z``."""
+        for _ in range(notches):
             page.mouse.wheel(0, -400)
-            last[0] = None
-        return resting and z <= height
+        return wait_until(lambda: (now := at_rest()) < z and now, 60, what="the camera nearer after the wheel")
 
-    # Polled every 0.25 s: a camera that has not moved in that time is at rest.
-    wait_until(low_and_resting, 60, what="the camera zoomed in and at rest", poll=0.25)
+    z = roll(1, start)
+    share = z / start
+    z = roll(math.ceil(math.log(height / z) / math.log(share)), z) if z > height else z
+    while z > height:
+        z = roll(1, z)
 
 
 def to_screen(page, x: float, y: float) -> tuple[float, float]:
@@ -149,7 +164,7 @@ def click_floor(page, x: float, y: float) -> None:
     page.mouse.click(*to_screen(page, x, y))
 
 
-def drag_floor(page, start, end, steps: int = 12, during=None) -> None:
+def drag_floor(page, start, end, steps: int = DRAG_STEPS, during=None) -> None:
     """Press at ``start``, move to ``end`` in steps (calling ``during()`` half-way), release."""
     page.mouse.move(*to_screen(page, *start))
     page.mouse.down()
@@ -224,7 +239,7 @@ def build(app, page, name: str) -> None:
     shot(page, f"{name}-building")
 
 
-def drag_vertex(page, draw, number: int, to, attempts: int = 3, steps: int = 12) -> None:
+def drag_vertex(page, draw, number: int, to, attempts: int = 3, steps: int = DRAG_STEPS) -> None:
     """Drag the handle of vertex ``number`` (as the floor shows it) to ``to``. The server has a point
     before the page draws its handle: a press that came first (once, on a loaded machine, right after a
     template was chosen) turned the camera instead, and while drawing one sometimes placed a new point

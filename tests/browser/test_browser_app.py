@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from sandbox.app.world.orders import SetPlaying
-from tests.browsing import BROWSER_MARKS, small_app
+from tests.browsing import BROWSER_MARKS, largest_canvas, small_app
 from tests.waiting import frames_pass, paused_step, wait_until, wait_until_steady
 
 pytestmark = BROWSER_MARKS
@@ -67,10 +67,7 @@ def page(app, browser):
 
 
 def scene_canvas(page):
-    canvases = page.locator("canvas")
-    sizes = [(c.bounding_box() or {"width": 0, "height": 0}) for c in canvases.all()]
-    best = max(range(len(sizes)), key=lambda i: sizes[i]["width"] * sizes[i]["height"])
-    return canvases.nth(best)
+    return page.locator("canvas").nth(largest_canvas(page)[0])
 
 
 def open_folder(page, title: str) -> None:

@@ -12,7 +12,7 @@ import pytest
 
 from tests.browsing import BROWSER_MARKS
 from tests.drawing_page import (L_ARMS, PLUS, TIMES, build, button, choose, click_floor, clock, designer_app,
-                                 designer_page, drag_floor, drag_vertex, open_page, shot,
+                                 designer_page, drag_floor, drag_vertex, shot,
                                  status_says, use)
 from tests.waiting import wait_until
 
@@ -116,15 +116,20 @@ def test_draw_a_plus_from_typed_points(app, page):
 # A phone (390 x 844) now gets the panel as a closed drawer (sandbox.app.web.page_layout; tests/browser/test_browser_phone.py);
 # drawing on a phone's drawer is not driven here yet.
 @pytest.mark.parametrize("width, height", [(1024, 768)])
-def test_small_viewports_show_the_tools(app, browser, width, height):
-    context, page, client = open_page(app, browser, width, height)
-    try:
+def test_small_viewports_show_the_tools(app, page, width, height):
+    """The module's page, narrowed to the viewport (a page of its own cost a load and a connect: 10-16 s of
+    a worker, for the same tools at the same size). Last in the module: the page stays this size."""
+    page.set_viewport_size({"width": width, "height": height})
+    wait_until(lambda: page.evaluate("[innerWidth, innerHeight]") == [width, height], what=f"the page at {width}x{height}")
+    draw, template = app.panel.shape.draw, page.get_by_label("Template", exact=True)
+    if template.is_visible():  # the Draw folder open (the module's page opened it): closed, to open it at this size
         page.get_by_text("Draw", exact=True).first.click()
-        choose(page, "Template", "letter E")
-        wait_until(lambda: len(app.panel.shape.draw.points) == 12, what="the E template")
-        status_says(page, "Ready")
-        shot(page, f"viewport-{width}x{height}")
-        page.get_by_role("button", name="Clear", exact=True).click()
-        wait_until(lambda: not app.panel.shape.draw.points, what="cleared")
-    finally:
-        context.close()
+        template.wait_for(state="hidden")
+    page.get_by_text("Draw", exact=True).first.click()
+    before = list(draw.points)  # the plus's 12, kept after Close and use
+    choose(page, "Template", "letter E")
+    wait_until(lambda: len(draw.points) == 12 and draw.points != before, what="the E template")
+    status_says(page, "Ready")
+    shot(page, f"viewport-{width}x{height}")
+    page.get_by_role("button", name="Clear", exact=True).click()
+    wait_until(lambda: not draw.points, what="cleared")

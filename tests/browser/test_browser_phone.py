@@ -14,7 +14,7 @@ import pytest
 from sandbox.app.web.page_layout import SHORTCUTS_ID, SOFTWARE_NOTICE
 from sandbox.app.world.orders import SetPlaying
 from sandbox.app.world.snapshot import LAMP_PROGRAM, PAPER_PROGRAM
-from tests.browsing import BROWSER_MARKS
+from tests.browsing import BROWSER_MARKS, largest_canvas
 from tests.waiting import wait_until
 
 pytestmark = BROWSER_MARKS
@@ -54,8 +54,7 @@ def screenshot(page, tmp_path: Path, name: str) -> Path:
 
 def scene_box(page) -> dict:
     """The scene canvas's box on the page (the largest canvas)."""
-    boxes = [c.bounding_box() for c in page.locator("canvas").all()]
-    return max((b for b in boxes if b), key=lambda b: b["width"] * b["height"])
+    return largest_canvas(page)[1]
 
 
 def drawer_height(page) -> float:

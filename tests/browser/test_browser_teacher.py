@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 
-from tests.browsing import BROWSER_MARKS
+from tests.browsing import BROWSER_MARKS, largest_canvas
 from tests.browser.test_browser_room import floor_to_page, shot, within
 from tests.waiting import wait_until
 
@@ -59,8 +59,7 @@ def open_page(browser, app, size=PROJECTOR, touch=False):
 
 
 def scene_canvas(page) -> dict:
-    boxes = [c.bounding_box() for c in page.locator("canvas").all()]
-    return max((b for b in boxes if b), key=lambda b: b["width"] * b["height"])
+    return largest_canvas(page)[1]
 
 
 def close_card(app, page, tap=False) -> None:
@@ -429,7 +428,18 @@ def test_compare_in_the_presenter_layout_is_read_from_the_back_of_the_room(brows
         labels = compare_labels(app, view_height)
         sizes = {name: letters_px(handle, client, canvas) for name, (handle, _) in labels.items()}
         caption = floor_to_page(client, canvas, labels["left caption"][1])
-        drawn = light_box_rows(page, caption["x"] + 40, caption["y"] - 10, caption["y"] + caption["height"] + 10, 30)
+
+        def caption_rows() -> int:  # the page draws the caption some frames after it is framed (a loaded
+            return light_box_rows(page, caption["x"] + 40, caption["y"] - 10,  # machine: 0 and 43 px seen)
+                                  caption["y"] + caption["height"] + 10, 30)
+
+        seen = [0]
+        try:
+            wait_until(lambda: seen.append(caption_rows()) or seen[-1] >= 2 * ROOM_PX, 30,
+                       what="the left caption drawn in full")
+        except AssertionError:
+            pass  # the assert below says how high it is drawn
+        drawn = seen[-1]
         shot(page, "teacher-compare.png")
         legend = compare_legend_box(app.runner.latest.world_config, app.panel.framing.offset,
                                     app.panel.framing._legend_aspect)
@@ -458,6 +468,12 @@ def test_compare_with_the_panel_open_lays_nothing_over_the_arenas(browser):
     context = None
     try:
         context, page, client = open_page(browser, app)
+        # The panel docks beside the floor after the page first reports its canvas, whole: framed for that
+        # canvas, the page was measured before the panel came (once its canvas was asked in one round trip,
+        # tests/browsing.canvas_boxes). Wait for the page's canvas beside the panel, as it reports it.
+        wait_until(lambda: (box := scene_canvas(page))["width"] < 0.7 * PROJECTOR[0]
+                   and abs((client.camera.aspect or 0) - box["width"] / box["height"]) < 0.01,
+                   what="the panel open beside the floor, the page's canvas reported")
         wait_framed(app, client, presenter=False)
         canvas = scene_canvas(page)
         assert canvas["width"] < 0.7 * PROJECTOR[0]  # the panel open beside it
