@@ -76,9 +76,9 @@ def cell_centres(lit: np.ndarray, config) -> np.ndarray:
 
 
 def hexagons_turned(drawn: np.ndarray, angles: np.ndarray) -> float:
-    from sandbox.app.view.hexagons import turned
+    from sandbox.app.view.hexagons import turned_each
 
-    return max((turned(np.array([d]), np.array([a])) for d, a in zip(drawn, angles)), default=0.0)
+    return float(turned_each(np.asarray(drawn, float), angles).max()) if len(drawn) else 0.0
 
 
 def band_offset(lit: np.ndarray, robots: np.ndarray, centre: np.ndarray, pitch: float) -> float | None:

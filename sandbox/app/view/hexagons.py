@@ -52,10 +52,11 @@ def wxyz(angles: np.ndarray) -> np.ndarray:
     return out
 
 
-def turned(drawn: np.ndarray, angles: np.ndarray) -> float:
-    """The largest difference (degrees) between hexagons drawn at ``drawn`` and the boxes' ``angles``."""
-    d = _turned_each(np.asarray(drawn, dtype=float), np.asarray(angles, dtype=float))
-    return float(d.max()) if len(d) else 0.0
+def turned_each(drawn: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """Each box's difference (degrees) between its hexagon drawn at ``drawn`` and its ``angles`` (of a
+    hexagon's 60-degree symmetry)."""
+    sixty = np.pi / 3
+    return np.degrees(np.abs(np.mod(np.asarray(angles, float) - drawn + sixty / 2, sixty) - sixty / 2))
 
 
 class Hexagons:
@@ -72,7 +73,7 @@ class Hexagons:
         self._mesh = hexagon(circumradius)
         self._position = position
         self._frame = 0
-        #: (handle, the boxes it shows in index order, the angles drawn)
+        #: (handle, the boxes it shows in index order)
         self.chunks: list[list] = []
         self._order = np.zeros(0, np.intp)  # the boxes, chunk after chunk
         self._starts = np.zeros(0, np.intp)  # where each chunk's slots begin
@@ -96,10 +97,10 @@ class Hexagons:
         slot_angles = np.asarray(angles, dtype=float)[order]
         moved = np.logical_or.reduceat((bits != self._positions).any(axis=1), starts)
         recoloured = np.logical_or.reduceat((shades != self._colours).any(axis=1), starts)
-        turned_most = np.maximum.reduceat(_turned_each(self._drawn, slot_angles), starts)
+        turned_most = np.maximum.reduceat(turned_each(self._drawn, slot_angles), starts)
         turn = self._restate | (turned_most > ANGLE_TOLERANCE)
         for k in np.flatnonzero(moved | turn | recoloured):
-            handle, idx, _ = chunk = self.chunks[k]
+            handle, idx = self.chunks[k]
             slots = slice(starts[k], starts[k] + len(idx))
             if moved[k]:
                 handle.batched_positions = positions[idx]
@@ -107,7 +108,6 @@ class Hexagons:
             if turn[k]:
                 handle.batched_wxyzs = wxyz(angles[idx])
                 self._drawn[slots] = slot_angles[slots]
-                chunk[2] = self._drawn[slots].copy()
             if recoloured[k]:
                 handle.batched_colors = colours[idx]
                 self._colours[slots] = shades[slots]
@@ -121,7 +121,7 @@ class Hexagons:
                 f"{self.path}/{k}", vertices, faces, batched_wxyzs=wxyz(angles[idx]), batched_positions=positions[idx],
                 batched_colors=colours[idx], lod="off", material="standard", flat_shading=True, side="double",
                 cast_shadow=False, receive_shadow=False, position=self._position)
-            self.chunks.append([handle, idx, np.asarray(angles[idx], dtype=float).copy()])
+            self.chunks.append([handle, idx])
         self._order = np.concatenate(groups)
         self._starts = np.cumsum([0] + [len(idx) for idx in groups[:-1]])
         self._positions = positions.view(np.uint32)[self._order].copy()
@@ -139,18 +139,12 @@ class Hexagons:
         (its slots): what its node was last sent is compared with its new boxes."""
         for k, (chunk, idx) in enumerate(zip(self.chunks, self._groups(positions, centre))):
             if not np.array_equal(idx, chunk[1]):
-                chunk[1], chunk[2] = idx, None  # other boxes: their angles are sent with their positions
+                chunk[1] = idx  # other boxes: their rotations are sent again (_restate)
                 self._order[self._starts[k]:self._starts[k] + len(idx)] = idx
                 self._restate[k] = True
 
     def remove(self) -> None:
-        for handle, _, _ in self.chunks:
+        for handle, _ in self.chunks:
             handle.remove()
         self.chunks = []
 
-
-def _turned_each(drawn: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """Each box's difference (degrees) between its hexagon drawn at ``drawn`` and its angle (as
-    :func:`turned`, box by box)."""
-    sixty = np.pi / 3
-    return np.degrees(np.abs(np.mod(angles - drawn + sixty / 2, sixty) - sixty / 2))

@@ -189,11 +189,11 @@ def test_boxes_are_chunked_by_distance_and_resting_chunks_send_nothing():
     boxes = Hexagons(scene, "/swarm/boxes", m, 0.25, (32, 32, 0.02))
     boxes.update(points, angles, colours, np.zeros(2))  # built; the first regroup by distance
     boxes.update(points, angles, colours, np.zeros(2))
-    shown = np.concatenate([idx for _, idx, _ in boxes.chunks])
-    assert sorted(shown) == list(range(m)) and [len(idx) for _, idx, _ in boxes.chunks] == [CHUNK] * 4 + [7]
+    shown = np.concatenate([idx for _, idx in boxes.chunks])
+    assert sorted(shown) == list(range(m)) and [len(idx) for _, idx in boxes.chunks] == [CHUNK] * 4 + [7]
     # Nearer boxes in earlier chunks.
-    far = [np.hypot(*points[idx, :2].astype(float).T).max() for _, idx, _ in boxes.chunks]
-    near = [np.hypot(*points[idx, :2].astype(float).T).min() for _, idx, _ in boxes.chunks]
+    far = [np.hypot(*points[idx, :2].astype(float).T).max() for _, idx in boxes.chunks]
+    near = [np.hypot(*points[idx, :2].astype(float).T).min() for _, idx in boxes.chunks]
     assert all(f <= n for f, n in zip(far, near[1:]))
     for _ in range(3):  # frames until the next regrouping
         boxes.update(points, angles, colours, np.zeros(2))
@@ -201,7 +201,7 @@ def test_boxes_are_chunked_by_distance_and_resting_chunks_send_nothing():
     boxes.update(points, angles, colours, np.zeros(2))
     assert scene.sent == [], "nothing moved: nothing sent"
     # One box moves and another turns a little, a third turns a lot.
-    handle, idx, _ = boxes.chunks[2]
+    handle, idx = boxes.chunks[2]
     moved, slight, much = idx[0], boxes.chunks[3][1][0], boxes.chunks[1][1][0]
     points[moved, 0] += np.float16(0.25)
     angles[slight] += np.radians(ANGLE_TOLERANCE / 2)
@@ -225,7 +225,7 @@ def test_a_recoloured_box_and_a_regrouping_send_only_their_chunks():
     scene = FakeScene()
     boxes = Hexagons(scene, "/swarm/boxes", m, 0.25, (32, 32, 0.02))
     boxes.update(points, angles, colours, np.zeros(2))
-    assert [list(idx) for _, idx, _ in boxes.chunks] == [list(range(k * CHUNK, (k + 1) * CHUNK)) for k in range(3)]
+    assert [list(idx) for _, idx in boxes.chunks] == [list(range(k * CHUNK, (k + 1) * CHUNK)) for k in range(3)]
     scene.sent.clear()
     colours[CHUNK + 3] = (255, 0, 0)  # a box of the middle chunk enters the goal
     boxes.update(points, angles, colours, np.zeros(2))
