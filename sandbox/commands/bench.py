@@ -252,6 +252,10 @@ def bench_command(args: argparse.Namespace) -> int:
         return advice_bench(args) if args.generated is None else draw_advice_bench(args)
     if args.generated is not None:
         raise UserError("--generated goes with --advice: bench --advice --generated N --truth DIR")
+    if args.skip < 0:
+        raise UserError(f"--skip takes the steps to spread the worlds over, 0 or more, got {args.skip}")
+    if args.skip and args.hosted is None and args.class_students is None:
+        raise UserError("--skip spreads a class's worlds: it goes with --hosted K or --class K")
     if args.steps is None:
         args.steps = 20_000  # a benchmark default: two full cycles, not a whole trial
     config = scaled(config_from_args(args), args.scale)

@@ -152,3 +152,11 @@ def test_a_spread_class_runs_student_i_of_k_to_step_steps_i_over_k():
     class_bench.spread_out(App(), ["a", "b", "c"], 20_000)  # 20,000 x 1/3, 2/3, 3/3
     assert {name: [(type(order), order.step) for order in orders] for name, orders in asked.items()} == {
         "a": [(SkipAhead, 6_666)], "b": [(SkipAhead, 13_333)], "c": [(SkipAhead, 20_000)]}
+
+
+def test_a_skip_below_zero_or_without_worlds_to_spread_is_refused_in_a_line():
+    for argv, said in ((["bench", "--class", "2", "--skip", "-5"], "0 or more, got -5"),
+                       (["bench", "--skip", "100"], "goes with --hosted K or --class K")):
+        args = build_parser("bench").parse_args(argv)
+        with pytest.raises(UserError, match=said):
+            args.func(args)
