@@ -423,14 +423,15 @@ def test_compare_in_the_presenter_layout_is_read_from_the_back_of_the_room(brows
         context, page, client = open_page(browser, app)
         wait_framed(app, client, presenter=True)
         wait_until(lambda: app.runner.latest.step > 0, what="the run under way")
-        canvas = scene_canvas(page)
-        view_height = canvas["height"] / per_metre(client, canvas)
-        labels = compare_labels(app, view_height)
-        sizes = {name: letters_px(handle, client, canvas) for name, (handle, _) in labels.items()}
-        caption = floor_to_page(client, canvas, labels["left caption"][1])
 
-        def caption_rows() -> int:  # the page draws the caption some frames after it is framed (a loaded
-            return light_box_rows(page, caption["x"] + 40, caption["y"] - 10,  # machine: 0 and 43 px seen)
+        def caption_rows() -> int:
+            """The left caption's box as drawn, where the page's camera puts it now: read afresh at each
+            look, since the page may still report its first camera (3, 3, 3) after it was framed, and draws
+            the caption some frames later (a loaded machine: 0 and 43 px seen)."""
+            canvas = scene_canvas(page)
+            box = compare_labels(app, canvas["height"] / per_metre(client, canvas))["left caption"][1]
+            caption = floor_to_page(client, canvas, box)
+            return light_box_rows(page, caption["x"] + 40, caption["y"] - 10,
                                   caption["y"] + caption["height"] + 10, 30)
 
         seen = [0]
@@ -440,6 +441,9 @@ def test_compare_in_the_presenter_layout_is_read_from_the_back_of_the_room(brows
         except AssertionError:
             pass  # the assert below says how high it is drawn
         drawn = seen[-1]
+        canvas = scene_canvas(page)
+        labels = compare_labels(app, canvas["height"] / per_metre(client, canvas))
+        sizes = {name: letters_px(handle, client, canvas) for name, (handle, _) in labels.items()}
         shot(page, "teacher-compare.png")
         legend = compare_legend_box(app.runner.latest.world_config, app.panel.framing.offset,
                                     app.panel.framing._legend_aspect)

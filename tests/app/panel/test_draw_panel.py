@@ -331,7 +331,8 @@ def test_after_use_the_drawing_gives_way_and_edit_this_goal_brings_it_back(app, 
     wait_until(lambda: app.runner.latest.goal_key != key and app.runner.latest.shape_name == "drawn",
                what="the square in use")
     view = draw.view
-    wait_until(lambda: not view.line.visible, 10, what="the drawing leaving the floor")
+    # The event thread hides the line, then the preview, then says "In use": wait for the last of them.
+    wait_until(lambda: "**In use**" in draw.status.content, 10, what="the drawing leaving the floor")
     assert not (view.line.visible or view.closing.visible or view.preview_goal.visible or view.preview_band.visible)
     assert not view._handles.visible and view._labels == [] and view._pad is None
     assert draw.given_way and draw.points == SQUARE and "**In use**" in draw.status.content  # kept, and said
