@@ -103,12 +103,11 @@ def pytest_collection_modifyitems(config, items) -> None:
 
 
 @pytest.fixture(scope="module")
-def browser():
+def browser(request):
     """One headless Chromium for a browser test module (see tests/browsing.py)."""
-    from sandbox.commands.live_bench import CHROMIUM_ARGS
-    from tests.browsing import CHROMIUM, PatientBrowser, playwright_api
+    from tests.browsing import CHROMIUM, TEST_CHROMIUM_ARGS, PatientBrowser, playwright_api
 
     with playwright_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        yield PatientBrowser(browser)
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=TEST_CHROMIUM_ARGS)
+        yield PatientBrowser(browser, in_full=getattr(request.module, "DRAWN_IN_FULL", False))
         browser.close()

@@ -15,6 +15,7 @@ import os
 import re
 import time
 from pathlib import Path
+from urllib.parse import urlsplit
 
 import pytest
 
@@ -47,8 +48,9 @@ def open_seats(app, browser, *viewports: dict) -> list[tuple]:
         context = browser.new_context(viewport=viewport)
         page = context.new_page()
         page.goto(f"http://127.0.0.1:{app.port}/join")
-        assert re.search(r"/seat/[A-Za-z0-9_-]{32}$", page.url), page.url
-        opened.append((context, page, page.url.rsplit("/", 1)[1]))
+        path = urlsplit(page.url).path  # (the tests' pages add ?fixedDpr: tests/browsing.py)
+        assert re.search(r"/seat/[A-Za-z0-9_-]{32}$", path), page.url
+        opened.append((context, page, path.rsplit("/", 1)[1]))
     for _, page, identity in opened:
         page.get_by_text("Goal shape", exact=True).wait_for()
         wait_until(lambda: identity in app.lesson.desks, what="the student's desk")

@@ -14,6 +14,7 @@ from tests.browsing import BROWSER_MARKS
 from tests.waiting import wait_until
 
 pytestmark = BROWSER_MARKS
+DRAWN_IN_FULL = True  # it reads letters and label boxes off screenshots (tests/browsing.py)
 
 TOKEN = "room-token-41"
 

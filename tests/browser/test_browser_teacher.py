@@ -19,6 +19,7 @@ from tests.browser.test_browser_room import floor_to_page, shot, within
 from tests.waiting import wait_until
 
 pytestmark = BROWSER_MARKS
+DRAWN_IN_FULL = True  # it reads letters and label boxes off screenshots (tests/browsing.py)
 
 #: The least height (CSS px) of the letters the back of a room must read (issue 56).
 ROOM_PX = 24.0

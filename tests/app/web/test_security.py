@@ -282,7 +282,9 @@ def test_an_endless_upload_never_grows_the_server(app):
     client.set_value(uuid_of(app.panel.run.speed), 7)  # handled after every part above
     wait_until(lambda: app.runner.steps_per_frame == 7, timeout=60, what="the server to read it all")
     grown = _rss() - before
-    assert grown < 1_000_000 + 5 * 1024 * 1024, f"the server grew by {grown / 1e6:.1f} MB"
+    # 300 MB were sent: kept, even one part in ten would be 30 MB. What the process keeps of freed
+    # 512-kB buffers (its allocator's arenas, the websocket's reads) was up to 6.6 MB in the full suite.
+    assert grown < 16 * 1024 * 1024, f"the server grew by {grown / 1e6:.1f} MB"
     assert app.gate.inbox._transfers == {} and refusals(app, cid) >= 300
     client.close()
 
