@@ -163,13 +163,21 @@ def test_start_over_is_offered_to_a_controlling_page_mid_run_not_to_a_watcher(ap
                 context.close()
 
 
+def view_height(client) -> float:
+    """The floor (m) the page's camera shows from the canvas's top to its bottom, as the page last
+    reported it (top-down)."""
+    import numpy as np
+
+    return float(2 * client.camera.position[2] * np.tan(client.camera.fov / 2))
+
+
 def floor_to_page(client, canvas: dict, box) -> dict:
     """A floor box (left, right, bottom, top, m) where the page draws it (CSS px), through the camera the
     page last reported: top-down, so a metre is the same number of pixels across and up."""
     import numpy as np
 
-    position, look_at = np.asarray(client.camera.position), np.asarray(client.camera.look_at)
-    per_metre = canvas["height"] / 2 / (position[2] * np.tan(client.camera.fov / 2))
+    look_at = np.asarray(client.camera.look_at)
+    per_metre = canvas["height"] / view_height(client)
     x = canvas["x"] + canvas["width"] / 2 + (np.array(box[:2]) - look_at[0]) * per_metre
     y = canvas["y"] + canvas["height"] / 2 - (np.array(box[2:]) - look_at[1]) * per_metre
     return {"x": float(x[0]), "y": float(y[1]), "width": float(x[1] - x[0]), "height": float(y[0] - y[1])}
@@ -223,9 +231,9 @@ def test_compare_mode_on_a_projector_shows_every_caption_and_readout_uncovered(b
         wait_until(framed, what="the page framed on both worlds")
         wait_until(lambda: app.runner.latest.sample.fraction_in_goal > 0, what="a share in the goal to show")
         canvas = max((c.bounding_box() for c in page.locator("canvas").all()), key=lambda b: b["width"] * b["height"])
-        view_height = 2 * client.camera.position[2] * np.tan(client.camera.fov / 2)
-        labels = {"left caption": caption_box(config, offset, False, view_height),
-                  "right caption": caption_box(config, offset, True, view_height),
+        height = view_height(client)
+        labels = {"left caption": caption_box(config, offset, False, height),
+                  "right caption": caption_box(config, offset, True, height),
                   "left readout": readout_box(config), "right readout": shifted(readout_box(config), offset),
                   "difference": difference_box(config, offset)}
         shown = {name: floor_to_page(client, canvas, box) for name, box in labels.items()}

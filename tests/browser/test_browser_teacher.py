@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from tests.browsing import BROWSER_MARKS, largest_canvas
-from tests.browser.test_browser_room import floor_to_page, shot, within
+from tests.browser.test_browser_room import floor_to_page, shot, view_height, within
 from tests.waiting import wait_until
 
 pytestmark = BROWSER_MARKS
@@ -74,7 +74,7 @@ def close_card(app, page, tap=False) -> None:
 
 def per_metre(client, canvas: dict) -> float:
     """CSS px a metre of floor takes on the page, through the camera the page reported (top-down)."""
-    return canvas["height"] / 2 / (client.camera.position[2] * np.tan(client.camera.fov / 2))
+    return canvas["height"] / view_height(client)
 
 
 def letters_px(label, client, canvas: dict) -> float:
@@ -368,13 +368,14 @@ def compare_app(presenter: bool):
                compare=(side_config("star-switch", base), "star-switch")).start()
 
 
-def compare_labels(app, view_height: float) -> dict:
-    """Each compare label's handle and the floor it covers (left, right, bottom, top)."""
+def compare_labels(app, height: float) -> dict:
+    """Each compare label's handle and the floor it covers (left, right, bottom, top), for a page whose view
+    shows ``height`` m of floor top to bottom (:func:`view_height`)."""
     from sandbox.app.view.scene import caption_box, difference_box, readout_box, shifted
 
     config, offset = app.runner.latest.world_config, app.panel.framing.offset
-    return {"left caption": (app.view.handles["caption"], caption_box(config, offset, False, view_height)),
-            "right caption": (app.comparison.view.handles["caption"], caption_box(config, offset, True, view_height)),
+    return {"left caption": (app.view.handles["caption"], caption_box(config, offset, False, height)),
+            "right caption": (app.comparison.view.handles["caption"], caption_box(config, offset, True, height)),
             "left readout": (app.view.handles["readout"], readout_box(config)),
             "right readout": (app.comparison.view.handles["readout"], shifted(readout_box(config), offset)),
             "difference": (app.comparison._difference, difference_box(config, offset))}
@@ -430,7 +431,7 @@ def test_compare_in_the_presenter_layout_is_read_from_the_back_of_the_room(brows
             look, since the page may still report its first camera (3, 3, 3) after it was framed, and draws
             the caption some frames later (a loaded machine: 0 and 43 px seen)."""
             canvas = scene_canvas(page)
-            box = compare_labels(app, canvas["height"] / per_metre(client, canvas))["left caption"][1]
+            box = compare_labels(app, view_height(client))["left caption"][1]
             caption = floor_to_page(client, canvas, box)
             return light_box_rows(page, caption["x"] + 40, caption["y"] - 10,
                                   caption["y"] + caption["height"] + 10, 30)
@@ -443,7 +444,7 @@ def test_compare_in_the_presenter_layout_is_read_from_the_back_of_the_room(brows
             pass  # the assert below says how high it is drawn
         drawn = seen[-1]
         canvas = scene_canvas(page)
-        labels = compare_labels(app, canvas["height"] / per_metre(client, canvas))
+        labels = compare_labels(app, view_height(client))
         sizes = {name: letters_px(handle, client, canvas) for name, (handle, _) in labels.items()}
         shot(page, "teacher-compare.png")
         legend = compare_legend_box(app.runner.latest.world_config, app.panel.framing.offset,
@@ -482,12 +483,12 @@ def test_compare_with_the_panel_open_lays_nothing_over_the_arenas(browser):
         wait_framed(app, client, presenter=False)
         canvas = scene_canvas(page)
         assert canvas["width"] < 0.7 * PROJECTOR[0]  # the panel open beside it
-        view_height = canvas["height"] / per_metre(client, canvas)
+        height = view_height(client)
         shot(page, "teacher-compare-panel-open.png")
-        across = [f"{name} {np.round(box, 1)} over the {wall}" for name, (_, box) in compare_labels(app, view_height).items()
+        across = [f"{name} {np.round(box, 1)} over the {wall}" for name, (_, box) in compare_labels(app, height).items()
                   for wall, arena in arenas(app).items() if crosses(box, arena)]
         assert not across, across
-        for name, (_, box) in compare_labels(app, view_height).items():
+        for name, (_, box) in compare_labels(app, height).items():
             assert within(floor_to_page(client, canvas, box), canvas), f"{name} is not all in view"
     finally:
         if context is not None:
