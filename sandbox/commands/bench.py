@@ -16,6 +16,7 @@ import math
 import resource
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
@@ -94,6 +95,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--truth", action="append", default=None, metavar="DIR",
                    help="with --advice --generated: the report folder of the draw's candidates sweep (sweep "
                         "--generated N --candidates, then report), or a final.csv; repeatable")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="with --advice --generated: keep each shape's advice in DIR as it ends; the same command "
+                        "again resumes where it stopped, or judges the kept advice on a truth that has grown")
     p.add_argument("--truth-steps", type=int, default=100_000, metavar="K",
                    help="with --advice --generated: the truth's trials are read at K steps [default: 100000]")
     add_config_arguments(p)
@@ -248,6 +252,8 @@ def bench_command(args: argparse.Namespace) -> int:
 
     if not (args.scale > 0 and math.isfinite(args.scale)):
         raise UserError(f"--scale must be a positive number, got {args.scale}")
+    if args.out is not None and (not args.advice or args.generated is None):
+        raise UserError("--out keeps the advice on a draw: bench --advice --generated N --truth DIR --out DIR")
     if args.advice:
         return advice_bench(args) if args.generated is None else draw_advice_bench(args)
     if args.generated is not None:
@@ -348,16 +354,21 @@ def draw_advice_bench(args: argparse.Namespace) -> int:
         raise UserError(str(exc)) from None
     config, workers = config_from_args(args), default_workers()
     steps = config.steps if args.steps is not None else STEPS
-    runs, refused = advice_check.advise_draw(
-        config, shapes, workers=workers, steps=steps,
-        heard=None if args.no_progress else lambda name: print(f"bench --advice: {name}", file=sys.stderr,
-                                                                flush=True))
-    check = advice_check.DrawCheck([advice_check.judge(r.shape, r.ranking, truth) for r in runs], refused)
+    try:
+        runs, refused = advice_check.advise_draw(
+            config, shapes, workers=workers, steps=steps, store=Path(args.out) if args.out else None,
+            heard=None if args.no_progress else lambda name: print(f"bench --advice: {name}", file=sys.stderr,
+                                                                    flush=True))
+    except (ValueError, OSError) as exc:
+        raise UserError(str(exc)) from None
+    check = advice_check.DrawCheck([advice_check.judge(r.shape, r.ranking, truth, every_one=True) for r in runs],
+                                   refused)
     if args.json:
         json.dump({"share_right": check.share_right, "passes": check.passes, "refused": refused,
                    "shapes": [{"shape": v.shape, "verdict": run.verdict, "first": v.first,
                                "first_at_truth": v.at_100k, "best": v.best, "best_at_truth": v.best_at_100k,
-                               "status": v.status, "cpu_seconds": round(run.cpu_seconds, 1)}
+                               "status": v.status, "unmeasured": list(v.unmeasured),
+                               "cpu_seconds": round(run.cpu_seconds, 1)}
                               for v, run in zip(check.verdicts, runs)]}, sys.stdout)
         sys.stdout.write("\n")
     else:

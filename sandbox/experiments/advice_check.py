@@ -14,7 +14,9 @@ from __future__ import annotations
 
 import csv
 import glob
+import json
 import math
+import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -118,10 +120,11 @@ class Verdict:
     at_100k: float  # the first choice at 100,000 steps (nan: not measured)
     best: str
     best_at_100k: float
+    unmeasured: tuple[str, ...] = ()  # candidates the advice ran that the truth lacks (judged with every_one)
 
     @property
     def status(self) -> str:
-        if math.isnan(self.at_100k):
+        if math.isnan(self.at_100k) or self.unmeasured:
             return "not measured"
         return "right" if round(self.best_at_100k - self.at_100k, 3) <= TOLERANCE else "wrong"
 
@@ -131,14 +134,19 @@ class Verdict:
                 f"{100 * self.best_at_100k:.1f} % | {self.status} |")
 
 
-def judge(shape: str, ranking: list[Ranked], truth: dict[tuple[str, str], list[float]]) -> Verdict:
-    """The first of ``ranking`` against the best of ``truth`` among the candidates the advice ran."""
+def judge(shape: str, ranking: list[Ranked], truth: dict[tuple[str, str], list[float]], *,
+          every_one: bool = False) -> Verdict:
+    """The first of ``ranking`` against the best of ``truth`` among the candidates the advice ran. With
+    ``every_one`` a shape is judged only when the truth has every one of them: a best among some is not known
+    to be the best (a candidates sweep still running)."""
     name = shape_name(shape)
     means = {r.candidate.label: float(np.mean(truth[(name, r.candidate.label)]))
              for r in ranking if (name, r.candidate.label) in truth}
     best = max(means, key=means.__getitem__) if means else "none measured"
     first = ranking[0].candidate.label
-    return Verdict(name, first, ranking[0].fraction, means.get(first, math.nan), best, means.get(best, math.nan))
+    unmeasured = tuple(r.candidate.label for r in ranking if r.candidate.label not in means) if every_one else ()
+    return Verdict(name, first, ranking[0].fraction, means.get(first, math.nan), best, means.get(best, math.nan),
+                   unmeasured)
 
 
 def shapes_checked(patterns: Iterable[str]) -> list[str]:
@@ -197,9 +205,19 @@ class DrawCheck:
                f"advised): {len(self.refused)}."]
         out += [f"wrong: {v.shape}: first {v.first} {_pct(v.at_100k)}, best {v.best} {_pct(v.best_at_100k)}"
                 for v in self.verdicts if v.status == "wrong"]
-        out += [f"not measured: {v.shape}: first {v.first} (no trial of it at {steps:,} steps in the truth)"
+        out += [f"not measured: {v.shape}: first {v.first} ({_missing(v, steps)})"
                 for v in self.verdicts if v.status == "not measured"]
+        judged = [v for v in self.verdicts if v.status != "not measured"]
+        if judged and len(judged) < len(self.verdicts):
+            out.insert(1, f"Of the {len(judged)} shapes whose candidates were all measured: {self.count('right')} "
+                          f"right ({100 * self.count('right') / len(judged):.1f} %).")
         return out
+
+
+def _missing(verdict: Verdict, steps: int) -> str:
+    if verdict.unmeasured:
+        return f"no trial at {steps:,} steps in the truth of {', '.join(verdict.unmeasured)}"
+    return f"no trial of it at {steps:,} steps in the truth"
 
 
 def _pct(fraction: float) -> str:
@@ -207,9 +225,12 @@ def _pct(fraction: float) -> str:
 
 
 def advise_draw(config: Config, shapes: Iterable, *, workers: int, steps: int = advice.STEPS,
-                heard: Callable[[str], None] | None = None) -> tuple[list[Timed], list[str]]:
+                heard: Callable[[str], None] | None = None, store: Path | None = None
+                ) -> tuple[list[Timed], list[str]]:
     """The default advice on every generated shape (``shapes``: :class:`GeneratedShape`) the model builds under
-    ``config``, timed; and the names of those it refuses (:func:`sandbox.experiments.draws.refusal`)."""
+    ``config``, timed; and the names of those it refuses (:func:`sandbox.experiments.draws.refusal`). With a
+    ``store`` folder each shape's advice is kept there as it ends and read back on the next call with the same
+    settings, so a long draw resumes where it stopped and can be judged again on a grown truth."""
     from sandbox.experiments.draws import refusal
 
     runs, refused = [], []
@@ -217,10 +238,54 @@ def advise_draw(config: Config, shapes: Iterable, *, workers: int, steps: int = 
         if refusal(config.replace(shape=shape.name), shape.vertices):
             refused.append(shape.name)
             continue
-        if heard:
-            heard(shape.name)
-        runs.append(timed_advice(shape.name, config, workers=workers, steps=steps))
+        kept = load_timed(store, shape.name, config, steps) if store else None
+        if kept is None:
+            if heard:
+                heard(shape.name)
+            kept = timed_advice(shape.name, config, workers=workers, steps=steps)
+            if store:
+                save_timed(store, kept, config, steps)
+        runs.append(kept)
     return runs, refused
+
+
+def _settings(shape: str, config: Config, steps: int) -> dict:
+    """What a kept advice was run with: the whole configuration on the shape, and the steps a trial."""
+    return {"config": config.replace(shape=shape).to_dict(), "steps": steps, "seeds": advice.SEEDS}
+
+
+def save_timed(store: Path, run: Timed, config: Config, steps: int) -> None:
+    """``store/<shape>.json``: the advice ``run`` and the settings it ran with (written whole, then renamed)."""
+    store.mkdir(parents=True, exist_ok=True)
+    ranking = [{"outline": r.candidate.outline, "strategies": [list(s) for s in r.candidate.strategies],
+                "fractions": r.fractions, "distances": r.distances, "cpu_seconds": r.cpu_seconds}
+               for r in run.ranking]
+    record = {"settings": _settings(run.shape, config, steps), "shape": run.shape, "verdict": run.verdict,
+              "seconds": run.seconds, "cpu_seconds": run.cpu_seconds, "estimates": run.estimates,
+              "ranking": ranking}
+    path = store / f"{run.shape}.json"
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(record))
+    os.replace(tmp, path)
+
+
+def load_timed(store: Path, shape: str, config: Config, steps: int) -> Timed | None:
+    """The advice on ``shape`` kept in ``store``, or None when none is (or a torn file); a ValueError when it ran
+    with other settings (its folder belongs to another draw or other flags)."""
+    path = store / f"{shape}.json"
+    try:
+        record = json.loads(path.read_text())
+        ranking = [Ranked(Candidate(r["outline"], tuple((name, float(amount)) for name, amount in r["strategies"])),
+                          list(r["fractions"]), list(r["distances"]), float(r["cpu_seconds"]))
+                   for r in record["ranking"]]
+        settings = record["settings"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    if settings != json.loads(json.dumps(_settings(shape, config, steps))):
+        raise ValueError(f"{path} holds the advice on {shape} run with other settings; use another --out or "
+                         f"delete it")
+    return Timed(shape, ranking, record["verdict"], record["seconds"], record["cpu_seconds"],
+                 [tuple(e) for e in record["estimates"]])
 
 
 def truth_files(folders: Iterable[str]) -> list[str]:
