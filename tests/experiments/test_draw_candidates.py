@@ -223,12 +223,15 @@ def test_a_tiny_candidates_sweep_its_report_and_the_advice_judged_on_it(tmp_path
     assert "No strategy's settings build it: none of the advice's candidates ran." in report
     assert "runs only the candidates whose own settings build it" in report
 
-    code = commands.main(["bench", "--advice", "--generated", "2", "--families", "rectilinear", "--truth", str(out),
-                          "--truth-steps", "1000", "--steps", "500", *small])
+    bench = ["bench", "--advice", "--generated", "2", "--families", "rectilinear", "--truth", str(out),
+             "--truth-steps", "1000", "--steps", "500", "--out", str(tmp_path / "advice"), *small]
+    code = commands.main(bench)
     printed = capsys.readouterr().out
     assert "| gen-rectilinear-0000 |" in printed and "gen-rectilinear-0001 |" not in printed
     assert "of 1 shapes advised" in printed and "refused by the model (not advised): 1." in printed
     assert code == (0 if ": passes." in printed else 1)
+    assert [f.name for f in (tmp_path / "advice").iterdir()] == ["gen-rectilinear-0000.json"]
+    assert commands.main(bench) == code and capsys.readouterr().out == printed  # judged again from the kept advice
 
 
 def test_a_truth_folder_not_yet_reported_is_named_with_the_report_to_run(tmp_path):
