@@ -281,6 +281,8 @@ def load_timed(store: Path, shape: str, config: Config, steps: int) -> Timed | N
         settings = record["settings"]
     except (OSError, ValueError, KeyError, TypeError):
         return None
+    if not ranking:
+        return None  # nothing to judge: run it again
     if settings != json.loads(json.dumps(_settings(shape, config, steps))):
         raise ValueError(f"{path} holds the advice on {shape} run with other settings; use another --out or "
                          f"delete it")

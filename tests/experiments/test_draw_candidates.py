@@ -283,6 +283,11 @@ def test_a_kept_advice_reads_back_as_it_ran_and_only_with_the_same_settings(tmp_
         advice_check.load_timed(tmp_path, "gen-star-0000", config.replace(robots=100), 10_000)
     (tmp_path / "gen-star-0000.json").write_text('{"settings": {"con')  # torn: run it again
     assert advice_check.load_timed(tmp_path, "gen-star-0000", config, 10_000) is None
+    empty = json.loads(json.dumps({"settings": advice_check._settings("gen-star-0000", config, 10_000)}))
+    for broken in ({**empty, "ranking": []}, {**empty, "ranking": 5}, {**empty, "ranking": [{"outline": 1}]}):
+        (tmp_path / "gen-star-0000.json").write_text(json.dumps({**broken, "verdict": "", "seconds": 1,
+                                                                 "cpu_seconds": 1, "estimates": []}))
+        assert advice_check.load_timed(tmp_path, "gen-star-0000", config, 10_000) is None
 
 
 def test_the_advice_on_a_draw_resumes_from_its_folder(tmp_path, monkeypatch, refusing):
