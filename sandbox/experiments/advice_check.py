@@ -16,7 +16,6 @@ import csv
 import glob
 import json
 import math
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,6 +26,7 @@ import numpy as np
 from sandbox.experiments import advise as advice
 from sandbox.experiments.advise import Candidate, Ranked
 from sandbox.experiments.pace import A_FEW_SECONDS
+from sandbox.experiments.storage import write_whole
 from sandbox.model.config import STRATEGY_NAMES, Config
 
 #: How far below the best at 100,000 steps the first choice may build the shape (a fraction of the boxes).
@@ -255,7 +255,7 @@ def _settings(shape: str, config: Config, steps: int) -> dict:
 
 
 def save_timed(store: Path, run: Timed, config: Config, steps: int) -> None:
-    """``store/<shape>.json``: the advice ``run`` and the settings it ran with (written whole, then renamed)."""
+    """``store/<shape>.json``: the advice ``run`` and the settings it ran with (written whole)."""
     store.mkdir(parents=True, exist_ok=True)
     ranking = [{"outline": r.candidate.outline, "strategies": [list(s) for s in r.candidate.strategies],
                 "fractions": r.fractions, "distances": r.distances, "cpu_seconds": r.cpu_seconds}
@@ -263,10 +263,7 @@ def save_timed(store: Path, run: Timed, config: Config, steps: int) -> None:
     record = {"settings": _settings(run.shape, config, steps), "shape": run.shape, "verdict": run.verdict,
               "seconds": run.seconds, "cpu_seconds": run.cpu_seconds, "estimates": run.estimates,
               "ranking": ranking}
-    path = store / f"{run.shape}.json"
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(record))
-    os.replace(tmp, path)
+    write_whole(store / f"{run.shape}.json", json.dumps(record))
 
 
 def load_timed(store: Path, shape: str, config: Config, steps: int) -> Timed | None:

@@ -29,6 +29,14 @@ SWEEP_FILE = "sweep.json"  # the sweep's cases and command (see sweep.write_meta
 LOCK_FILE = ".sweep.lock"  # held by the sweep writing to the folder (ResultStore.lock)
 
 
+def write_whole(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` whole or not at all: into ``<path>.tmp``, then renamed over it, so a reader
+    (or a sweep resuming after a kill) never sees half a file."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
 class ResultStore:
     """The trial files of a sweep under ``DIR/trials``."""
 
@@ -94,9 +102,7 @@ class ResultStore:
         os.replace(tmp, csv_path)
         meta = {k: v for k, v in result.items() if k != "samples"}
         meta["case"] = case
-        tmp = json_path.with_suffix(".json.tmp")
-        tmp.write_text(json.dumps(meta, separators=(",", ":")))
-        os.replace(tmp, json_path)  # last: marks the trial done
+        write_whole(json_path, json.dumps(meta, separators=(",", ":")))  # last: marks the trial done
 
     def load(self) -> list[dict]:
         """Every finished trial: its JSON record plus ``samples`` (dict of numpy arrays) from its CSV."""

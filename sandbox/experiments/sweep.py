@@ -24,7 +24,7 @@ from sandbox.experiments import draws
 from sandbox.experiments.executors import dask_executor, local_executor, run_trials
 from sandbox.experiments.plan import Case, grid_cases, make_trials, paper_cases
 from sandbox.experiments.report import build_report
-from sandbox.experiments.storage import SWEEP_FILE, ResultStore, load_meta
+from sandbox.experiments.storage import SWEEP_FILE, ResultStore, load_meta, write_whole
 from sandbox.experiments.trials import SweepError, check_program
 from sandbox.model import watchdog
 from sandbox.model.config import CASES, Config, params, read_config_values
@@ -63,9 +63,7 @@ def write_meta(out: Path, cases: list[Case], compare: list, command: str, trials
                 trials=max(trials, int(meta.get("trials", 0))), seed_start=seed_start)
     if generated:
         meta[draws.META_KEY] = draws.merged(meta.get(draws.META_KEY, {}), generated)
-    tmp = out / (SWEEP_FILE + ".tmp")
-    tmp.write_text(json.dumps(meta, indent=1, default=str))
-    os.replace(tmp, out / SWEEP_FILE)
+    write_whole(out / SWEEP_FILE, json.dumps(meta, indent=1, default=str))
 
 
 def _command_line(args: argparse.Namespace) -> str:
