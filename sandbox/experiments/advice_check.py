@@ -233,6 +233,11 @@ def advise_draw(config: Config, shapes: Iterable, *, workers: int, steps: int = 
     settings, so a long draw resumes where it stopped and can be judged again on a grown truth."""
     from sandbox.experiments.draws import refusal
 
+    if store:
+        try:  # a folder that cannot be one fails here, before any advice runs
+            store.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ValueError(f"cannot keep the advice in {store}: {exc.strerror or exc}") from None
     runs, refused = [], []
     for shape in shapes:
         if refusal(config.replace(shape=shape.name), shape.vertices):
@@ -256,7 +261,6 @@ def _settings(shape: str, config: Config, steps: int) -> dict:
 
 def save_timed(store: Path, run: Timed, config: Config, steps: int) -> None:
     """``store/<shape>.json``: the advice ``run`` and the settings it ran with (written whole)."""
-    store.mkdir(parents=True, exist_ok=True)
     ranking = [{"outline": r.candidate.outline, "strategies": [list(s) for s in r.candidate.strategies],
                 "fractions": r.fractions, "distances": r.distances, "cpu_seconds": r.cpu_seconds}
                for r in run.ranking]

@@ -312,3 +312,15 @@ def test_the_advice_on_a_draw_resumes_from_its_folder(tmp_path, monkeypatch, ref
 def test_out_goes_with_the_advice_on_a_draw(capsys):
     assert commands.main(["bench", "--out", "/tmp/x"]) == 2
     assert "--out keeps the advice on a draw" in capsys.readouterr().err
+
+
+def test_an_out_that_cannot_be_a_folder_is_refused_before_any_advice_runs(tmp_path, monkeypatch, capsys):
+    ran = []
+    monkeypatch.setattr(advice_check, "timed_advice", lambda *a, **k: ran.append(a))
+    truth = tmp_path / "final.csv"
+    truth.write_text("case,seed\n")
+    a_file = tmp_path / "a-file"
+    a_file.write_text("")
+    assert commands.main(["bench", "--advice", "--generated", "1", "--truth", str(truth), "--out",
+                          str(a_file / "advice")]) == 2
+    assert f"cannot keep the advice in {a_file / 'advice'}: Not a directory" in capsys.readouterr().err and not ran
