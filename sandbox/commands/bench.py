@@ -92,6 +92,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                    help="with --advice --generated: the families of the draw [default: all]")
     p.add_argument("--generator-seed", type=int, default=0, metavar="S",
                    help="with --advice --generated: the draw [default: 0]")
+    p.add_argument("--part", default=None, metavar="K/N",
+                   help="with --advice --generated: only the K-th of N runs of consecutive shapes of the draw, "
+                        "as sweep --part (a draw's truth made in parts, on several machines or days)")
     p.add_argument("--truth", action="append", default=None, metavar="DIR",
                    help="with --advice --generated: the report folder of the draw's candidates sweep (sweep "
                         "--generated N --candidates, then report), or a final.csv; repeatable")
@@ -254,6 +257,8 @@ def bench_command(args: argparse.Namespace) -> int:
         raise UserError(f"--scale must be a positive number, got {args.scale}")
     if args.out is not None and (not args.advice or args.generated is None):
         raise UserError("--out keeps the advice on a draw: bench --advice --generated N --truth DIR --out DIR")
+    if args.part is not None and (not args.advice or args.generated is None):
+        raise UserError("--part splits a draw: bench --advice --generated N --part K/N --truth DIR")
     if args.advice:
         return advice_bench(args) if args.generated is None else draw_advice_bench(args)
     if args.generated is not None:
@@ -341,14 +346,13 @@ def draw_advice_bench(args: argparse.Namespace) -> int:
     from sandbox.experiments.draws import Draw
     from sandbox.experiments.trials import SweepError
     from sandbox.shapes import ShapeError
-    from sandbox.shapes.generator import draw
 
     if not args.truth:
         raise UserError("bench --advice --generated needs --truth DIR: the report of the draw's candidates sweep "
                         "(phototaxis sweep --generated N --candidates --steps 100000, then phototaxis report)")
     try:
-        wanted = Draw.from_flags(args.generated, args.families, args.generator_seed)
-        shapes = draw(wanted.count, wanted.families, wanted.generator_seed)
+        wanted = Draw.from_flags(args.generated, args.families, args.generator_seed, args.part)
+        shapes = wanted.shapes()
         truth = advice_check.read_evaluations(advice_check.truth_files(args.truth), args.truth_steps)
     except (SweepError, ShapeError, ValueError) as exc:
         raise UserError(str(exc)) from None

@@ -185,6 +185,7 @@ def _table(header: list[str], rows: list[list[str]]) -> str:
 def section(generated: dict, results: list[ShapeResult], figure: str | None) -> list[str]:
     """The report's section on the draw, in markdown lines; ``figure`` the worst shapes' picture (relative)."""
     draws = "; ".join(f"{d['count']} shapes of {', '.join(d['families'])}, generator seed {d['generator_seed']}"
+                      f"{', part {0} of {1}'.format(*d['part']) if d.get('part') else ''}"
                       f"{', every advice candidate of each' if d.get('candidates') else ''}"
                       for d in generated.get("draws", []))
     out = ["", "## The distribution over generated shapes", "",

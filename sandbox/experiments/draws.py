@@ -26,23 +26,58 @@ META_KEY = "generated"
 
 @dataclass(frozen=True)
 class Draw:
-    """What ``--generated``, ``--families`` and ``--generator-seed`` ask for."""
+    """What ``--generated``, ``--families``, ``--generator-seed`` and ``--part`` ask for."""
 
     count: int
     families: tuple[str, ...]
     generator_seed: int
+    part: tuple[int, int] | None = None  # (k, n): the k-th of n runs of consecutive shapes, from 1
 
     @classmethod
-    def from_flags(cls, count: int, families: str, generator_seed: int) -> "Draw":
+    def from_flags(cls, count: int, families: str, generator_seed: int, part: str | None = None) -> "Draw":
         if count < 1:
             raise SweepError(f"--generated must be at least 1 (got {count})")
         try:
-            return cls(count, families_from_text(families), generator_seed)
+            chosen = families_from_text(families)
         except ShapeError as exc:
             raise SweepError(f"--families: {exc}") from None
+        return cls(count, chosen, generator_seed, parse_part(part, count) if part else None)
+
+    def shapes(self) -> list[GeneratedShape]:
+        """The draw's shapes, or its part's: a part of a draw is the same shapes as the whole draw holds
+        there (a draw's first k shapes never depend on its count)."""
+        shapes = draw(self.count, self.families, self.generator_seed)
+        if self.part is None:
+            return shapes
+        first, end = part_bounds(*self.part, self.count)
+        return shapes[first:end]
 
     def record(self) -> dict:
-        return {"count": self.count, "families": list(self.families), "generator_seed": self.generator_seed}
+        record = {"count": self.count, "families": list(self.families), "generator_seed": self.generator_seed}
+        return {**record, "part": list(self.part)} if self.part else record
+
+
+def parse_part(text: str, count: int) -> tuple[int, int]:
+    """'2/4' -> (2, 4): the second of four parts of a draw of ``count`` shapes."""
+    k, slash, n = text.partition("/")
+    try:
+        k_n = (int(k), int(n)) if slash else None
+    except ValueError:
+        k_n = None
+    if k_n is None:
+        raise SweepError(f"--part takes K/N, the K-th of N parts, as 2/4 (got {text!r})")
+    k, n = k_n
+    if not 1 <= k <= n:
+        raise SweepError(f"--part {text}: K must be 1 to N")
+    if n > count:
+        raise SweepError(f"--part {text}: a draw of {count} shape(s) has at most {count} part(s)")
+    return k, n
+
+
+def part_bounds(k: int, n: int, count: int) -> tuple[int, int]:
+    """The shapes of part k of n of a draw of ``count``, [first, end): consecutive, as even as count allows
+    (100 in 4: 25 each; the families in turn, so each part holds each family about as often)."""
+    return (k - 1) * count // n, k * count // n
 
 
 def refusal(config: Config, vertices: np.ndarray) -> str:
@@ -71,7 +106,7 @@ def generated_cases(wanted: Draw, base: dict, typed: dict) -> tuple[list[Case], 
 def planned(wanted: Draw, base: dict, typed: dict) -> list[tuple[GeneratedShape, Case, str]]:
     """Every shape of the draw, its case (named after it) and why the model refuses it ('' when it builds it)."""
     try:
-        shapes = draw(wanted.count, wanted.families, wanted.generator_seed)
+        shapes = wanted.shapes()
     except ShapeError as exc:
         raise SweepError(f"--generated: {exc}") from None
     out = []

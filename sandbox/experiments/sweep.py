@@ -73,6 +73,8 @@ def _command_line(args: argparse.Namespace) -> str:
     if getattr(args, "generated", None) is not None:
         parts += ["--generated", str(args.generated), "--families", args.families,
                   "--generator-seed", str(args.generator_seed)]
+        if getattr(args, "part", None):
+            parts += ["--part", args.part]
         parts += ["--candidates"] if getattr(args, "candidates", False) else []
     else:
         parts += ["--grid", _portable(args.grid)] if args.grid else ["--cases", args.cases]
@@ -136,7 +138,8 @@ def sweep_plan(args: argparse.Namespace) -> tuple[list[Case], list, dict]:
     """:func:`sweep_cases`, and the record of a draw of generated shapes ({} for any other sweep)."""
     base, typed = _base(args), _typed_flags(args)
     if getattr(args, "generated", None) is not None:
-        wanted = draws.Draw.from_flags(args.generated, args.families, args.generator_seed)
+        wanted = draws.Draw.from_flags(args.generated, args.families, args.generator_seed,
+                                       getattr(args, "part", None))
         if getattr(args, "candidates", False):
             from sandbox.experiments.draw_candidates import candidate_cases  # the advice's candidates
 
@@ -144,6 +147,8 @@ def sweep_plan(args: argparse.Namespace) -> tuple[list[Case], list, dict]:
         else:
             cases, generated = draws.generated_cases(wanted, base, typed)
         return cases, [], generated
+    if getattr(args, "part", None):
+        raise SweepError("--part splits a draw of generated shapes: it goes with --generated N")
     if getattr(args, "candidates", False):
         raise SweepError("--candidates runs the advice's candidates of a draw: it goes with --generated N")
     if args.grid:
@@ -249,6 +254,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--generator-seed", type=int, default=0, metavar="S",
                    help=f"with --generated: the draw; draw S takes each family's shapes from seed "
                    f"S x {SEEDS_PER_DRAW:,} on, so two draws share none [default: 0]")
+    p.add_argument("--part", default=None, metavar="K/N",
+                   help="with --generated: only the K-th of N runs of consecutive shapes of the draw (100 in 4: "
+                   "25 each, each family about as often): a long draw split over machines or days, each part "
+                   "into its own --out; a part's shapes and trials are those the whole draw runs there")
     p.add_argument("--candidates", action="store_true",
                    help="with --generated: every candidate the advice tries (phototaxis advise) on each shape, one "
                    "case a shape and candidate, named 'gen-star-0003 / offset + chase'; the truth bench --advice "

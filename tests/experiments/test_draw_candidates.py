@@ -314,6 +314,22 @@ def test_out_goes_with_the_advice_on_a_draw(capsys):
     assert "--out keeps the advice on a draw" in capsys.readouterr().err
 
 
+def test_the_advice_on_a_part_of_a_draw_runs_only_its_shapes(tmp_path, monkeypatch, capsys):
+    ran = []
+    monkeypatch.setattr(advice_check, "timed_advice",
+                        lambda shape, config, workers, steps: ran.append(shape) or timed(shape))
+    truth = tmp_path / "final.csv"
+    truth.write_text("case,seed\n")
+    bench = ["bench", "--advice", "--generated", "4", "--families", "convex", "--truth", str(truth)]
+    commands.main([*bench, "--part", "2/2", "--no-progress"])
+    assert [generator.shape_name("convex", s) for s in (2, 3)] == ran
+    assert "of 2 shapes advised" in capsys.readouterr().out
+    assert commands.main([*bench, "--part", "3/2"]) == 2
+    assert "--part 3/2: K must be 1 to N" in capsys.readouterr().err
+    assert commands.main(["bench", "--part", "1/2"]) == 2
+    assert "--part splits a draw: bench --advice --generated N --part K/N" in capsys.readouterr().err
+
+
 def test_an_out_that_cannot_be_a_folder_is_refused_before_any_advice_runs(tmp_path, monkeypatch, capsys):
     ran = []
     monkeypatch.setattr(advice_check, "timed_advice", lambda *a, **k: ran.append(a))

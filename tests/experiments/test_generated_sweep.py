@@ -80,6 +80,47 @@ def test_bad_draws_are_one_line(argv, message, tmp_path):
         sweep_plan(parsed(*argv, "--out", str(tmp_path)))
 
 
+def test_the_parts_of_a_draw_are_its_shapes_in_turn_each_once():
+    """100 shapes in 4 parts: 25 each, consecutive, 5 of each family; 10 in 3: 3, 3 and 4. A part's shapes
+    are the whole draw's there, so the parts' trials are the whole draw's."""
+    assert [draws.part_bounds(k, 4, 100) for k in (1, 2, 3, 4)] == [(0, 25), (25, 50), (50, 75), (75, 100)]
+    assert [draws.part_bounds(k, 3, 10) for k in (1, 2, 3)] == [(0, 3), (3, 6), (6, 10)]
+    whole = draws.Draw.from_flags(10, "all", 2).shapes()
+    parts = [draws.Draw.from_flags(10, "all", 2, f"{k}/3").shapes() for k in (1, 2, 3)]
+    assert [s.name for part in parts for s in part] == [s.name for s in whole]
+    fourth, fifth, first = generator.FAMILIES[3], generator.FAMILIES[4], generator.FAMILIES[0]
+    assert [s.name for s in parts[1]] == [f"gen-{fourth}-2000", f"gen-{fifth}-2000", f"gen-{first}-2001"]
+    assert all(np.array_equal(a.vertices, b.vertices) for a, b in zip(parts[2], whole[6:]))
+    first_of_four = draws.Draw.from_flags(100, "all", 2, "1/4").shapes()
+    assert len(first_of_four) == 25 and {s.family for s in first_of_four} == set(generator.FAMILIES)
+    assert all(sum(s.family == f for s in first_of_four) == 5 for f in generator.FAMILIES)
+
+
+def test_a_part_is_kept_with_its_draw_and_said_in_the_command(tmp_path, refusing):
+    args = parsed("--generated", "4", "--families", "star", "--part", "2/2", "--candidates", "--out", str(tmp_path))
+    cases, compare, generated = sweep_plan(args)
+    assert {c.label.split(" / ")[0] for c in cases} == {"gen-star-0002", "gen-star-0003"}
+    assert generated["draws"] == [{"count": 4, "families": ["star"], "generator_seed": 0, "part": [2, 2],
+                                   "candidates": True}]
+    from sandbox.experiments.sweep import _command_line
+
+    assert "--generated 4 --families star --generator-seed 0 --part 2/2 --candidates" in _command_line(args)
+    assert "part 2 of 2" in "\n".join(distribution.section(generated, [], None))
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--generated", "3", "--part", "2"], "--part takes K/N, the K-th of N parts, as 2/4 (got '2')"),
+    (["--generated", "3", "--part", "a/b"], "--part takes K/N"),
+    (["--generated", "3", "--part", "0/2"], "--part 0/2: K must be 1 to N"),
+    (["--generated", "3", "--part", "3/2"], "--part 3/2: K must be 1 to N"),
+    (["--generated", "3", "--part", "1/4"], "--part 1/4: a draw of 3 shape(s) has at most 3 part(s)"),
+    (["--cases", "paper", "--part", "1/2"], "--part splits a draw of generated shapes: it goes with --generated N"),
+])
+def test_bad_parts_are_one_line(argv, message, tmp_path):
+    with pytest.raises(SweepError, match=re.escape(message)):
+        sweep_plan(parsed(*argv, "--out", str(tmp_path)))
+
+
 def test_generated_is_one_of_cases_grid_and_generated(capsys):
     with pytest.raises(SystemExit):
         parsed("--generated", "3", "--cases", "paper", "--out", "x")
