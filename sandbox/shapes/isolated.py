@@ -26,6 +26,8 @@ from sandbox.shapes.formats import read_polygon_bytes
 TIME_LIMIT = 5.0
 #: Bytes the reading process may allocate beyond what it starts with.
 MEMORY_LIMIT = 512 * 1024 * 1024
+#: The exit code of a reader that ran out of memory with no memory left to say so.
+OUT_OF_MEMORY = 3
 #: Files read at once; more wait their turn (each reader is a process on the server's cores).
 READERS_AT_ONCE = 2
 
@@ -59,7 +61,7 @@ def read_polygon_isolated(data: bytes, name: str, *, time_limit: float = TIME_LI
             kind, value = receiving.recv()
         except EOFError:
             reader.join(1.0)
-            raise fail(name, f"could not be read (the reader stopped with exit code {reader.exitcode})") from None
+            raise _stopped(name, reader.exitcode, memory_limit) from None
         finally:
             receiving.close()
             if reader.is_alive():
@@ -71,20 +73,41 @@ def read_polygon_isolated(data: bytes, name: str, *, time_limit: float = TIME_LI
 
 
 def _read_in_child(sending, data: bytes, name: str, memory_limit: int) -> None:
-    """The child: limit its memory, read the file, send ("vertices", array) or ("refused", message)."""
+    """The child: limit its memory, read the file, send ("vertices", array) or ("refused", message).
+
+    A file that used up the memory allowed may leave too little to send even the refusal (its pickle, the
+    traceback of a failed send): then the child ends with :data:`OUT_OF_MEMORY`, which needs no memory, and
+    the server says the same refusal."""
+    too_large = ("refused", _too_large(name, memory_limit))  # made before the limit
     _limit_memory(memory_limit)
     try:
         answer = ("vertices", read_polygon_bytes(data, name))
     except ShapeError as error:
         answer = ("refused", str(error))
+    except MemoryError:
+        answer = too_large
     except Exception as error:  # the file's fault too: nothing else runs in this process
-        if isinstance(error, MemoryError) or "bad_alloc" in str(error):  # GEOS says it in C++
-            answer = ("refused", str(fail(name, f"needs more than {memory_limit // 2**20} MB to read")))
+        if "bad_alloc" in str(error):  # GEOS says it in C++
+            answer = too_large
         else:
             answer = ("refused", str(fail(name, f"could not be read ({type(error).__name__}: "
                                                f"{str(error)[:60] or 'no details'})")))
-    sending.send(answer)
-    sending.close()
+    try:
+        sending.send(answer)
+        sending.close()
+    except MemoryError:
+        os._exit(OUT_OF_MEMORY)
+
+
+def _too_large(name: str, memory_limit: int) -> str:
+    return str(fail(name, f"needs more than {memory_limit // 2**20} MB to read"))
+
+
+def _stopped(name: str, exitcode: int | None, memory_limit: int) -> ShapeError:
+    """What the server says of a reader that ended without an answer."""
+    if exitcode == OUT_OF_MEMORY:
+        return ShapeError(_too_large(name, memory_limit))
+    return fail(name, f"could not be read (the reader stopped with exit code {exitcode})")
 
 
 def _limit_memory(memory_limit: int) -> None:

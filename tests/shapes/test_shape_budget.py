@@ -139,5 +139,45 @@ def test_an_upload_is_read_in_a_child_within_its_time_and_memory():
                      for i in range(2999)).encode()
     with pytest.raises(ShapeError, match=r"^star.txt: took more than 0.01 s to read"):
         read_polygon_isolated(star, "star.txt", time_limit=0.01)
-    with pytest.raises(ShapeError, match=r"^star.txt: needs more than 0 MB to read$"):
-        read_polygon_isolated(star, "star.txt", memory_limit=0)
+    with pytest.raises(ShapeError, match=r"^star.txt: needs more than 0 MB to read$"):  # not slow: any load
+        read_polygon_isolated(star, "star.txt", memory_limit=0, time_limit=60.0)
+
+
+class _Pipe:
+    """A reader's end of the pipe to the server, whose send may run out of memory."""
+
+    def __init__(self, fails: bool = False):
+        self.fails, self.sent = fails, []
+
+    def send(self, answer):
+        if self.fails:
+            raise MemoryError
+        self.sent.append(answer)
+
+    def close(self):
+        pass
+
+
+def test_a_reader_out_of_memory_says_so_even_with_no_memory_left_to_send_it(monkeypatch):
+    """Out of memory, the reader sends the refusal it made before its limit; when even the send fails, it
+    ends with OUT_OF_MEMORY, which the server reads as the same refusal (a traceback, exit code 1, would
+    have said only that the reader stopped)."""
+    from sandbox.shapes import isolated
+
+    def out_of_memory(data, name):
+        raise MemoryError
+
+    monkeypatch.setattr(isolated, "_limit_memory", lambda limit: None)  # not this test process's memory
+    monkeypatch.setattr(isolated, "read_polygon_bytes", out_of_memory)
+    pipe = _Pipe()
+    isolated._read_in_child(pipe, b"", "big.svg", 64 * 2**20)
+    assert pipe.sent == [("refused", "big.svg: needs more than 64 MB to read")]
+
+    exits = []
+    monkeypatch.setattr(isolated.os, "_exit", exits.append)
+    isolated._read_in_child(_Pipe(fails=True), b"", "big.svg", 64 * 2**20)
+    assert exits == [isolated.OUT_OF_MEMORY]
+    assert str(isolated._stopped("big.svg", isolated.OUT_OF_MEMORY, 64 * 2**20)) == \
+        "big.svg: needs more than 64 MB to read"
+    assert str(isolated._stopped("big.svg", -9, 64 * 2**20)) == \
+        "big.svg: could not be read (the reader stopped with exit code -9)"
