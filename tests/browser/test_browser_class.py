@@ -102,11 +102,13 @@ def test_a_lab_lesson_with_three_students_and_the_teacher(app, browser):
     # the second student's world on the projector: the teacher's floor shows it, live
     choose(teacher, "Student", "Student 2")
     click_button(teacher, "Show on the projector")
-    wait_until(lambda: lesson.projected == identities[1] and app.on_projector is not None, what="the projector")
+    teachers_page = next(iter(app.pages.get_clients()))
+    # the app's event thread projects, then lays the teacher's pages out: wait for the whole of it
+    wait_until(lambda: lesson.projected == identities[1] and app.on_projector is not None
+               and app.panel.framing.of(teachers_page) == PRESENTER, what="the projector, presenter layout")
     projected = app.on_projector
     assert projected.shape_name == goals[1]  # that student's world, on the teacher's floor
     # in the presenter layout (the panel folded), named in its caption
-    assert app.panel.framing.of(next(iter(app.pages.get_clients()))) == PRESENTER
     assert app.view.handles["caption"].text.startswith(f"Student 2: {goals[1]}")
     teacher.get_by_text("Phototaxis sandbox").first.click()  # the presenter's folded panel: it opens
     teacher.get_by_text("On the projector: Student 2").wait_for()
