@@ -59,14 +59,10 @@ class Draw:
 
 def parse_part(text: str, count: int) -> tuple[int, int]:
     """'2/4' -> (2, 4): the second of four parts of a draw of ``count`` shapes."""
-    k, slash, n = text.partition("/")
     try:
-        k_n = (int(k), int(n)) if slash else None
-    except ValueError:
-        k_n = None
-    if k_n is None:
-        raise SweepError(f"--part takes K/N, the K-th of N parts, as 2/4 (got {text!r})")
-    k, n = k_n
+        k, n = (int(number) for number in text.split("/"))
+    except ValueError:  # not two numbers, or not two of them
+        raise SweepError(f"--part takes K/N, the K-th of N parts, as 2/4 (got {text!r})") from None
     if not 1 <= k <= n:
         raise SweepError(f"--part {text}: K must be 1 to N")
     if n > count:

@@ -78,7 +78,7 @@ def _read_in_child(sending, data: bytes, name: str, memory_limit: int) -> None:
     A file that used up the memory allowed may leave too little to send even the refusal (its pickle, the
     traceback of a failed send): then the child ends with :data:`OUT_OF_MEMORY`, which needs no memory, and
     the server says the same refusal."""
-    too_large = ("refused", _too_large(name, memory_limit))  # made before the limit
+    too_large = ("refused", str(_too_large(name, memory_limit)))  # made before the limit
     _limit_memory(memory_limit)
     try:
         answer = ("vertices", read_polygon_bytes(data, name))
@@ -99,14 +99,14 @@ def _read_in_child(sending, data: bytes, name: str, memory_limit: int) -> None:
         os._exit(OUT_OF_MEMORY)
 
 
-def _too_large(name: str, memory_limit: int) -> str:
-    return str(fail(name, f"needs more than {memory_limit // 2**20} MB to read"))
+def _too_large(name: str, memory_limit: int) -> ShapeError:
+    return fail(name, f"needs more than {memory_limit // 2**20} MB to read")
 
 
 def _stopped(name: str, exitcode: int | None, memory_limit: int) -> ShapeError:
     """What the server says of a reader that ended without an answer."""
     if exitcode == OUT_OF_MEMORY:
-        return ShapeError(_too_large(name, memory_limit))
+        return _too_large(name, memory_limit)
     return fail(name, f"could not be read (the reader stopped with exit code {exitcode})")
 
 
